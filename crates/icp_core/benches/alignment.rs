@@ -1,0 +1,150 @@
+//! Criterion benches of the alignment hot path: KD-tree build, one correspondence pass over a
+//! 1080-point scan, visibility ray casting and a full 30-iteration alignment.
+//!
+//! The test case is a generated office floor (40 x 25 m, rooms along a corridor, 0.2 m thick
+//! walls with both faces sampled every 5 cm) and a 1080-beam scan cast against it from inside a
+//! room, with 1.5 cm noise. Run `cargo bench`; compare numbers within one run only.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use icp_core::correspondence::{find_pairs, Pair, TargetSet};
+use icp_core::point_map::Tree2;
+use icp_core::{align, IcpConfig, PointMap, Pose2};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+
+/// Both faces of an axis-aligned wall from `a` to `b` (thickness 0.2 m), points every 5 cm.
+fn wall(points: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
+    let horizontal = (a[1] - b[1]).abs() < 1e-9;
+    let len = if horizontal {
+        (b[0] - a[0]).abs()
+    } else {
+        (b[1] - a[1]).abs()
+    };
+    let n = (len / 0.05).round() as usize;
+    for i in 0..=n {
+        let t = i as f64 / n as f64;
+        let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        if horizontal {
+            points.push([p[0], p[1] - 0.1]);
+            points.push([p[0], p[1] + 0.1]);
+        } else {
+            points.push([p[0] - 0.1, p[1]]);
+            points.push([p[0] + 0.1, p[1]]);
+        }
+    }
+}
+
+/// A 40 x 25 m office: outer walls, a corridor at y 11..13.5, eight rooms with 1 m doors.
+fn office() -> Vec<[f64; 2]> {
+    let mut pts = Vec::new();
+    wall(&mut pts, [0.0, 0.0], [40.0, 0.0]);
+    wall(&mut pts, [0.0, 25.0], [40.0, 25.0]);
+    wall(&mut pts, [0.0, 0.0], [0.0, 25.0]);
+    wall(&mut pts, [40.0, 0.0], [40.0, 25.0]);
+    for (y, far) in [(11.0, 0.0), (13.5, 25.0)] {
+        let mut x = 0.0;
+        for k in 0..4 {
+            let x1 = 10.0 * (k + 1) as f64;
+            wall(&mut pts, [x, y], [x + 4.0, y]);
+            wall(&mut pts, [x + 5.0, y], [x1, y]);
+            if k < 3 {
+                wall(&mut pts, [x1, y], [x1, far]);
+            }
+            x = x1;
+        }
+    }
+    pts
+}
+
+/// A noisy 1080-beam scan from `pose` (robot frame): plan points visible from the pose, jittered
+/// along and across the wall, thinned to 1080 points.
+fn scan(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
+    let vis = map.visible_from(pose, 30.0).unwrap();
+    let inv = pose.inverse();
+    (0..1080)
+        .map(|_| {
+            let i = vis[rng.random_range(0..vis.len())] as usize;
+            let q = map.points()[i];
+            let n = map.normals()[i];
+            let along = rng.random_range(-0.025..0.025);
+            let across = rng.random_range(-0.015..0.015);
+            inv.transform_point([
+                q[0] - n[1] * along + n[0] * across,
+                q[1] + n[0] * along + n[1] * across,
+            ])
+        })
+        .collect()
+}
+
+fn benches(c: &mut Criterion) {
+    let pts = office();
+    let map = PointMap::new(pts.clone(), None).unwrap();
+    let truth = Pose2::new(6.0, 5.0, 0.3);
+    let guess = Pose2::new(6.15, 4.87, 0.35);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let scan = scan(&map, truth, &mut rng);
+
+    let mut g = c.benchmark_group("build");
+    g.throughput(Throughput::Elements(pts.len() as u64));
+    g.bench_function("kdtree", |b| {
+        b.iter(|| Tree2::new_from_slice(black_box(&pts)))
+    });
+    g.bench_function("point_map", |b| {
+        b.iter(|| PointMap::new(black_box(pts.clone()), None).unwrap())
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("correspondences_1080");
+    g.throughput(Throughput::Elements(scan.len() as u64));
+    let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
+    let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
+    let full = TargetSet::Full(&map);
+    g.bench_function("full_plan", |b| {
+        b.iter(|| find_pairs(&full, black_box(&moved), 0.4, &mut pairs))
+    });
+    let visible = TargetSet::subset(&map, map.visible_from(guess, 30.0).unwrap()).unwrap();
+    g.bench_function("visible_subset", |b| {
+        b.iter(|| find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("visibility");
+    g.bench_function("visible_from_30m", |b| {
+        b.iter(|| map.visible_from(black_box(guess), 30.0).unwrap())
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("align_1080");
+    let fixed = IcpConfig {
+        max_correspondence_distance: 0.4,
+        translation_tolerance: 0.0,
+        rotation_tolerance: 0.0,
+        ..IcpConfig::default()
+    };
+    for (name, cfg) in [
+        ("fixed_30_iterations", fixed.clone()),
+        (
+            "fixed_30_no_visibility",
+            IcpConfig {
+                use_visibility: false,
+                ..fixed.clone()
+            },
+        ),
+        (
+            "default",
+            IcpConfig {
+                max_correspondence_distance: 0.4,
+                ..IcpConfig::default()
+            },
+        ),
+    ] {
+        g.bench_with_input(BenchmarkId::from_parameter(name), &cfg, |b, cfg| {
+            b.iter(|| align(&map, black_box(&scan), guess, cfg).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(alignment, benches);
+criterion_main!(alignment);

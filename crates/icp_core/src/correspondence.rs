@@ -1,0 +1,164 @@
+//! Correspondences: every (transformed) scan point paired with its nearest plan point, kept only
+//! when nearer than a maximum distance (furniture, people and robots are not in the plan).
+
+use crate::point_map::{PointMap, Tree2};
+use kiddo::SquaredEuclidean;
+
+/// A scan point paired with a plan point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pair {
+    /// Index into the scan points.
+    pub source: u32,
+    /// Index into the plan's points.
+    pub target: u32,
+    /// Squared distance between them, square metres.
+    pub sq_dist: f64,
+}
+
+/// The plan points a scan is matched against: all of them, or a subset (e.g. the visible ones)
+/// with its own KD-tree. Either way results are reported as indices into the full plan.
+#[derive(Debug)]
+pub enum TargetSet<'a> {
+    /// Every point of the plan.
+    Full(&'a PointMap),
+    /// A subset of the plan.
+    Subset {
+        /// The plan.
+        map: &'a PointMap,
+        /// Plan indices of the subset.
+        indices: Vec<u32>,
+        /// KD-tree over the subset (items index into `indices`).
+        tree: Tree2,
+    },
+}
+
+impl<'a> TargetSet<'a> {
+    /// The subset of `map` given by `indices` (plan indices), or `None` when `indices` is empty.
+    pub fn subset(map: &'a PointMap, indices: Vec<u32>) -> Option<Self> {
+        if indices.is_empty() {
+            return None;
+        }
+        let pts: Vec<[f64; 2]> = indices.iter().map(|&i| map.points()[i as usize]).collect();
+        let tree = Tree2::new_from_slice(&pts);
+        Some(Self::Subset { map, indices, tree })
+    }
+
+    /// The whole plan.
+    pub fn map(&self) -> &'a PointMap {
+        match self {
+            Self::Full(map) | Self::Subset { map, .. } => map,
+        }
+    }
+
+    /// Number of candidate points.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Full(map) => map.len(),
+            Self::Subset { indices, .. } => indices.len(),
+        }
+    }
+
+    /// Never true: both variants hold at least one point.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Plan index and squared distance of the candidate nearest to `q`.
+    #[inline]
+    pub fn nearest(&self, q: [f64; 2]) -> (u32, f64) {
+        match self {
+            Self::Full(map) => map.nearest(q),
+            Self::Subset { indices, tree, .. } => {
+                let nn = tree.nearest_one::<SquaredEuclidean>(&q);
+                (indices[nn.item as usize], nn.distance)
+            }
+        }
+    }
+}
+
+/// Pairs every point of `transformed` (scan points already in the map frame) with its nearest
+/// target, keeping pairs closer than `max_distance` metres. `out` is cleared first.
+pub fn find_pairs(
+    target: &TargetSet<'_>,
+    transformed: &[[f64; 2]],
+    max_distance: f64,
+    out: &mut Vec<Pair>,
+) {
+    out.clear();
+    let max_sq = max_distance * max_distance;
+    for (i, q) in transformed.iter().enumerate() {
+        let (t, d2) = target.nearest(*q);
+        if d2 <= max_sq {
+            out.push(Pair {
+                source: i as u32,
+                target: t,
+                sq_dist: d2,
+            });
+        }
+    }
+}
+
+/// Keeps the `ratio` share (rounded up, at least `min_keep`) of `pairs` with the smallest
+/// distances; order afterwards is unspecified. A ratio of 1 keeps everything.
+pub fn trim(pairs: &mut Vec<Pair>, ratio: f64, min_keep: usize) {
+    if ratio >= 1.0 || pairs.len() <= min_keep {
+        return;
+    }
+    let keep = ((pairs.len() as f64 * ratio).ceil() as usize).clamp(min_keep, pairs.len());
+    pairs.select_nth_unstable_by(keep - 1, |a, b| a.sq_dist.total_cmp(&b.sq_dist));
+    pairs.truncate(keep);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line_map() -> PointMap {
+        PointMap::new((0..101).map(|i| [i as f64 * 0.1, 0.0]).collect(), None).unwrap()
+    }
+
+    #[test]
+    fn rejects_pairs_beyond_max_distance() {
+        let map = line_map();
+        let target = TargetSet::Full(&map);
+        let scan = [[1.0, 0.1], [2.0, 0.3], [3.05, -0.2]];
+        let mut pairs = Vec::new();
+        find_pairs(&target, &scan, 0.25, &mut pairs);
+        assert_eq!(
+            pairs.iter().map(|p| p.source).collect::<Vec<_>>(),
+            vec![0, 2]
+        );
+        assert_eq!(pairs[0].target, 10);
+        assert!((pairs[0].sq_dist - 0.01).abs() < 1e-12);
+        assert!((pairs[1].sq_dist - (0.05f64.powi(2) + 0.04)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn subset_reports_plan_indices() {
+        let map = line_map();
+        let target = TargetSet::subset(&map, vec![50, 51, 52]).unwrap();
+        assert_eq!(target.len(), 3);
+        let (idx, d2) = target.nearest([0.0, 0.0]);
+        assert_eq!(idx, 50);
+        assert!((d2 - 25.0).abs() < 1e-9);
+        assert!(TargetSet::subset(&map, vec![]).is_none());
+    }
+
+    #[test]
+    fn trim_keeps_the_closest_share() {
+        let mut pairs: Vec<Pair> = (0..10)
+            .map(|i| Pair {
+                source: i,
+                target: i,
+                sq_dist: (9 - i) as f64,
+            })
+            .collect();
+        trim(&mut pairs, 0.3, 2);
+        let mut kept: Vec<u32> = pairs.iter().map(|p| p.source).collect();
+        kept.sort_unstable();
+        assert_eq!(kept, vec![7, 8, 9]);
+        let mut few = pairs.clone();
+        trim(&mut few, 0.1, 2);
+        assert_eq!(few.len(), 2);
+    }
+}

@@ -1,0 +1,177 @@
+//! Pose covariance of a finished alignment, over (x, y, yaw) of `T_map_base`.
+//!
+//! Each inlier is treated as a measurement of its distance to the plan's wall line (point-to-line,
+//! normal taken from the plan's local point structure), so that a direction the walls do not
+//! constrain (a long corridor) shows up as a large variance instead of being hidden by the
+//! point-to-point pairing. `cov = sigma^2 H^-1` with `H = sum J J^T`,
+//! `J = [n_x, n_y, n . perp(p - t)]` and `sigma^2` the residual variance along the normals.
+
+use crate::point_map::PointMap;
+use crate::pose::Pose2;
+use nalgebra::{Matrix3, Vector3};
+
+/// Neighbours used to fit a wall direction at a plan point.
+pub const NORMAL_NEIGHBOURS: usize = 6;
+
+/// Unit normal of the plan's wall at every point (least-squares line through the point's
+/// [`NORMAL_NEIGHBOURS`] nearest plan points); `[0, 0]` where no direction can be fitted.
+pub fn estimate_normals(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2) -> Vec<[f64; 2]> {
+    let k = std::num::NonZero::new(NORMAL_NEIGHBOURS).expect("k > 0");
+    map_points
+        .iter()
+        .map(|p| {
+            let nn = tree.nearest_n::<kiddo::SquaredEuclidean>(p, k);
+            if nn.len() < 3 {
+                return [0.0, 0.0];
+            }
+            let inv = 1.0 / nn.len() as f64;
+            let (mut mx, mut my) = (0.0, 0.0);
+            for n in &nn {
+                let q = map_points[n.item as usize];
+                mx += q[0] - p[0];
+                my += q[1] - p[1];
+            }
+            mx *= inv;
+            my *= inv;
+            let (mut cxx, mut cxy, mut cyy) = (0.0, 0.0, 0.0);
+            for n in &nn {
+                let q = map_points[n.item as usize];
+                let (dx, dy) = (q[0] - p[0] - mx, q[1] - p[1] - my);
+                cxx += dx * dx;
+                cxy += dx * dy;
+                cyy += dy * dy;
+            }
+            if cxx + cyy <= 0.0 {
+                return [0.0, 0.0];
+            }
+            // Direction of the major axis; the normal is perpendicular to it.
+            let phi = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+            [-phi.sin(), phi.cos()]
+        })
+        .collect()
+}
+
+/// Covariance over (x, y, yaw) (m^2, m rad, rad^2) of `pose` given inlier pairs
+/// `(scan point already in the map frame, plan index)`.
+///
+/// Returns a matrix of `inf` on the diagonal (and 0 elsewhere) when fewer than four pairs have a
+/// normal or the information matrix is singular: the alignment then does not fix the pose.
+pub fn pose_covariance(
+    map: &PointMap,
+    normals: &[[f64; 2]],
+    pose: &Pose2,
+    pairs: &[([f64; 2], u32)],
+) -> Matrix3<f64> {
+    let mut h = Matrix3::<f64>::zeros();
+    let mut sum_sq = 0.0;
+    let mut m = 0usize;
+    for (p, idx) in pairs {
+        let n = normals[*idx as usize];
+        if n == [0.0, 0.0] {
+            continue;
+        }
+        let q = map.points()[*idx as usize];
+        let r = n[0] * (p[0] - q[0]) + n[1] * (p[1] - q[1]);
+        let lever = [p[0] - pose.x, p[1] - pose.y];
+        let j = Vector3::new(n[0], n[1], n[0] * -lever[1] + n[1] * lever[0]);
+        h += j * j.transpose();
+        sum_sq += r * r;
+        m += 1;
+    }
+    let unknown = Matrix3::from_diagonal_element(f64::INFINITY);
+    if m < 4 {
+        return unknown;
+    }
+    let sigma2 = sum_sq / (m - 3) as f64;
+    match h.try_inverse() {
+        Some(inv)
+            if inv.iter().all(|v| v.is_finite())
+                && inv[(0, 0)] > 0.0
+                && inv[(1, 1)] > 0.0
+                && inv[(2, 2)] > 0.0 =>
+        {
+            let c = inv * sigma2;
+            (c + c.transpose()) * 0.5
+        }
+        _ => unknown,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_of_a_straight_wall_are_perpendicular() {
+        let pts: Vec<[f64; 2]> = (0..50).map(|i| [i as f64 * 0.05, 1.0]).collect();
+        let map = PointMap::new(pts, None).unwrap();
+        for n in estimate_normals(map.points(), map.tree()) {
+            assert!(
+                n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9,
+                "{n:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn corridor_is_unconstrained_along_its_axis() {
+        // Two long parallel walls: x is free, y and yaw are fixed.
+        let mut pts = Vec::new();
+        for i in 0..400 {
+            let x = i as f64 * 0.05;
+            pts.push([x, 1.0]);
+            pts.push([x, -1.0]);
+        }
+        let map = PointMap::new(pts.clone(), None).unwrap();
+        let normals = estimate_normals(map.points(), map.tree());
+        let pose = Pose2::new(10.0, 0.0, 0.0);
+        let pairs: Vec<([f64; 2], u32)> = (0..pts.len())
+            .step_by(3)
+            .map(|i| {
+                let jitter = if i % 2 == 0 { 0.004 } else { -0.003 };
+                ([pts[i][0], pts[i][1] + jitter], i as u32)
+            })
+            .collect();
+        let cov = pose_covariance(&map, &normals, &pose, &pairs);
+        assert!(
+            cov[(0, 0)].is_infinite() || cov[(0, 0)] > 1e3 * cov[(1, 1)],
+            "{cov}"
+        );
+    }
+
+    #[test]
+    fn room_covariance_is_small_and_scales_with_noise() {
+        let mut pts = Vec::new();
+        for i in 0..=100 {
+            let t = i as f64 * 0.05;
+            pts.extend([[t, 0.0], [t, 5.0], [0.0, t], [5.0, t]]);
+        }
+        let map = PointMap::new(pts.clone(), None).unwrap();
+        let normals = estimate_normals(map.points(), map.tree());
+        let pose = Pose2::new(2.5, 2.5, 0.0);
+        let covariance_for = |noise: f64| {
+            let pairs: Vec<([f64; 2], u32)> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let s = if i % 2 == 0 { noise } else { -noise };
+                    ([p[0] + s, p[1] + s], i as u32)
+                })
+                .collect();
+            pose_covariance(&map, &normals, &pose, &pairs)
+        };
+        let c1 = covariance_for(0.01);
+        let c2 = covariance_for(0.02);
+        assert!(
+            c1[(0, 0)].is_finite() && c1[(0, 0)] > 0.0 && c1[(0, 0)] < 1e-5,
+            "{c1}"
+        );
+        assert!(
+            (c2[(0, 0)] / c1[(0, 0)] - 4.0).abs() < 0.2,
+            "{} {}",
+            c1[(0, 0)],
+            c2[(0, 0)]
+        );
+        assert!(c1[(2, 2)] > 0.0 && c1[(2, 2)] < 1e-5);
+    }
+}

@@ -1,0 +1,80 @@
+//! Errors: every way the core refuses its input, each with a message that names the problem.
+
+/// Result type of the core.
+pub type Result<T> = std::result::Result<T, IcpError>;
+
+/// An input the core cannot work with. The bindings turn each into a Python `ValueError`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IcpError {
+    /// A point set that must hold points holds none.
+    #[error("{what} is empty: it needs at least one point")]
+    Empty {
+        /// Which input.
+        what: &'static str,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("{what} has a non-finite coordinate (NaN or inf) at row {row}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Row of the first offending point.
+        row: usize,
+    },
+    /// Fewer usable points than the computation needs.
+    #[error("{what} has {got} usable points; at least {need} are needed")]
+    TooFewPoints {
+        /// Which input.
+        what: &'static str,
+        /// How many there were.
+        got: usize,
+        /// How many are needed.
+        need: usize,
+    },
+    /// A configuration value outside its allowed range.
+    #[error("invalid {name} = {value}: {requirement}")]
+    InvalidParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value, as text.
+        value: String,
+        /// What it must satisfy.
+        requirement: &'static str,
+    },
+    /// The visibility raster of a plan would be too large to hold.
+    #[error(
+        "the plan's visibility raster at {resolution} m would need {cells} cells (limit {limit}); \
+         give a coarser resolution"
+    )]
+    RasterTooLarge {
+        /// Requested resolution, metres per cell.
+        resolution: f64,
+        /// Cells it would need.
+        cells: f64,
+        /// The most cells allowed.
+        limit: usize,
+    },
+}
+
+/// Checks that every coordinate of `points` is finite.
+pub fn check_finite(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
+    match points
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        Some(row) => Err(IcpError::NonFinite { what, row }),
+        None => Ok(()),
+    }
+}
+
+/// Builds an [`IcpError::InvalidParameter`].
+pub fn invalid(
+    name: &'static str,
+    value: impl std::fmt::Display,
+    requirement: &'static str,
+) -> IcpError {
+    IcpError::InvalidParameter {
+        name,
+        value: value.to_string(),
+        requirement,
+    }
+}

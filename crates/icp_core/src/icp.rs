@@ -1,0 +1,520 @@
+//! Trimmed, coarse-to-fine point-to-point ICP of a scan against the plan.
+//!
+//! 1. The plan points visible from the initial guess are selected by ray casting (optional).
+//! 2. For each stage of the correspondence schedule (distances `max_correspondence_distance *
+//!    factor`), iterate: pair each scan point with its nearest plan point, drop pairs beyond the
+//!    stage's distance, keep the closest `trim_ratio` share, solve the rigid update in closed form.
+//! 3. Report the final pose with its inliers (pairs within `max_correspondence_distance`), RMSE,
+//!    and covariance.
+
+use crate::candidate_cache::CandidateCache;
+use crate::correspondence::{find_pairs, trim, Pair, TargetSet};
+use crate::covariance::pose_covariance;
+use crate::error::{check_finite, invalid, IcpError, Result};
+use crate::point_map::PointMap;
+use crate::pose::Pose2;
+use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
+use crate::termination::{pair_fingerprint, stage_end, Tolerances};
+use nalgebra::Matrix3;
+
+/// How far (metres) a scan point may move from where its KD-tree candidates were fetched before
+/// they are fetched again (see [`CandidateCache`]).
+pub const CACHE_MARGIN: f64 = 0.1;
+
+/// Settings of one alignment. Distances in metres, angles in radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IcpConfig {
+    /// Pairs farther apart than this are outliers (things not in the plan).
+    pub max_correspondence_distance: f64,
+    /// Most iterations over all stages.
+    pub max_iterations: usize,
+    /// Share (0, 1] of the in-range pairs, the closest ones, used by each update.
+    pub trim_ratio: f64,
+    /// A stage stops when a step moves less than this (and rotates less than `rotation_tolerance`).
+    pub translation_tolerance: f64,
+    /// See `translation_tolerance`. Both zero: every iteration runs.
+    pub rotation_tolerance: f64,
+    /// Use every k-th scan point for the iterations (all points are scored at the end).
+    pub subsample: usize,
+    /// Stage distances as factors of `max_correspondence_distance`, applied in order.
+    pub correspondence_schedule: Vec<f64>,
+    /// Match only against the plan points visible from the initial guess.
+    pub use_visibility: bool,
+    /// Range for the visibility ray casting; `None`: the scan's farthest point plus the largest
+    /// stage distance.
+    pub visibility_range: Option<f64>,
+}
+
+impl Default for IcpConfig {
+    fn default() -> Self {
+        Self {
+            max_correspondence_distance: 0.25,
+            max_iterations: 30,
+            trim_ratio: 1.0,
+            translation_tolerance: 1e-4,
+            rotation_tolerance: 1e-4,
+            subsample: 1,
+            correspondence_schedule: vec![1.0, 0.5, 0.25],
+            use_visibility: true,
+            visibility_range: None,
+        }
+    }
+}
+
+fn positive_finite(name: &'static str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(name, v, "must be a positive finite number"))
+    }
+}
+
+impl IcpConfig {
+    /// Checks every value; the error names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        positive_finite(
+            "max_correspondence_distance",
+            self.max_correspondence_distance,
+        )?;
+        if self.max_iterations == 0 {
+            return Err(invalid("max_iterations", 0, "must be at least 1"));
+        }
+        if !(self.trim_ratio > 0.0 && self.trim_ratio <= 1.0) {
+            return Err(invalid("trim_ratio", self.trim_ratio, "must be in (0, 1]"));
+        }
+        for (name, v) in [
+            ("translation_tolerance", self.translation_tolerance),
+            ("rotation_tolerance", self.rotation_tolerance),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(invalid(
+                    name,
+                    v,
+                    "must be a finite number >= 0 (0 disables it)",
+                ));
+            }
+        }
+        if self.subsample == 0 {
+            return Err(invalid("subsample", 0, "must be at least 1"));
+        }
+        if self.correspondence_schedule.is_empty() {
+            return Err(invalid(
+                "correspondence_schedule",
+                "[]",
+                "needs at least one stage",
+            ));
+        }
+        for &f in &self.correspondence_schedule {
+            positive_finite("correspondence_schedule factor", f)?;
+        }
+        if let Some(r) = self.visibility_range {
+            positive_finite("visibility_range", r)?;
+        }
+        Ok(())
+    }
+
+    fn tolerances(&self) -> Tolerances {
+        Tolerances {
+            translation: self.translation_tolerance,
+            rotation: self.rotation_tolerance,
+        }
+    }
+}
+
+/// Outcome of one alignment.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IcpResult {
+    /// `T_map_base`: the robot's pose in the map.
+    pub pose: Pose2,
+    /// The last stage ended on the tolerances or at a fixed point, not on the iteration budget.
+    pub converged: bool,
+    /// Iterations run over all stages.
+    pub iterations: usize,
+    /// Scan points within `max_correspondence_distance` of a (visible) plan point at `pose`.
+    pub num_inliers: usize,
+    /// `num_inliers` over all scan points.
+    pub inlier_ratio: f64,
+    /// Root mean square distance of the inliers to their plan points, metres (NaN without inliers).
+    pub rmse: f64,
+    /// Covariance over (x, y, yaw); `inf` on the diagonal when the pose is not constrained.
+    pub covariance: Matrix3<f64>,
+    /// Per input scan point: is it an inlier.
+    pub inlier_mask: Vec<bool>,
+    /// Plan points matched against (the visible ones, or all).
+    pub num_target_points: usize,
+}
+
+/// Aligns `scan` (points in the robot frame, metres) to `map` starting from `initial`
+/// (`T_map_base` guess).
+pub fn align(
+    map: &PointMap,
+    scan: &[[f64; 2]],
+    initial: Pose2,
+    config: &IcpConfig,
+) -> Result<IcpResult> {
+    config.validate()?;
+    if scan.is_empty() {
+        return Err(IcpError::Empty { what: "scan" });
+    }
+    check_finite("scan", scan)?;
+    if !initial.is_finite() {
+        return Err(invalid(
+            "initial_pose",
+            format!("{initial:?}"),
+            "must be finite",
+        ));
+    }
+    let used: Vec<[f64; 2]> = scan.iter().step_by(config.subsample).copied().collect();
+    if used.len() < MIN_PAIRS {
+        return Err(IcpError::TooFewPoints {
+            what: "scan (after subsampling)",
+            got: used.len(),
+            need: MIN_PAIRS,
+        });
+    }
+    let largest_factor = config
+        .correspondence_schedule
+        .iter()
+        .copied()
+        .fold(1.0, f64::max);
+    let target = if config.use_visibility {
+        let range = match config.visibility_range {
+            Some(r) => r,
+            None => {
+                let farthest = scan.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+                farthest + largest_factor * config.max_correspondence_distance
+            }
+        };
+        let visible = map.visible_from(initial, range)?;
+        if visible.len() >= MIN_PAIRS {
+            TargetSet::subset(map, visible).unwrap_or(TargetSet::Full(map))
+        } else {
+            TargetSet::Full(map)
+        }
+    } else {
+        TargetSet::Full(map)
+    };
+
+    let tolerances = config.tolerances();
+    let stages = config.correspondence_schedule.len();
+    let mut pose = initial;
+    let mut iterations = 0usize;
+    let mut converged = false;
+    let mut moved = Vec::with_capacity(used.len());
+    let mut pairs: Vec<Pair> = Vec::with_capacity(used.len());
+    let mut previous_fingerprint = None;
+    let largest_distance = largest_factor * config.max_correspondence_distance;
+    let mut cache = CandidateCache::new(largest_distance + CACHE_MARGIN);
+    'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
+        let distance = factor * config.max_correspondence_distance;
+        let end = stage_end(stage, stages, config.max_iterations);
+        converged = false;
+        previous_fingerprint = None;
+        while iterations < end {
+            pose.transform_points(&used, &mut moved);
+            cache.find_pairs(&target, &moved, distance, &mut pairs);
+            trim(&mut pairs, config.trim_ratio, MIN_PAIRS);
+            let mut acc = RigidAccumulator::default();
+            for p in &pairs {
+                acc.add(moved[p.source as usize], map.points()[p.target as usize]);
+            }
+            let Some(step) = acc.solve() else {
+                // Too few pairs to continue: keep the pose reached so far.
+                converged = false;
+                break 'stages;
+            };
+            pose = step.compose(&pose);
+            iterations += 1;
+            let fingerprint = pair_fingerprint(&pairs);
+            let fixed_point = previous_fingerprint == Some(fingerprint);
+            previous_fingerprint = Some(fingerprint);
+            converged = fixed_point || tolerances.is_small(&step);
+            if converged && !tolerances.disabled() {
+                break;
+            }
+        }
+    }
+    let _ = previous_fingerprint;
+    if std::env::var_os("PLANICP_DEBUG_CACHE").is_some() {
+        eprintln!(
+            "cache: refills {} direct {} stale {} iterations {iterations}",
+            cache.refills, cache.direct_passes, cache.stale_points
+        );
+    }
+    Ok(score(
+        map, &target, scan, pose, config, converged, iterations,
+    ))
+}
+
+/// Final scoring of all scan points at `pose`: inliers, RMSE, covariance.
+fn score(
+    map: &PointMap,
+    target: &TargetSet<'_>,
+    scan: &[[f64; 2]],
+    pose: Pose2,
+    config: &IcpConfig,
+    converged: bool,
+    iterations: usize,
+) -> IcpResult {
+    let mut moved = Vec::with_capacity(scan.len());
+    pose.transform_points(scan, &mut moved);
+    let mut pairs = Vec::with_capacity(scan.len());
+    find_pairs(
+        target,
+        &moved,
+        config.max_correspondence_distance,
+        &mut pairs,
+    );
+    let mut inlier_mask = vec![false; scan.len()];
+    let mut sum_sq = 0.0;
+    let mut inlier_pairs = Vec::with_capacity(pairs.len());
+    for p in &pairs {
+        inlier_mask[p.source as usize] = true;
+        sum_sq += p.sq_dist;
+        inlier_pairs.push((moved[p.source as usize], p.target));
+    }
+    let num_inliers = pairs.len();
+    let rmse = if num_inliers > 0 {
+        (sum_sq / num_inliers as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    let covariance = pose_covariance(map, map.normals(), &pose, &inlier_pairs);
+    IcpResult {
+        pose,
+        converged,
+        iterations,
+        num_inliers,
+        inlier_ratio: num_inliers as f64 / scan.len() as f64,
+        rmse,
+        covariance,
+        inlier_mask,
+        num_target_points: target.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Wall points of an L-shaped pair of rooms with 0.2 m thick walls, every 0.05 m on both faces.
+    fn rooms() -> Vec<[f64; 2]> {
+        let mut pts = Vec::new();
+        let mut segment = |a: [f64; 2], b: [f64; 2]| {
+            let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+            let n = (len / 0.05).round() as usize;
+            for i in 0..=n {
+                let t = i as f64 / n as f64;
+                pts.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+            }
+        };
+        for (a, b) in [
+            ([0.0, 0.0], [8.0, 0.0]),
+            ([8.0, 0.0], [8.0, 5.0]),
+            ([8.0, 5.0], [0.0, 5.0]),
+            ([0.0, 5.0], [0.0, 0.0]),
+            ([-0.2, -0.2], [8.2, -0.2]),
+            ([8.2, -0.2], [8.2, 5.2]),
+            ([8.2, 5.2], [-0.2, 5.2]),
+            ([-0.2, 5.2], [-0.2, -0.2]),
+            ([3.0, 0.0], [3.0, 3.0]),
+            ([3.2, 0.0], [3.2, 3.0]),
+            ([3.0, 3.0], [3.2, 3.0]),
+        ] {
+            segment(a, b);
+        }
+        pts
+    }
+
+    /// A scan seen from `truth` (robot frame): points on the visible wall faces, placed at random
+    /// along the wall (as beams would hit it, not on the plan's sample points), with uniform
+    /// noise of `noise` metres.
+    fn scan_from(map: &PointMap, truth: Pose2, rng: &mut ChaCha8Rng, noise: f64) -> Vec<[f64; 2]> {
+        let inv = truth.inverse();
+        map.visible_from(truth, 20.0)
+            .unwrap()
+            .iter()
+            .map(|&i| {
+                let q = map.points()[i as usize];
+                let n = map.normals()[i as usize];
+                let along = rng.random_range(-0.02..=0.02);
+                let w = [q[0] - n[1] * along, q[1] + n[0] * along];
+                let p = inv.transform_point(w);
+                [
+                    p[0] + rng.random_range(-noise..=noise),
+                    p[1] + rng.random_range(-noise..=noise),
+                ]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn recovers_known_transform_from_offset_guess() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let truth = Pose2::new(5.5, 2.2, 0.4);
+        let scan = scan_from(&map, truth, &mut rng, 0.0);
+        let guess = Pose2::new(5.7, 2.05, 0.45);
+        let res = align(&map, &scan, guess, &IcpConfig::default()).unwrap();
+        // Point-to-point pairs with 5 cm plan spacing: a few millimetres of discretisation error.
+        assert!((res.pose.x - truth.x).abs() < 0.005, "{:?}", res.pose);
+        assert!((res.pose.y - truth.y).abs() < 0.005, "{:?}", res.pose);
+        assert!((res.pose.yaw - truth.yaw).abs() < 0.002, "{:?}", res.pose);
+        assert!(res.converged);
+        assert_eq!(res.num_inliers, scan.len());
+        assert!(res.rmse < 0.02, "rmse {}", res.rmse);
+    }
+
+    #[test]
+    fn zero_tolerances_run_every_iteration() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let truth = Pose2::new(5.0, 2.5, -0.2);
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let cfg = IcpConfig {
+            translation_tolerance: 0.0,
+            rotation_tolerance: 0.0,
+            max_iterations: 17,
+            ..IcpConfig::default()
+        };
+        let res = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &cfg).unwrap();
+        assert_eq!(res.iterations, 17);
+        assert!(
+            res.converged,
+            "a fixed point should be reached within 17 iterations"
+        );
+        let early = align(
+            &map,
+            &scan,
+            Pose2::new(5.1, 2.4, -0.15),
+            &IcpConfig::default(),
+        )
+        .unwrap();
+        assert!(
+            early.iterations < 17,
+            "tolerances should stop early, ran {}",
+            early.iterations
+        );
+        assert!((early.pose.x - res.pose.x).abs() < 1e-3);
+    }
+
+    #[test]
+    fn budget_exhaustion_is_not_convergence() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let truth = Pose2::new(5.0, 2.5, 0.0);
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let cfg = IcpConfig {
+            max_iterations: 1,
+            ..IcpConfig::default()
+        };
+        let res = align(&map, &scan, Pose2::new(5.2, 2.4, 0.05), &cfg).unwrap();
+        assert_eq!(res.iterations, 1);
+        assert!(!res.converged);
+    }
+
+    #[test]
+    fn outliers_beyond_max_distance_are_ignored() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let truth = Pose2::new(6.0, 1.5, 0.1);
+        let mut scan = scan_from(&map, truth, &mut rng, 0.005);
+        let clean = scan.len();
+        // A cabinet 0.5 m from the wall: not in the plan.
+        for i in 0..150 {
+            scan.push(
+                truth
+                    .inverse()
+                    .transform_point([4.0 + i as f64 * 0.01, 4.5]),
+            );
+        }
+        let res = align(
+            &map,
+            &scan,
+            Pose2::new(6.1, 1.6, 0.12),
+            &IcpConfig::default(),
+        )
+        .unwrap();
+        assert!(
+            (res.pose.x - truth.x).abs() < 0.01 && (res.pose.y - truth.y).abs() < 0.01,
+            "{:?}",
+            res.pose
+        );
+        assert!(
+            res.inlier_mask[clean..].iter().all(|&m| !m),
+            "cabinet points counted as inliers"
+        );
+        assert!(res.num_inliers >= clean * 95 / 100);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let cfg = IcpConfig::default();
+        let p = Pose2::new(1.0, 1.0, 0.0);
+        assert_eq!(
+            align(&map, &[], p, &cfg).unwrap_err(),
+            IcpError::Empty { what: "scan" }
+        );
+        assert!(matches!(
+            align(&map, &[[0.0, 0.0], [1.0, f64::INFINITY]], p, &cfg),
+            Err(IcpError::NonFinite { row: 1, .. })
+        ));
+        assert!(matches!(
+            align(&map, &[[0.0, 0.0], [1.0, 0.0]], p, &cfg),
+            Err(IcpError::TooFewPoints { .. })
+        ));
+        for bad in [
+            IcpConfig {
+                max_correspondence_distance: 0.0,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                max_correspondence_distance: f64::NAN,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                max_iterations: 0,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                trim_ratio: 0.0,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                trim_ratio: 1.5,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                translation_tolerance: -1.0,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                subsample: 0,
+                ..cfg.clone()
+            },
+            IcpConfig {
+                correspondence_schedule: vec![],
+                ..cfg.clone()
+            },
+            IcpConfig {
+                correspondence_schedule: vec![1.0, -0.5],
+                ..cfg.clone()
+            },
+            IcpConfig {
+                visibility_range: Some(0.0),
+                ..cfg.clone()
+            },
+        ] {
+            assert!(
+                matches!(
+                    align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], p, &bad),
+                    Err(IcpError::InvalidParameter { .. })
+                ),
+                "{bad:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! `icp_core`: the numerical engine of planicp.
+//!
+//! Aligns 2D LIDAR scans to a floor plan given as wall-surface points (metres, map frame).
+//! Everything here is pure Rust; the Python bindings live in the `planicp_py` crate.
+//!
+//! One concept per module:
+//! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
+//! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
+//! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
+//! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
+//! - [`correspondence`]: nearest-point pairing with a maximum distance.
+//! - [`candidate_cache`]: exact reuse of KD-tree radius queries across ICP iterations.
+//! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
+//! - [`termination`]: when an ICP stage stops.
+//! - [`icp`]: the trimmed, coarse-to-fine ICP loop and its configuration and result.
+//! - [`covariance`]: the pose covariance of a finished alignment.
+//! - [`error`]: every way the core can refuse its input.
+
+pub mod candidate_cache;
+pub mod correspondence;
+pub mod covariance;
+pub mod error;
+pub mod icp;
+pub mod point_map;
+pub mod pose;
+pub mod rigid_solver;
+pub mod termination;
+pub mod visibility;
+pub mod wall_raster;
+
+pub use error::{IcpError, Result};
+pub use icp::{align, IcpConfig, IcpResult};
+pub use point_map::PointMap;
+pub use pose::Pose2;

@@ -1,0 +1,199 @@
+//! The plan as the ICP sees it: wall-surface points in metres (map frame), a KD-tree over them and
+//! a visibility raster, all built once and shared read-only between alignments and threads.
+
+use crate::covariance;
+use crate::error::{check_finite, IcpError, Result};
+use crate::pose::Pose2;
+use crate::visibility;
+use crate::wall_raster::WallRaster;
+use kiddo::immutable::float::kdtree::ImmutableKdTree;
+use kiddo::SquaredEuclidean;
+
+/// KD-tree over 2D points; items are indices into the point slice it was built from.
+pub type Tree2 = ImmutableKdTree<f64, u32, 2, 16>;
+
+/// Largest number of points a map may hold (indices are `u32`).
+pub const MAX_POINTS: usize = u32::MAX as usize;
+
+/// When no raster resolution is given, the raster is coarsened until it has at most this many cells.
+pub const AUTO_RASTER_MAX_CELLS: f64 = 16.0 * 1024.0 * 1024.0;
+
+/// Wall points, their KD-tree, their wall normals and their visibility raster.
+#[derive(Debug, Clone)]
+pub struct PointMap {
+    points: Vec<[f64; 2]>,
+    tree: Tree2,
+    raster: WallRaster,
+    normals: Vec<[f64; 2]>,
+}
+
+impl PointMap {
+    /// Builds the map from wall points (metres, map frame).
+    ///
+    /// `raster_resolution` is the cell size of the visibility raster in metres; `None` estimates it
+    /// from the point spacing (see [`estimate_raster_resolution`]).
+    pub fn new(points: Vec<[f64; 2]>, raster_resolution: Option<f64>) -> Result<Self> {
+        if points.is_empty() {
+            return Err(IcpError::Empty { what: "plan" });
+        }
+        if points.len() > MAX_POINTS {
+            return Err(IcpError::TooFewPoints {
+                what: "plan (too many points)",
+                got: points.len(),
+                need: MAX_POINTS,
+            });
+        }
+        check_finite("plan", &points)?;
+        let tree = Tree2::new_from_slice(&points);
+        let resolution = match raster_resolution {
+            Some(r) => r,
+            None => estimate_raster_resolution(&points, &tree),
+        };
+        let raster = WallRaster::new(&points, resolution)?;
+        let normals = covariance::estimate_normals(&points, &tree);
+        Ok(Self {
+            points,
+            tree,
+            raster,
+            normals,
+        })
+    }
+
+    /// The wall points, metres, map frame.
+    pub fn points(&self) -> &[[f64; 2]] {
+        &self.points
+    }
+
+    /// Number of wall points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Never true: a map holds at least one point.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The KD-tree over all points.
+    pub fn tree(&self) -> &Tree2 {
+        &self.tree
+    }
+
+    /// Unit wall normal at every point (`[0, 0]` where none could be fitted).
+    pub fn normals(&self) -> &[[f64; 2]] {
+        &self.normals
+    }
+
+    /// The visibility raster.
+    pub fn raster(&self) -> &WallRaster {
+        &self.raster
+    }
+
+    /// Index and squared distance of the plan point nearest to `q`.
+    #[inline]
+    pub fn nearest(&self, q: [f64; 2]) -> (u32, f64) {
+        let nn = self.tree.nearest_one::<SquaredEuclidean>(&q);
+        (nn.item, nn.distance)
+    }
+
+    /// Indices (ascending) of the wall points a range sensor at `position` sees within `max_range`
+    /// metres. See [`visibility::visible_points`].
+    pub fn visible_from(&self, pose: Pose2, max_range: f64) -> Result<Vec<u32>> {
+        visibility::visible_points(&self.raster, [pose.x, pose.y], max_range)
+    }
+}
+
+/// A raster cell size that keeps consecutive wall points in touching cells: 1.5 times the median
+/// nearest-neighbour spacing of (up to 4096 evenly strided) points, coarsened if the raster would
+/// exceed [`AUTO_RASTER_MAX_CELLS`] cells. A single point or coincident points give 0.05 m.
+pub fn estimate_raster_resolution(points: &[[f64; 2]], tree: &Tree2) -> f64 {
+    const FALLBACK: f64 = 0.05;
+    let stride = (points.len() / 4096).max(1);
+    let mut spacing: Vec<f64> = points
+        .iter()
+        .step_by(stride)
+        .filter_map(|p| {
+            let nn =
+                tree.nearest_n::<SquaredEuclidean>(p, std::num::NonZero::new(2).expect("2 > 0"));
+            nn.iter()
+                .map(|n| n.distance)
+                .find(|&d| d > 0.0)
+                .map(f64::sqrt)
+        })
+        .collect();
+    let mut resolution = if spacing.is_empty() {
+        FALLBACK
+    } else {
+        let mid = spacing.len() / 2;
+        let (_, median, _) = spacing.select_nth_unstable_by(mid, f64::total_cmp);
+        1.5 * *median
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let area = (hi[0] - lo[0] + 2.0 * resolution) * (hi[1] - lo[1] + 2.0 * resolution);
+    if area / (resolution * resolution) > AUTO_RASTER_MAX_CELLS {
+        resolution = (area / AUTO_RASTER_MAX_CELLS).sqrt() * 1.01;
+    }
+    resolution
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn tree_matches_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        // Wall-like data: many points share an axis value.
+        let mut pts = Vec::new();
+        for i in 0..2000 {
+            let t = i as f64 * 0.01;
+            pts.push([t, 0.0]);
+            pts.push([0.0, t]);
+            pts.push([rng.random_range(-5.0..25.0), rng.random_range(-5.0..25.0)]);
+        }
+        let map = PointMap::new(pts.clone(), None).unwrap();
+        for _ in 0..2000 {
+            let q = [rng.random_range(-10.0..30.0), rng.random_range(-10.0..30.0)];
+            let (idx, d2) = map.nearest(q);
+            let best = pts
+                .iter()
+                .map(|p| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2))
+                .fold(f64::INFINITY, f64::min);
+            assert!((d2 - best).abs() < 1e-12, "tree {d2} vs brute force {best}");
+            let p = pts[idx as usize];
+            assert!(((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) - d2).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn rejects_empty_and_non_finite_plans() {
+        assert_eq!(
+            PointMap::new(vec![], None).unwrap_err(),
+            IcpError::Empty { what: "plan" }
+        );
+        assert_eq!(
+            PointMap::new(vec![[0.0, 0.0], [f64::NAN, 1.0]], None).unwrap_err(),
+            IcpError::NonFinite {
+                what: "plan",
+                row: 1
+            }
+        );
+    }
+
+    #[test]
+    fn estimated_resolution_follows_spacing() {
+        let pts: Vec<[f64; 2]> = (0..1000).map(|i| [i as f64 * 0.02, 0.0]).collect();
+        let map = PointMap::new(pts, None).unwrap();
+        assert!((map.raster().resolution() - 0.03).abs() < 1e-9);
+        let single = PointMap::new(vec![[1.0, 1.0]], None).unwrap();
+        assert!((single.raster().resolution() - 0.05).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,154 @@
+//! The rigid transform that best maps paired points onto each other, in closed form.
+//!
+//! Minimises `sum_i |R(theta) s_i + t - d_i|^2` over `theta` and `t` (the 2D case of
+//! Umeyama/Kabsch, without reflection): `theta = atan2(sum s'_i x d'_i, sum s'_i . d'_i)` over the
+//! centred points, `t = mean(d) - R mean(s)`.
+
+use crate::pose::Pose2;
+
+/// Fewest pairs the solver accepts: two distinct points fix a 2D rigid transform; a third guards
+/// against a lucky coincidence.
+pub const MIN_PAIRS: usize = 3;
+
+/// Running sums for the closed-form solution (add pairs one by one, then [`solve`](Self::solve)).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RigidAccumulator {
+    n: f64,
+    // Points are accumulated relative to the first pair, so that large map coordinates do not
+    // cancel in the centred moments.
+    ref_s: [f64; 2],
+    ref_d: [f64; 2],
+    sum_s: [f64; 2],
+    sum_d: [f64; 2],
+    // Raw second moments: sxx = sum s.x d.x, etc.
+    sxx: f64,
+    sxy: f64,
+    syx: f64,
+    syy: f64,
+}
+
+impl RigidAccumulator {
+    /// Adds the pair `source -> destination`.
+    #[inline]
+    pub fn add(&mut self, s: [f64; 2], d: [f64; 2]) {
+        if self.n == 0.0 {
+            self.ref_s = s;
+            self.ref_d = d;
+        }
+        let s = [s[0] - self.ref_s[0], s[1] - self.ref_s[1]];
+        let d = [d[0] - self.ref_d[0], d[1] - self.ref_d[1]];
+        self.n += 1.0;
+        self.sum_s[0] += s[0];
+        self.sum_s[1] += s[1];
+        self.sum_d[0] += d[0];
+        self.sum_d[1] += d[1];
+        self.sxx += s[0] * d[0];
+        self.sxy += s[0] * d[1];
+        self.syx += s[1] * d[0];
+        self.syy += s[1] * d[1];
+    }
+
+    /// Number of pairs added.
+    pub fn len(&self) -> usize {
+        self.n as usize
+    }
+
+    /// True when no pair was added.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0.0
+    }
+
+    /// The transform mapping sources onto destinations, or `None` with fewer than [`MIN_PAIRS`].
+    pub fn solve(&self) -> Option<Pose2> {
+        if self.len() < MIN_PAIRS {
+            return None;
+        }
+        let n = self.n;
+        let ms = [self.sum_s[0] / n, self.sum_s[1] / n];
+        let md = [self.sum_d[0] / n, self.sum_d[1] / n];
+        // Centred cross-covariance H = sum (s - ms)(d - md)^T.
+        let hxx = self.sxx - n * ms[0] * md[0];
+        let hxy = self.sxy - n * ms[0] * md[1];
+        let hyx = self.syx - n * ms[1] * md[0];
+        let hyy = self.syy - n * ms[1] * md[1];
+        let theta = (hxy - hyx).atan2(hxx + hyy);
+        let (s, c) = theta.sin_cos();
+        // Undo the reference shift: R (s + ref_s) + t = d + ref_d.
+        let ms = [ms[0] + self.ref_s[0], ms[1] + self.ref_s[1]];
+        let md = [md[0] + self.ref_d[0], md[1] + self.ref_d[1]];
+        let t = [
+            md[0] - (c * ms[0] - s * ms[1]),
+            md[1] - (s * ms[0] + c * ms[1]),
+        ];
+        let pose = Pose2::new(t[0], t[1], theta);
+        pose.is_finite().then_some(pose)
+    }
+}
+
+/// Convenience: the transform mapping `sources[i]` onto `destinations[i]`.
+pub fn solve_rigid(sources: &[[f64; 2]], destinations: &[[f64; 2]]) -> Option<Pose2> {
+    let mut acc = RigidAccumulator::default();
+    for (s, d) in sources.iter().zip(destinations) {
+        acc.add(*s, *d);
+    }
+    acc.solve()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn exact_on_noiseless_pairs() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..200 {
+            let truth = Pose2::new(
+                rng.random_range(-50.0..50.0),
+                rng.random_range(-50.0..50.0),
+                rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+            );
+            let src: Vec<[f64; 2]> = (0..rng.random_range(3..60))
+                .map(|_| [rng.random_range(-20.0..20.0), rng.random_range(-20.0..20.0)])
+                .collect();
+            let dst: Vec<[f64; 2]> = src.iter().map(|p| truth.transform_point(*p)).collect();
+            let est = solve_rigid(&src, &dst).unwrap();
+            assert!((est.x - truth.x).abs() < 1e-9, "{est:?} vs {truth:?}");
+            assert!((est.y - truth.y).abs() < 1e-9);
+            assert!(crate::pose::wrap_angle(est.yaw - truth.yaw).abs() < 1e-11);
+        }
+    }
+
+    #[test]
+    fn needs_three_pairs() {
+        assert!(solve_rigid(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.0], [1.0, 0.0]]).is_none());
+        assert!(solve_rigid(
+            &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            &[[1.0, 0.0], [2.0, 0.0], [1.0, 1.0]]
+        )
+        .is_some());
+    }
+
+    #[test]
+    fn least_squares_with_noise_is_unbiased_on_average() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let truth = Pose2::new(0.3, -0.2, 0.05);
+        let src: Vec<[f64; 2]> = (0..5000)
+            .map(|_| [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)])
+            .collect();
+        let dst: Vec<[f64; 2]> = src
+            .iter()
+            .map(|p| {
+                let q = truth.transform_point(*p);
+                [
+                    q[0] + rng.random_range(-0.01..0.01),
+                    q[1] + rng.random_range(-0.01..0.01),
+                ]
+            })
+            .collect();
+        let est = solve_rigid(&src, &dst).unwrap();
+        assert!((est.x - truth.x).abs() < 1e-3 && (est.y - truth.y).abs() < 1e-3);
+        assert!((est.yaw - truth.yaw).abs() < 1e-4);
+    }
+}

@@ -1,0 +1,262 @@
+//! `planicp._core`: a thin pyo3 layer over `icp_core`.
+//!
+//! Inputs are copied out of numpy arrays, the GIL is released for the numerical work, core errors
+//! become `PlanicpError` (a `ValueError`), and a panic inside the core is caught and raised as
+//! `PlanicpInternalError` (a `RuntimeError`) instead of crossing into Python.
+
+use icp_core::{IcpConfig, IcpError, IcpResult, PointMap, Pose2};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Arc;
+
+create_exception!(
+    _core,
+    PlanicpError,
+    PyValueError,
+    "An input planicp cannot work with; the message names the problem."
+);
+create_exception!(
+    _core,
+    PlanicpInternalError,
+    PyRuntimeError,
+    "A bug inside planicp's native core (a Rust panic, caught at the boundary). Please report it."
+);
+
+fn core_error(err: IcpError) -> PyErr {
+    PlanicpError::new_err(err.to_string())
+}
+
+/// Runs `f`, turning a core error into `PlanicpError` and a panic into `PlanicpInternalError`.
+fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) => Err(core_error(e)),
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".to_string());
+            Err(PlanicpInternalError::new_err(format!(
+                "internal error in planicp's native core: {msg}"
+            )))
+        }
+    }
+}
+
+/// Copies an (N, 2) float64 array into owned points; `what` names it in errors.
+fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
+    let shape = array.shape();
+    if shape[1] != 2 {
+        return Err(PlanicpError::new_err(format!(
+            "{what} must have shape (N, 2), got ({}, {})",
+            shape[0], shape[1]
+        )));
+    }
+    Ok(array
+        .as_array()
+        .rows()
+        .into_iter()
+        .map(|r| [r[0], r[1]])
+        .collect())
+}
+
+fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1]]).collect();
+    Array2::from_shape_vec((points.len(), 2), flat)
+        .expect("length matches shape")
+        .into_pyarray(py)
+}
+
+/// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster.
+#[pyclass(frozen, module = "planicp._core", name = "PointMap")]
+struct PyPointMap {
+    inner: Arc<PointMap>,
+}
+
+#[pymethods]
+impl PyPointMap {
+    #[new]
+    #[pyo3(signature = (points, raster_resolution=None))]
+    fn new(
+        py: Python<'_>,
+        points: PyReadonlyArray2<'_, f64>,
+        raster_resolution: Option<f64>,
+    ) -> PyResult<Self> {
+        let pts = points_from("plan points", &points)?;
+        let map = py.detach(|| guarded(|| PointMap::new(pts, raster_resolution)))?;
+        Ok(Self {
+            inner: Arc::new(map),
+        })
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    /// (N, 2) copy of the wall points.
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_to_array(py, self.inner.points())
+    }
+
+    /// (N, 2) unit wall normals ((0, 0) where none could be fitted).
+    #[getter]
+    fn normals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        points_to_array(py, self.inner.normals())
+    }
+
+    /// Cell size of the visibility raster, metres.
+    #[getter]
+    fn raster_resolution(&self) -> f64 {
+        self.inner.raster().resolution()
+    }
+
+    /// Indices of the wall points visible from (x, y) within max_range metres.
+    fn visible_indices<'py>(
+        &self,
+        py: Python<'py>,
+        x: f64,
+        y: f64,
+        max_range: f64,
+    ) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        let map = Arc::clone(&self.inner);
+        let idx = py.detach(|| guarded(|| map.visible_from(Pose2::new(x, y, 0.0), max_range)))?;
+        Ok(idx.into_pyarray(py))
+    }
+}
+
+/// Validated ICP settings (see `planicp.IcpConfig` for their meaning).
+#[pyclass(frozen, module = "planicp._core")]
+struct IcpSettings {
+    inner: IcpConfig,
+}
+
+#[pymethods]
+impl IcpSettings {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
+                        rotation_tolerance, subsample, correspondence_schedule, use_visibility,
+                        visibility_range=None))]
+    fn new(
+        max_correspondence_distance: f64,
+        max_iterations: usize,
+        trim_ratio: f64,
+        translation_tolerance: f64,
+        rotation_tolerance: f64,
+        subsample: usize,
+        correspondence_schedule: Vec<f64>,
+        use_visibility: bool,
+        visibility_range: Option<f64>,
+    ) -> PyResult<Self> {
+        let inner = IcpConfig {
+            max_correspondence_distance,
+            max_iterations,
+            trim_ratio,
+            translation_tolerance,
+            rotation_tolerance,
+            subsample,
+            correspondence_schedule,
+            use_visibility,
+            visibility_range,
+        };
+        inner.validate().map_err(core_error)?;
+        Ok(Self { inner })
+    }
+}
+
+/// The raw outcome of `align`; `planicp.IcpResult` wraps it.
+#[pyclass(frozen, module = "planicp._core")]
+struct Alignment {
+    inner: IcpResult,
+}
+
+#[pymethods]
+impl Alignment {
+    /// (x, y, yaw) of T_map_base: metres, metres, radians.
+    #[getter]
+    fn pose(&self) -> (f64, f64, f64) {
+        let p = self.inner.pose;
+        (p.x, p.y, p.yaw)
+    }
+    #[getter]
+    fn converged(&self) -> bool {
+        self.inner.converged
+    }
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+    #[getter]
+    fn num_inliers(&self) -> usize {
+        self.inner.num_inliers
+    }
+    #[getter]
+    fn inlier_ratio(&self) -> f64 {
+        self.inner.inlier_ratio
+    }
+    #[getter]
+    fn rmse(&self) -> f64 {
+        self.inner.rmse
+    }
+    #[getter]
+    fn num_target_points(&self) -> usize {
+        self.inner.num_target_points
+    }
+    /// 3x3 covariance over (x, y, yaw).
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let c = &self.inner.covariance;
+        Array2::from_shape_fn((3, 3), |(i, j)| c[(i, j)]).into_pyarray(py)
+    }
+    /// (N,) bool: which scan points are inliers.
+    #[getter]
+    fn inlier_mask<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.inner.inlier_mask.clone().into_pyarray(py)
+    }
+}
+
+/// Aligns scan points (N, 2, robot frame, metres) to the map from initial (x, y, yaw).
+#[pyfunction]
+fn align(
+    py: Python<'_>,
+    map: &PyPointMap,
+    scan: PyReadonlyArray2<'_, f64>,
+    initial: (f64, f64, f64),
+    settings: &IcpSettings,
+) -> PyResult<Alignment> {
+    let pts = points_from("scan points", &scan)?;
+    let map = Arc::clone(&map.inner);
+    let config = settings.inner.clone();
+    let initial = Pose2::new(initial.0, initial.1, initial.2);
+    let inner = py.detach(|| guarded(|| icp_core::align(&map, &pts, initial, &config)))?;
+    Ok(Alignment { inner })
+}
+
+/// Panics inside the guarded boundary, to prove that a panic surfaces as PlanicpInternalError.
+#[pyfunction]
+fn _panic_for_tests() -> PyResult<()> {
+    guarded(|| -> Result<(), IcpError> { panic!("deliberate panic for the boundary test") })
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MIN_SCAN_POINTS", icp_core::rigid_solver::MIN_PAIRS)?;
+    m.add("PlanicpError", m.py().get_type::<PlanicpError>())?;
+    m.add(
+        "PlanicpInternalError",
+        m.py().get_type::<PlanicpInternalError>(),
+    )?;
+    m.add_class::<PyPointMap>()?;
+    m.add_class::<IcpSettings>()?;
+    m.add_class::<Alignment>()?;
+    m.add_function(wrap_pyfunction!(align, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+    Ok(())
+}

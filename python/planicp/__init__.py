@@ -1,0 +1,36 @@
+"""planicp: localize a 2D-LIDAR robot against the architectural floor plan of its building.
+
+Quick start::
+
+    import planicp
+    plan = planicp.PlanMap.from_points(wall_xy)                  # (N, 2) metres, map frame
+    result = planicp.localize(scan_xy, plan, (x, y, yaw))        # scan in the robot frame
+    print(result.pose, result.inlier_ratio, result.covariance)
+
+Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_map_base.
+"""
+
+from __future__ import annotations
+
+from ._core import PlanicpError, PlanicpInternalError
+from ._core import __version__ as __version__
+from .icp_config import IcpConfig
+from .icp_result import IcpResult
+from .laser_scan import scan_to_points
+from .localize import localize
+from .localizer import AcceptanceGate, Estimate, Localizer
+from .plan_map import PlanMap
+
+__all__ = [
+    "AcceptanceGate",
+    "Estimate",
+    "IcpConfig",
+    "IcpResult",
+    "Localizer",
+    "PlanMap",
+    "PlanicpError",
+    "PlanicpInternalError",
+    "__version__",
+    "localize",
+    "scan_to_points",
+]

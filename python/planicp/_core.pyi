@@ -1,0 +1,72 @@
+"""Type stubs of the native core (crates/planicp_py). See the Python wrappers for full docs."""
+
+import numpy as np
+from numpy.typing import NDArray
+
+__version__: str
+MIN_SCAN_POINTS: int
+
+class PlanicpError(ValueError):
+    """An input planicp cannot work with; the message names the problem."""
+
+class PlanicpInternalError(RuntimeError):
+    """A bug inside planicp's native core (a Rust panic, caught at the boundary)."""
+
+class PointMap:
+    """Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster."""
+
+    def __new__(cls, points: NDArray[np.float64], raster_resolution: float | None = None) -> PointMap: ...
+    def __len__(self) -> int: ...
+    @property
+    def points(self) -> NDArray[np.float64]: ...
+    @property
+    def normals(self) -> NDArray[np.float64]: ...
+    @property
+    def raster_resolution(self) -> float: ...
+    def visible_indices(self, x: float, y: float, max_range: float) -> NDArray[np.uint32]: ...
+
+class IcpSettings:
+    """Validated ICP settings."""
+
+    def __new__(
+        cls,
+        max_correspondence_distance: float,
+        max_iterations: int,
+        trim_ratio: float,
+        translation_tolerance: float,
+        rotation_tolerance: float,
+        subsample: int,
+        correspondence_schedule: list[float],
+        use_visibility: bool,
+        visibility_range: float | None = None,
+    ) -> IcpSettings: ...
+
+class Alignment:
+    """The raw outcome of `align`."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]: ...
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def num_inliers(self) -> int: ...
+    @property
+    def inlier_ratio(self) -> float: ...
+    @property
+    def rmse(self) -> float: ...
+    @property
+    def num_target_points(self) -> int: ...
+    @property
+    def covariance(self) -> NDArray[np.float64]: ...
+    @property
+    def inlier_mask(self) -> NDArray[np.bool_]: ...
+
+def align(
+    map: PointMap,
+    scan: NDArray[np.float64],
+    initial: tuple[float, float, float],
+    settings: IcpSettings,
+) -> Alignment: ...
+def _panic_for_tests() -> None: ...

@@ -1,0 +1,77 @@
+"""Input checks shared by the public API: every rejection names the argument and the problem."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+Pose = tuple[float, float, float]
+"""(x, y, yaw): metres, metres, radians (REP-103: yaw counter-clockwise from +x)."""
+
+
+def as_points(value: Any, name: str, *, allow_empty: bool = False) -> NDArray[np.float64]:
+    """`value` as a C-contiguous (N, 2) float64 array of finite coordinates.
+
+    Raises:
+        TypeError: the values are not real numbers (bool, complex, strings, objects).
+        ValueError: wrong shape, empty (unless `allow_empty`), or a NaN/inf coordinate.
+    """
+    try:
+        arr = np.asarray(value)
+    except (ValueError, TypeError) as exc:  # ragged nested sequences
+        raise ValueError(f"{name} must be an (N, 2) array of numbers: {exc}") from None
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must hold real numbers (float or int), got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (N, 2), got {arr.shape}")
+    if arr.shape[0] == 0 and not allow_empty:
+        raise ValueError(f"{name} is empty: it needs at least one point")
+    out = np.ascontiguousarray(arr, dtype=np.float64)
+    finite = np.isfinite(out).all(axis=1)
+    if not finite.all():
+        row = int(np.flatnonzero(~finite)[0])
+        raise ValueError(f"{name} has a non-finite coordinate (NaN or inf) at row {row}: {out[row].tolist()}")
+    return out
+
+
+def as_pose(value: Any, name: str) -> Pose:
+    """`value` as a finite (x, y, yaw) tuple of floats."""
+    try:
+        arr = np.asarray(value)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{name} must be (x, y, yaw): {exc}") from None
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must hold real numbers (x, y, yaw), got dtype {arr.dtype}")
+    if arr.shape != (3,):
+        raise ValueError(f"{name} must be (x, y, yaw) with 3 values, got shape {arr.shape}")
+    x, y, yaw = (float(v) for v in arr)
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise ValueError(f"{name} must be finite, got {(x, y, yaw)}")
+    return (x, y, yaw)
+
+
+def positive(value: Any, name: str, unit: str = "") -> float:
+    """`value` as a positive finite float."""
+    v = real_number(value, name)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ValueError(f"{name} must be a positive finite number{unit and ' of ' + unit}, got {value!r}")
+    return v
+
+
+def real_number(value: Any, name: str) -> float:
+    """`value` as a float; bools and non-numbers are a TypeError."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r}")
+    return float(value)
+
+
+def whole_number(value: Any, name: str, minimum: int) -> int:
+    """`value` as an int >= `minimum`; floats and bools are a TypeError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__} {value!r}")
+    if value < minimum:
+        raise ValueError(f"{name} must be at least {minimum}, got {value}")
+    return int(value)

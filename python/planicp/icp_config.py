@@ -1,0 +1,111 @@
+"""Settings of one scan-to-plan alignment."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from . import _core
+from ._validation import positive, real_number, whole_number
+
+
+@dataclass(frozen=True)
+class IcpConfig:
+    """How `localize` aligns a scan to the plan. Distances in metres, angles in radians.
+
+    Attributes:
+        max_correspondence_distance: a scan point farther than this from every (visible) plan
+            point is an outlier: furniture, people and robots are not in the plan. The thesis used
+            0.25 m. It is also the distance at which the final inliers are counted.
+        max_iterations: most ICP iterations, over all stages of the schedule.
+        trim_ratio: share (0, 1] of the in-range pairs, the closest ones, that each update uses
+            (trimmed ICP). 1 keeps every pair within the stage's distance.
+        translation_tolerance: a stage ends when an update moves the pose less than this...
+        rotation_tolerance: ...and turns it less than this. 0 for both: always run
+            `max_iterations` (the stages then split them evenly).
+        subsample: use every k-th scan point for the iterations (the thesis used 2); every point is
+            still scored for `inlier_mask`, `num_inliers` and `rmse`.
+        correspondence_schedule: coarse-to-fine stages, as factors of
+            `max_correspondence_distance`: stage k rejects pairs beyond
+            `factor_k * max_correspondence_distance`.
+        use_visibility: match only against the wall faces visible from the initial guess (ray
+            cast through the plan), so that scan points cannot lock onto the far face of a wall.
+        visibility_range: range of that ray casting; None: the scan's farthest point plus the
+            largest stage distance.
+    """
+
+    max_correspondence_distance: float = 0.25
+    max_iterations: int = 30
+    trim_ratio: float = 1.0
+    translation_tolerance: float = 1e-4
+    rotation_tolerance: float = 1e-4
+    subsample: int = 1
+    correspondence_schedule: tuple[float, ...] = (1.0, 0.5, 0.25)
+    use_visibility: bool = True
+    visibility_range: float | None = None
+    _native: _core.IcpSettings = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        positive(self.max_correspondence_distance, "max_correspondence_distance", "metres")
+        whole_number(self.max_iterations, "max_iterations", 1)
+        ratio = real_number(self.trim_ratio, "trim_ratio")
+        if not (0.0 < ratio <= 1.0):
+            raise ValueError(f"trim_ratio must be in (0, 1], got {self.trim_ratio!r}")
+        for name in ("translation_tolerance", "rotation_tolerance"):
+            v = real_number(getattr(self, name), name)
+            if not (math.isfinite(v) and v >= 0.0):
+                raise ValueError(f"{name} must be a finite number >= 0 (0 disables it), got {v!r}")
+        whole_number(self.subsample, "subsample", 1)
+        schedule = self.correspondence_schedule
+        if isinstance(schedule, (str, bytes)) or not isinstance(schedule, Sequence):
+            raise TypeError(f"correspondence_schedule must be a sequence of factors, got {schedule!r}")
+        if len(schedule) == 0:
+            raise ValueError("correspondence_schedule needs at least one stage")
+        factors = tuple(positive(f, "correspondence_schedule factor") for f in schedule)
+        object.__setattr__(self, "correspondence_schedule", factors)
+        if not isinstance(self.use_visibility, bool):
+            raise TypeError(f"use_visibility must be a bool, got {self.use_visibility!r}")
+        if self.visibility_range is not None:
+            positive(self.visibility_range, "visibility_range", "metres")
+        native = _core.IcpSettings(
+            float(self.max_correspondence_distance),
+            int(self.max_iterations),
+            float(self.trim_ratio),
+            float(self.translation_tolerance),
+            float(self.rotation_tolerance),
+            int(self.subsample),
+            list(factors),
+            self.use_visibility,
+            None if self.visibility_range is None else float(self.visibility_range),
+        )
+        object.__setattr__(self, "_native", native)
+
+    @property
+    def stage_distances(self) -> tuple[float, ...]:
+        """The rejection distance of each stage, metres."""
+        return tuple(f * self.max_correspondence_distance for f in self.correspondence_schedule)
+
+    def replace(self, **changes: Any) -> IcpConfig:
+        """A copy with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values (YAML/JSON friendly); `from_dict` reads them back."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}
+        out["correspondence_schedule"] = list(self.correspondence_schedule)
+        return out
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> IcpConfig:
+        """The inverse of `to_dict`; unknown keys are an error naming them."""
+        known = {f.name for f in dataclasses.fields(cls) if f.init}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(f"unknown IcpConfig keys: {unknown}; known: {sorted(known)}")
+        kwargs = dict(values)
+        if "correspondence_schedule" in kwargs:
+            kwargs["correspondence_schedule"] = tuple(kwargs["correspondence_schedule"])
+        return cls(**kwargs)

@@ -1,0 +1,64 @@
+"""What one alignment found, and how good it is."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import Pose
+from .se2 import pose_to_matrix
+
+
+@dataclass(frozen=True, repr=False)
+class IcpResult:
+    """Outcome of `localize`.
+
+    Attributes:
+        pose: (x, y, yaw) of the robot in the map (T_map_base): metres, metres, radians.
+        converged: the last stage ended on the tolerances or at a fixed point (the pairs stopped
+            changing), not by running out of iterations.
+        iterations: ICP iterations run.
+        num_inliers: scan points within `max_correspondence_distance` of a (visible) plan point
+            at `pose`.
+        inlier_ratio: `num_inliers` over all scan points.
+        rmse: root mean square distance of the inliers to the plan, metres (NaN without inliers).
+        covariance: 3x3 over (x, y, yaw) in the map frame (m^2, m rad, rad^2), from the
+            point-to-wall residuals; `inf` on the diagonal when the scan does not fix the pose.
+        inlier_mask: (N,) bool over the input scan points.
+        num_target_points: plan points the scan was matched against (the visible ones, or all).
+    """
+
+    pose: Pose
+    converged: bool
+    iterations: int
+    num_inliers: int
+    inlier_ratio: float
+    rmse: float
+    covariance: NDArray[np.float64]
+    inlier_mask: NDArray[np.bool_]
+    num_target_points: int
+
+    @property
+    def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802 (frame-explicit name)
+        """3x3 homogeneous transform bringing robot-frame points into the map frame."""
+        return pose_to_matrix(self.pose)
+
+    @property
+    def std(self) -> tuple[float, float, float]:
+        """Standard deviations of (x, y, yaw) from the covariance: metres, metres, radians."""
+        d = np.diag(self.covariance)
+        return (math.sqrt(d[0]), math.sqrt(d[1]), math.sqrt(d[2]))
+
+    def __repr__(self) -> str:
+        x, y, yaw = self.pose
+        sx, sy, syaw = self.std
+        return (
+            f"IcpResult(pose=(x={x:.4f} m, y={y:.4f} m, yaw={math.degrees(yaw):.3f} deg), "
+            f"converged={self.converged}, iterations={self.iterations}, "
+            f"inliers={self.num_inliers}/{len(self.inlier_mask)} ({100 * self.inlier_ratio:.1f} %), "
+            f"rmse={self.rmse * 100:.2f} cm, "
+            f"std=(x {sx * 100:.2f} cm, y {sy * 100:.2f} cm, yaw {math.degrees(syaw):.3f} deg))"
+        )
