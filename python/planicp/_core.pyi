@@ -1,7 +1,21 @@
 """Type stubs of the native core (crates/planicp_py). See the Python wrappers for full docs."""
 
+from typing import final
+
 import numpy as np
 from numpy.typing import NDArray
+
+__all__ = [
+    "MIN_SCAN_POINTS",
+    "Alignment",
+    "IcpSettings",
+    "PlanicpError",
+    "PlanicpInternalError",
+    "PointMap",
+    "__version__",
+    "_panic_for_tests",
+    "align",
+]
 
 __version__: str
 MIN_SCAN_POINTS: int
@@ -12,6 +26,7 @@ class PlanicpError(ValueError):
 class PlanicpInternalError(RuntimeError):
     """A bug inside planicp's native core (a Rust panic, caught at the boundary)."""
 
+@final
 class PointMap:
     """Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster."""
 
@@ -25,6 +40,7 @@ class PointMap:
     def raster_resolution(self) -> float: ...
     def visible_indices(self, x: float, y: float, max_range: float) -> NDArray[np.uint32]: ...
 
+@final
 class IcpSettings:
     """Validated ICP settings."""
 
@@ -41,6 +57,7 @@ class IcpSettings:
         visibility_range: float | None = None,
     ) -> IcpSettings: ...
 
+@final
 class Alignment:
     """The raw outcome of `align`."""
 

@@ -52,4 +52,5 @@ def transform_points(pose: Pose, points: NDArray[np.float64]) -> NDArray[np.floa
     """(N, 2) points mapped by `pose`."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     rot = np.array([[c, -s], [s, c]])
-    return points @ rot.T + np.array(pose[:2])
+    moved: NDArray[np.float64] = points @ rot.T + np.array(pose[:2])
+    return moved
