@@ -54,6 +54,7 @@ class IcpSettings:
         subsample: int,
         correspondence_schedule: list[float],
         use_visibility: bool,
+        accelerate: bool,
         visibility_range: float | None = None,
     ) -> IcpSettings: ...
 

@@ -68,10 +68,12 @@ def real_number(value: Any, name: str) -> float:
     return float(value)
 
 
-def whole_number(value: Any, name: str, minimum: int) -> int:
-    """`value` as an int >= `minimum`; floats and bools are a TypeError."""
+def whole_number(value: Any, name: str, minimum: int, maximum: int = 2**31 - 1) -> int:
+    """`value` as an int in [`minimum`, `maximum`]; floats and bools are a TypeError."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"{name} must be an integer, got {type(value).__name__} {value!r}")
     if value < minimum:
         raise ValueError(f"{name} must be at least {minimum}, got {value}")
+    if value > maximum:
+        raise ValueError(f"{name} must be at most {maximum}, got {value}")
     return int(value)

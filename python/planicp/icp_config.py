@@ -33,6 +33,9 @@ class IcpConfig:
             `factor_k * max_correspondence_distance`.
         use_visibility: match only against the wall faces visible from the initial guess (ray
             cast through the plan), so that scan points cannot lock onto the far face of a wall.
+        accelerate: when successive updates keep moving the same way by shrinking amounts, jump
+            ahead along that series (Besl and McKay's accelerated ICP); a jump that makes the fit
+            worse is undone at the next iteration.
         visibility_range: range of that ray casting; None: the scan's farthest point plus the
             largest stage distance.
     """
@@ -45,6 +48,7 @@ class IcpConfig:
     subsample: int = 1
     correspondence_schedule: tuple[float, ...] = (1.0, 0.5, 0.25)
     use_visibility: bool = True
+    accelerate: bool = True
     visibility_range: float | None = None
     _native: _core.IcpSettings = field(init=False, repr=False, compare=False)
 
@@ -68,6 +72,8 @@ class IcpConfig:
         object.__setattr__(self, "correspondence_schedule", factors)
         if not isinstance(self.use_visibility, bool):
             raise TypeError(f"use_visibility must be a bool, got {self.use_visibility!r}")
+        if not isinstance(self.accelerate, bool):
+            raise TypeError(f"accelerate must be a bool, got {self.accelerate!r}")
         if self.visibility_range is not None:
             positive(self.visibility_range, "visibility_range", "metres")
         native = _core.IcpSettings(
@@ -79,6 +85,7 @@ class IcpConfig:
             int(self.subsample),
             list(factors),
             self.use_visibility,
+            self.accelerate,
             None if self.visibility_range is None else float(self.visibility_range),
         )
         object.__setattr__(self, "_native", native)

@@ -16,11 +16,7 @@ use std::hint::black_box;
 /// Both faces of an axis-aligned wall from `a` to `b` (thickness 0.2 m), points every 5 cm.
 fn wall(points: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
     let horizontal = (a[1] - b[1]).abs() < 1e-9;
-    let len = if horizontal {
-        (b[0] - a[0]).abs()
-    } else {
-        (b[1] - a[1]).abs()
-    };
+    let len = if horizontal { (b[0] - a[0]).abs() } else { (b[1] - a[1]).abs() };
     let n = (len / 0.05).round() as usize;
     for i in 0..=n {
         let t = i as f64 / n as f64;
@@ -69,10 +65,7 @@ fn scan(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
             let n = map.normals()[i];
             let along = rng.random_range(-0.025..0.025);
             let across = rng.random_range(-0.015..0.015);
-            inv.transform_point([
-                q[0] - n[1] * along + n[0] * across,
-                q[1] + n[0] * along + n[1] * across,
-            ])
+            inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
         })
         .collect()
 }
@@ -87,12 +80,8 @@ fn benches(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("build");
     g.throughput(Throughput::Elements(pts.len() as u64));
-    g.bench_function("kdtree", |b| {
-        b.iter(|| Tree2::new_from_slice(black_box(&pts)))
-    });
-    g.bench_function("point_map", |b| {
-        b.iter(|| PointMap::new(black_box(pts.clone()), None).unwrap())
-    });
+    g.bench_function("kdtree", |b| b.iter(|| Tree2::new_from_slice(black_box(&pts))));
+    g.bench_function("point_map", |b| b.iter(|| PointMap::new(black_box(pts.clone()), None).unwrap()));
     g.finish();
 
     let mut g = c.benchmark_group("correspondences_1080");
@@ -100,9 +89,7 @@ fn benches(c: &mut Criterion) {
     let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
     let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
     let full = TargetSet::Full(&map);
-    g.bench_function("full_plan", |b| {
-        b.iter(|| find_pairs(&full, black_box(&moved), 0.4, &mut pairs))
-    });
+    g.bench_function("full_plan", |b| b.iter(|| find_pairs(&full, black_box(&moved), 0.4, &mut pairs)));
     let visible = TargetSet::subset(&map, map.visible_from(guess, 30.0).unwrap()).unwrap();
     g.bench_function("visible_subset", |b| {
         b.iter(|| find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
@@ -110,9 +97,7 @@ fn benches(c: &mut Criterion) {
     g.finish();
 
     let mut g = c.benchmark_group("visibility");
-    g.bench_function("visible_from_30m", |b| {
-        b.iter(|| map.visible_from(black_box(guess), 30.0).unwrap())
-    });
+    g.bench_function("visible_from_30m", |b| b.iter(|| map.visible_from(black_box(guess), 30.0).unwrap()));
     g.finish();
 
     let mut g = c.benchmark_group("align_1080");
@@ -124,20 +109,8 @@ fn benches(c: &mut Criterion) {
     };
     for (name, cfg) in [
         ("fixed_30_iterations", fixed.clone()),
-        (
-            "fixed_30_no_visibility",
-            IcpConfig {
-                use_visibility: false,
-                ..fixed.clone()
-            },
-        ),
-        (
-            "default",
-            IcpConfig {
-                max_correspondence_distance: 0.4,
-                ..IcpConfig::default()
-            },
-        ),
+        ("fixed_30_no_visibility", IcpConfig { use_visibility: false, ..fixed.clone() }),
+        ("default", IcpConfig { max_correspondence_distance: 0.4, ..IcpConfig::default() }),
     ] {
         g.bench_with_input(BenchmarkId::from_parameter(name), &cfg, |b, cfg| {
             b.iter(|| align(&map, black_box(&scan), guess, cfg).unwrap())

@@ -78,22 +78,13 @@ impl<'a> TargetSet<'a> {
 
 /// Pairs every point of `transformed` (scan points already in the map frame) with its nearest
 /// target, keeping pairs closer than `max_distance` metres. `out` is cleared first.
-pub fn find_pairs(
-    target: &TargetSet<'_>,
-    transformed: &[[f64; 2]],
-    max_distance: f64,
-    out: &mut Vec<Pair>,
-) {
+pub fn find_pairs(target: &TargetSet<'_>, transformed: &[[f64; 2]], max_distance: f64, out: &mut Vec<Pair>) {
     out.clear();
     let max_sq = max_distance * max_distance;
     for (i, q) in transformed.iter().enumerate() {
         let (t, d2) = target.nearest(*q);
         if d2 <= max_sq {
-            out.push(Pair {
-                source: i as u32,
-                target: t,
-                sq_dist: d2,
-            });
+            out.push(Pair { source: i as u32, target: t, sq_dist: d2 });
         }
     }
 }
@@ -124,10 +115,7 @@ mod tests {
         let scan = [[1.0, 0.1], [2.0, 0.3], [3.05, -0.2]];
         let mut pairs = Vec::new();
         find_pairs(&target, &scan, 0.25, &mut pairs);
-        assert_eq!(
-            pairs.iter().map(|p| p.source).collect::<Vec<_>>(),
-            vec![0, 2]
-        );
+        assert_eq!(pairs.iter().map(|p| p.source).collect::<Vec<_>>(), vec![0, 2]);
         assert_eq!(pairs[0].target, 10);
         assert!((pairs[0].sq_dist - 0.01).abs() < 1e-12);
         assert!((pairs[1].sq_dist - (0.05f64.powi(2) + 0.04)).abs() < 1e-12);
@@ -146,13 +134,8 @@ mod tests {
 
     #[test]
     fn trim_keeps_the_closest_share() {
-        let mut pairs: Vec<Pair> = (0..10)
-            .map(|i| Pair {
-                source: i,
-                target: i,
-                sq_dist: (9 - i) as f64,
-            })
-            .collect();
+        let mut pairs: Vec<Pair> =
+            (0..10).map(|i| Pair { source: i, target: i, sq_dist: (9 - i) as f64 }).collect();
         trim(&mut pairs, 0.3, 2);
         let mut kept: Vec<u32> = pairs.iter().map(|p| p.source).collect();
         kept.sort_unstable();

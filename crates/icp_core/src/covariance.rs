@@ -106,10 +106,7 @@ mod tests {
         let pts: Vec<[f64; 2]> = (0..50).map(|i| [i as f64 * 0.05, 1.0]).collect();
         let map = PointMap::new(pts, None).unwrap();
         for n in estimate_normals(map.points(), map.tree()) {
-            assert!(
-                n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9,
-                "{n:?}"
-            );
+            assert!(n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9, "{n:?}");
         }
     }
 
@@ -133,10 +130,7 @@ mod tests {
             })
             .collect();
         let cov = pose_covariance(&map, &normals, &pose, &pairs);
-        assert!(
-            cov[(0, 0)].is_infinite() || cov[(0, 0)] > 1e3 * cov[(1, 1)],
-            "{cov}"
-        );
+        assert!(cov[(0, 0)].is_infinite() || cov[(0, 0)] > 1e3 * cov[(1, 1)], "{cov}");
     }
 
     #[test]
@@ -162,16 +156,8 @@ mod tests {
         };
         let c1 = covariance_for(0.01);
         let c2 = covariance_for(0.02);
-        assert!(
-            c1[(0, 0)].is_finite() && c1[(0, 0)] > 0.0 && c1[(0, 0)] < 1e-5,
-            "{c1}"
-        );
-        assert!(
-            (c2[(0, 0)] / c1[(0, 0)] - 4.0).abs() < 0.2,
-            "{} {}",
-            c1[(0, 0)],
-            c2[(0, 0)]
-        );
+        assert!(c1[(0, 0)].is_finite() && c1[(0, 0)] > 0.0 && c1[(0, 0)] < 1e-5, "{c1}");
+        assert!((c2[(0, 0)] / c1[(0, 0)] - 4.0).abs() < 0.2, "{} {}", c1[(0, 0)], c2[(0, 0)]);
         assert!(c1[(2, 2)] > 0.0 && c1[(2, 2)] < 1e-5);
     }
 }

@@ -20,6 +20,19 @@ pub enum IcpError {
         /// Row of the first offending point.
         row: usize,
     },
+    /// A coordinate is finite but too large to be metres in a building.
+    #[error(
+        "{what} has a coordinate of {value:e} m at row {row}, beyond +-{MAX_COORDINATE:e} m; \
+         planicp works in metres: express the points in a local frame"
+    )]
+    OutOfRange {
+        /// Which input.
+        what: &'static str,
+        /// Row of the first offending point.
+        row: usize,
+        /// The offending value.
+        value: f64,
+    },
     /// Fewer usable points than the computation needs.
     #[error("{what} has {got} usable points; at least {need} are needed")]
     TooFewPoints {
@@ -55,26 +68,25 @@ pub enum IcpError {
     },
 }
 
-/// Checks that every coordinate of `points` is finite.
+/// Largest coordinate magnitude accepted, metres. At 1e9 m a double still resolves 0.1 micrometre;
+/// far beyond it, centimetre geometry and the rasters built from it break down.
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// Checks that every coordinate of `points` is finite and within [`MAX_COORDINATE`].
 pub fn check_finite(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
-    match points
-        .iter()
-        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
-    {
-        Some(row) => Err(IcpError::NonFinite { what, row }),
-        None => Ok(()),
+    for (row, p) in points.iter().enumerate() {
+        if !(p[0].is_finite() && p[1].is_finite()) {
+            return Err(IcpError::NonFinite { what, row });
+        }
+        if p[0].abs() > MAX_COORDINATE || p[1].abs() > MAX_COORDINATE {
+            let value = if p[0].abs() > p[1].abs() { p[0] } else { p[1] };
+            return Err(IcpError::OutOfRange { what, row, value });
+        }
     }
+    Ok(())
 }
 
 /// Builds an [`IcpError::InvalidParameter`].
-pub fn invalid(
-    name: &'static str,
-    value: impl std::fmt::Display,
-    requirement: &'static str,
-) -> IcpError {
-    IcpError::InvalidParameter {
-        name,
-        value: value.to_string(),
-        requirement,
-    }
+pub fn invalid(name: &'static str, value: impl std::fmt::Display, requirement: &'static str) -> IcpError {
+    IcpError::InvalidParameter { name, value: value.to_string(), requirement }
 }

@@ -7,6 +7,7 @@
 //! 3. Report the final pose with its inliers (pairs within `max_correspondence_distance`), RMSE,
 //!    and covariance.
 
+use crate::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
 use crate::candidate_cache::CandidateCache;
 use crate::correspondence::{find_pairs, trim, Pair, TargetSet};
 use crate::covariance::pose_covariance;
@@ -17,9 +18,21 @@ use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
 use crate::termination::{pair_fingerprint, stage_end, Tolerances};
 use nalgebra::Matrix3;
 
-/// How far (metres) a scan point may move from where its KD-tree candidates were fetched before
-/// they are fetched again (see [`CandidateCache`]).
-pub const CACHE_MARGIN: f64 = 0.1;
+/// Candidates are fetched within this many times a stage's distance, so a scan point may move
+/// by (factor - 1) times the distance before its candidates must be fetched again
+/// (see [`CandidateCache`]).
+pub const CACHE_RADIUS_FACTOR: f64 = 2.0;
+
+/// A stage's rejection distance: `factor * max_distance`, but never below `SPACING_FLOOR` plan
+/// point spacings (nor above `max_distance`): closer than that, correct pairs are lost to the
+/// plan's sampling (a scan point between two samples is half a spacing from both) plus noise.
+pub fn stage_distance(factor: f64, max_distance: f64, spacing: f64) -> f64 {
+    let floor = (SPACING_FLOOR * spacing).min(max_distance);
+    (factor * max_distance).max(floor)
+}
+
+/// See [`stage_distance`].
+pub const SPACING_FLOOR: f64 = 2.0;
 
 /// Settings of one alignment. Distances in metres, angles in radians.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,6 +53,8 @@ pub struct IcpConfig {
     pub correspondence_schedule: Vec<f64>,
     /// Match only against the plan points visible from the initial guess.
     pub use_visibility: bool,
+    /// Extrapolate slowly converging iterations (see [`crate::acceleration`]).
+    pub accelerate: bool,
     /// Range for the visibility ray casting; `None`: the scan's farthest point plus the largest
     /// stage distance.
     pub visibility_range: Option<f64>,
@@ -56,6 +71,7 @@ impl Default for IcpConfig {
             subsample: 1,
             correspondence_schedule: vec![1.0, 0.5, 0.25],
             use_visibility: true,
+            accelerate: true,
             visibility_range: None,
         }
     }
@@ -72,10 +88,7 @@ fn positive_finite(name: &'static str, v: f64) -> Result<()> {
 impl IcpConfig {
     /// Checks every value; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
-        positive_finite(
-            "max_correspondence_distance",
-            self.max_correspondence_distance,
-        )?;
+        positive_finite("max_correspondence_distance", self.max_correspondence_distance)?;
         if self.max_iterations == 0 {
             return Err(invalid("max_iterations", 0, "must be at least 1"));
         }
@@ -87,22 +100,14 @@ impl IcpConfig {
             ("rotation_tolerance", self.rotation_tolerance),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(invalid(
-                    name,
-                    v,
-                    "must be a finite number >= 0 (0 disables it)",
-                ));
+                return Err(invalid(name, v, "must be a finite number >= 0 (0 disables it)"));
             }
         }
         if self.subsample == 0 {
             return Err(invalid("subsample", 0, "must be at least 1"));
         }
         if self.correspondence_schedule.is_empty() {
-            return Err(invalid(
-                "correspondence_schedule",
-                "[]",
-                "needs at least one stage",
-            ));
+            return Err(invalid("correspondence_schedule", "[]", "needs at least one stage"));
         }
         for &f in &self.correspondence_schedule {
             positive_finite("correspondence_schedule factor", f)?;
@@ -114,10 +119,7 @@ impl IcpConfig {
     }
 
     fn tolerances(&self) -> Tolerances {
-        Tolerances {
-            translation: self.translation_tolerance,
-            rotation: self.rotation_tolerance,
-        }
+        Tolerances { translation: self.translation_tolerance, rotation: self.rotation_tolerance }
     }
 }
 
@@ -146,24 +148,16 @@ pub struct IcpResult {
 
 /// Aligns `scan` (points in the robot frame, metres) to `map` starting from `initial`
 /// (`T_map_base` guess).
-pub fn align(
-    map: &PointMap,
-    scan: &[[f64; 2]],
-    initial: Pose2,
-    config: &IcpConfig,
-) -> Result<IcpResult> {
+pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConfig) -> Result<IcpResult> {
     config.validate()?;
     if scan.is_empty() {
         return Err(IcpError::Empty { what: "scan" });
     }
     check_finite("scan", scan)?;
     if !initial.is_finite() {
-        return Err(invalid(
-            "initial_pose",
-            format!("{initial:?}"),
-            "must be finite",
-        ));
+        return Err(invalid("initial_pose", format!("{initial:?}"), "must be finite"));
     }
+    check_finite("initial_pose", &[[initial.x, initial.y]])?;
     let used: Vec<[f64; 2]> = scan.iter().step_by(config.subsample).copied().collect();
     if used.len() < MIN_PAIRS {
         return Err(IcpError::TooFewPoints {
@@ -172,11 +166,7 @@ pub fn align(
             need: MIN_PAIRS,
         });
     }
-    let largest_factor = config
-        .correspondence_schedule
-        .iter()
-        .copied()
-        .fold(1.0, f64::max);
+    let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
     let target = if config.use_visibility {
         let range = match config.visibility_range {
             Some(r) => r,
@@ -196,27 +186,48 @@ pub fn align(
     };
 
     let tolerances = config.tolerances();
+    // Lever arm that turns a rotation into metres for the extrapolation: RMS range of the scan.
+    let scan_radius =
+        (used.iter().map(|p| p[0] * p[0] + p[1] * p[1]).sum::<f64>() / used.len() as f64).sqrt();
     let stages = config.correspondence_schedule.len();
     let mut pose = initial;
     let mut iterations = 0usize;
     let mut converged = false;
     let mut moved = Vec::with_capacity(used.len());
     let mut pairs: Vec<Pair> = Vec::with_capacity(used.len());
-    let mut previous_fingerprint = None;
-    let largest_distance = largest_factor * config.max_correspondence_distance;
-    let mut cache = CandidateCache::new(largest_distance + CACHE_MARGIN);
+    let radius_factor = CACHE_RADIUS_FACTOR;
+    let mut cache = CandidateCache::new(radius_factor * largest_factor * config.max_correspondence_distance);
     'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
-        let distance = factor * config.max_correspondence_distance;
+        let distance = stage_distance(*factor, config.max_correspondence_distance, map.spacing());
         let end = stage_end(stage, stages, config.max_iterations);
         converged = false;
-        previous_fingerprint = None;
+        let mut previous_fingerprint = None;
+        let mut last_update: Option<Update> = None;
+        // Pose before an extrapolation and the cost it must not exceed.
+        let mut pending: Option<(Pose2, f64)> = None;
+        let mut cooldown = 0usize;
         while iterations < end {
             pose.transform_points(&used, &mut moved);
             cache.find_pairs(&target, &moved, distance, &mut pairs);
+            if let Some((before, bound)) = pending.take() {
+                if truncated_cost(&pairs, used.len(), distance) > bound {
+                    // The jump made the fit worse: go back and spend this iteration there.
+                    pose = before;
+                    last_update = None;
+                    cooldown = COOLDOWN;
+                    iterations += 1;
+                    continue;
+                }
+            }
+            let cost = truncated_cost(&pairs, used.len(), distance);
             trim(&mut pairs, config.trim_ratio, MIN_PAIRS);
             let mut acc = RigidAccumulator::default();
+            let mut centroid = [0.0, 0.0];
             for p in &pairs {
-                acc.add(moved[p.source as usize], map.points()[p.target as usize]);
+                let s = moved[p.source as usize];
+                centroid[0] += s[0];
+                centroid[1] += s[1];
+                acc.add(s, map.points()[p.target as usize]);
             }
             let Some(step) = acc.solve() else {
                 // Too few pairs to continue: keep the pose reached so far.
@@ -232,39 +243,50 @@ pub fn align(
             if converged && !tolerances.disabled() {
                 break;
             }
+            let n = pairs.len() as f64;
+            let update = Update::new(&step, [centroid[0] / n, centroid[1] / n]);
+            if config.accelerate && cooldown == 0 && !fixed_point {
+                if let Some(jump) =
+                    last_update.as_ref().and_then(|prev| extrapolation(prev, &update, scan_radius))
+                {
+                    pending = Some((pose, cost));
+                    pose = jump.compose(&pose);
+                }
+            }
+            cooldown = cooldown.saturating_sub(1);
+            last_update = Some(update);
         }
     }
-    let _ = previous_fingerprint;
-    if std::env::var_os("PLANICP_DEBUG_CACHE").is_some() {
-        eprintln!(
-            "cache: refills {} direct {} stale {} iterations {iterations}",
-            cache.refills, cache.direct_passes, cache.stale_points
-        );
-    }
-    Ok(score(
-        map, &target, scan, pose, config, converged, iterations,
-    ))
+    let scored_with = (config.subsample == 1).then_some(&mut cache);
+    let outcome = LoopOutcome { pose, converged, iterations };
+    Ok(score(map, &target, scored_with, scan, config, outcome))
+}
+
+/// Where the iterations ended.
+struct LoopOutcome {
+    pose: Pose2,
+    converged: bool,
+    iterations: usize,
 }
 
 /// Final scoring of all scan points at `pose`: inliers, RMSE, covariance.
 fn score(
     map: &PointMap,
     target: &TargetSet<'_>,
+    cache: Option<&mut CandidateCache>,
     scan: &[[f64; 2]],
-    pose: Pose2,
     config: &IcpConfig,
-    converged: bool,
-    iterations: usize,
+    LoopOutcome { pose, converged, iterations }: LoopOutcome,
 ) -> IcpResult {
     let mut moved = Vec::with_capacity(scan.len());
     pose.transform_points(scan, &mut moved);
     let mut pairs = Vec::with_capacity(scan.len());
-    find_pairs(
-        target,
-        &moved,
-        config.max_correspondence_distance,
-        &mut pairs,
-    );
+    let d = config.max_correspondence_distance;
+    match cache {
+        // The iterations ran on every scan point, so the cache holds candidates for all of them.
+        Some(cache) if d <= cache.radius() => cache.find_pairs(target, &moved, d, &mut pairs),
+        _ => find_pairs(target, &moved, d, &mut pairs),
+    }
     let mut inlier_mask = vec![false; scan.len()];
     let mut sum_sq = 0.0;
     let mut inlier_pairs = Vec::with_capacity(pairs.len());
@@ -274,11 +296,7 @@ fn score(
         inlier_pairs.push((moved[p.source as usize], p.target));
     }
     let num_inliers = pairs.len();
-    let rmse = if num_inliers > 0 {
-        (sum_sq / num_inliers as f64).sqrt()
-    } else {
-        f64::NAN
-    };
+    let rmse = if num_inliers > 0 { (sum_sq / num_inliers as f64).sqrt() } else { f64::NAN };
     let covariance = pose_covariance(map, map.normals(), &pose, &inlier_pairs);
     IcpResult {
         pose,
@@ -342,10 +360,7 @@ mod tests {
                 let along = rng.random_range(-0.02..=0.02);
                 let w = [q[0] - n[1] * along, q[1] + n[0] * along];
                 let p = inv.transform_point(w);
-                [
-                    p[0] + rng.random_range(-noise..=noise),
-                    p[1] + rng.random_range(-noise..=noise),
-                ]
+                [p[0] + rng.random_range(-noise..=noise), p[1] + rng.random_range(-noise..=noise)]
             })
             .collect()
     }
@@ -381,19 +396,10 @@ mod tests {
         };
         let res = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &cfg).unwrap();
         assert_eq!(res.iterations, 17);
+        assert!(res.converged, "a fixed point should be reached within 17 iterations");
+        let early = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &IcpConfig::default()).unwrap();
         assert!(
-            res.converged,
-            "a fixed point should be reached within 17 iterations"
-        );
-        let early = align(
-            &map,
-            &scan,
-            Pose2::new(5.1, 2.4, -0.15),
-            &IcpConfig::default(),
-        )
-        .unwrap();
-        assert!(
-            early.iterations < 17,
+            early.iterations < IcpConfig::default().max_iterations,
             "tolerances should stop early, ran {}",
             early.iterations
         );
@@ -406,10 +412,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let truth = Pose2::new(5.0, 2.5, 0.0);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
-        let cfg = IcpConfig {
-            max_iterations: 1,
-            ..IcpConfig::default()
-        };
+        let cfg = IcpConfig { max_iterations: 1, ..IcpConfig::default() };
         let res = align(&map, &scan, Pose2::new(5.2, 2.4, 0.05), &cfg).unwrap();
         assert_eq!(res.iterations, 1);
         assert!(!res.converged);
@@ -424,28 +427,11 @@ mod tests {
         let clean = scan.len();
         // A cabinet 0.5 m from the wall: not in the plan.
         for i in 0..150 {
-            scan.push(
-                truth
-                    .inverse()
-                    .transform_point([4.0 + i as f64 * 0.01, 4.5]),
-            );
+            scan.push(truth.inverse().transform_point([4.0 + i as f64 * 0.01, 4.5]));
         }
-        let res = align(
-            &map,
-            &scan,
-            Pose2::new(6.1, 1.6, 0.12),
-            &IcpConfig::default(),
-        )
-        .unwrap();
-        assert!(
-            (res.pose.x - truth.x).abs() < 0.01 && (res.pose.y - truth.y).abs() < 0.01,
-            "{:?}",
-            res.pose
-        );
-        assert!(
-            res.inlier_mask[clean..].iter().all(|&m| !m),
-            "cabinet points counted as inliers"
-        );
+        let res = align(&map, &scan, Pose2::new(6.1, 1.6, 0.12), &IcpConfig::default()).unwrap();
+        assert!((res.pose.x - truth.x).abs() < 0.01 && (res.pose.y - truth.y).abs() < 0.01, "{:?}", res.pose);
+        assert!(res.inlier_mask[clean..].iter().all(|&m| !m), "cabinet points counted as inliers");
         assert!(res.num_inliers >= clean * 95 / 100);
     }
 
@@ -454,10 +440,7 @@ mod tests {
         let map = PointMap::new(rooms(), None).unwrap();
         let cfg = IcpConfig::default();
         let p = Pose2::new(1.0, 1.0, 0.0);
-        assert_eq!(
-            align(&map, &[], p, &cfg).unwrap_err(),
-            IcpError::Empty { what: "scan" }
-        );
+        assert_eq!(align(&map, &[], p, &cfg).unwrap_err(), IcpError::Empty { what: "scan" });
         assert!(matches!(
             align(&map, &[[0.0, 0.0], [1.0, f64::INFINITY]], p, &cfg),
             Err(IcpError::NonFinite { row: 1, .. })
@@ -467,46 +450,16 @@ mod tests {
             Err(IcpError::TooFewPoints { .. })
         ));
         for bad in [
-            IcpConfig {
-                max_correspondence_distance: 0.0,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                max_correspondence_distance: f64::NAN,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                max_iterations: 0,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                trim_ratio: 0.0,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                trim_ratio: 1.5,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                translation_tolerance: -1.0,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                subsample: 0,
-                ..cfg.clone()
-            },
-            IcpConfig {
-                correspondence_schedule: vec![],
-                ..cfg.clone()
-            },
-            IcpConfig {
-                correspondence_schedule: vec![1.0, -0.5],
-                ..cfg.clone()
-            },
-            IcpConfig {
-                visibility_range: Some(0.0),
-                ..cfg.clone()
-            },
+            IcpConfig { max_correspondence_distance: 0.0, ..cfg.clone() },
+            IcpConfig { max_correspondence_distance: f64::NAN, ..cfg.clone() },
+            IcpConfig { max_iterations: 0, ..cfg.clone() },
+            IcpConfig { trim_ratio: 0.0, ..cfg.clone() },
+            IcpConfig { trim_ratio: 1.5, ..cfg.clone() },
+            IcpConfig { translation_tolerance: -1.0, ..cfg.clone() },
+            IcpConfig { subsample: 0, ..cfg.clone() },
+            IcpConfig { correspondence_schedule: vec![], ..cfg.clone() },
+            IcpConfig { correspondence_schedule: vec![1.0, -0.5], ..cfg.clone() },
+            IcpConfig { visibility_range: Some(0.0), ..cfg.clone() },
         ] {
             assert!(
                 matches!(

@@ -9,13 +9,17 @@
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
-//! - [`candidate_cache`]: exact reuse of KD-tree radius queries across ICP iterations.
+//! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
+//! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
 //! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
 //! - [`termination`]: when an ICP stage stops.
+//! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
 //! - [`icp`]: the trimmed, coarse-to-fine ICP loop and its configuration and result.
 //! - [`covariance`]: the pose covariance of a finished alignment.
 //! - [`error`]: every way the core can refuse its input.
 
+pub mod acceleration;
+pub mod bucket_grid;
 pub mod candidate_cache;
 pub mod correspondence;
 pub mod covariance;

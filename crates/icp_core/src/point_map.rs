@@ -25,6 +25,7 @@ pub struct PointMap {
     tree: Tree2,
     raster: WallRaster,
     normals: Vec<[f64; 2]>,
+    spacing: f64,
 }
 
 impl PointMap {
@@ -45,18 +46,14 @@ impl PointMap {
         }
         check_finite("plan", &points)?;
         let tree = Tree2::new_from_slice(&points);
+        let spacing = median_spacing(&points, &tree);
         let resolution = match raster_resolution {
             Some(r) => r,
-            None => estimate_raster_resolution(&points, &tree),
+            None => estimate_raster_resolution(&points, spacing),
         };
         let raster = WallRaster::new(&points, resolution)?;
         let normals = covariance::estimate_normals(&points, &tree);
-        Ok(Self {
-            points,
-            tree,
-            raster,
-            normals,
-        })
+        Ok(Self { points, tree, raster, normals, spacing })
     }
 
     /// The wall points, metres, map frame.
@@ -84,6 +81,11 @@ impl PointMap {
         &self.normals
     }
 
+    /// Median distance between neighbouring wall points, metres (0.05 m when it cannot be told).
+    pub fn spacing(&self) -> f64 {
+        self.spacing
+    }
+
     /// The visibility raster.
     pub fn raster(&self) -> &WallRaster {
         &self.raster
@@ -103,31 +105,32 @@ impl PointMap {
     }
 }
 
-/// A raster cell size that keeps consecutive wall points in touching cells: 1.5 times the median
-/// nearest-neighbour spacing of (up to 4096 evenly strided) points, coarsened if the raster would
-/// exceed [`AUTO_RASTER_MAX_CELLS`] cells. A single point or coincident points give 0.05 m.
-pub fn estimate_raster_resolution(points: &[[f64; 2]], tree: &Tree2) -> f64 {
+/// Median distance from a point to its nearest other point, over up to 4096 evenly strided
+/// points; 0.05 m when every point coincides with another or there is only one.
+pub fn median_spacing(points: &[[f64; 2]], tree: &Tree2) -> f64 {
     const FALLBACK: f64 = 0.05;
     let stride = (points.len() / 4096).max(1);
+    let two = std::num::NonZero::new(2).expect("2 > 0");
     let mut spacing: Vec<f64> = points
         .iter()
         .step_by(stride)
         .filter_map(|p| {
-            let nn =
-                tree.nearest_n::<SquaredEuclidean>(p, std::num::NonZero::new(2).expect("2 > 0"));
-            nn.iter()
-                .map(|n| n.distance)
-                .find(|&d| d > 0.0)
-                .map(f64::sqrt)
+            let nn = tree.nearest_n::<SquaredEuclidean>(p, two);
+            nn.iter().map(|n| n.distance).find(|&d| d > 0.0).map(f64::sqrt)
         })
         .collect();
-    let mut resolution = if spacing.is_empty() {
-        FALLBACK
-    } else {
-        let mid = spacing.len() / 2;
-        let (_, median, _) = spacing.select_nth_unstable_by(mid, f64::total_cmp);
-        1.5 * *median
-    };
+    if spacing.is_empty() {
+        return FALLBACK;
+    }
+    let mid = spacing.len() / 2;
+    let (_, median, _) = spacing.select_nth_unstable_by(mid, f64::total_cmp);
+    *median
+}
+
+/// A raster cell size that keeps consecutive wall points in touching cells: 1.5 times the point
+/// `spacing`, coarsened if the raster would exceed [`AUTO_RASTER_MAX_CELLS`] cells.
+pub fn estimate_raster_resolution(points: &[[f64; 2]], spacing: f64) -> f64 {
+    let mut resolution = 1.5 * spacing;
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in points {
         for k in 0..2 {
@@ -175,16 +178,10 @@ mod tests {
 
     #[test]
     fn rejects_empty_and_non_finite_plans() {
-        assert_eq!(
-            PointMap::new(vec![], None).unwrap_err(),
-            IcpError::Empty { what: "plan" }
-        );
+        assert_eq!(PointMap::new(vec![], None).unwrap_err(), IcpError::Empty { what: "plan" });
         assert_eq!(
             PointMap::new(vec![[0.0, 0.0], [f64::NAN, 1.0]], None).unwrap_err(),
-            IcpError::NonFinite {
-                what: "plan",
-                row: 1
-            }
+            IcpError::NonFinite { what: "plan", row: 1 }
         );
     }
 
@@ -194,6 +191,7 @@ mod tests {
         let map = PointMap::new(pts, None).unwrap();
         assert!((map.raster().resolution() - 0.03).abs() < 1e-9);
         let single = PointMap::new(vec![[1.0, 1.0]], None).unwrap();
-        assert!((single.raster().resolution() - 0.05).abs() < 1e-12);
+        assert!((single.raster().resolution() - 0.075).abs() < 1e-12);
+        assert!((single.spacing() - 0.05).abs() < 1e-12);
     }
 }

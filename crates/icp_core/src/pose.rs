@@ -30,11 +30,7 @@ pub fn wrap_angle(a: f64) -> f64 {
 impl Pose2 {
     /// A pose from its parts; yaw is wrapped.
     pub fn new(x: f64, y: f64, yaw: f64) -> Self {
-        Self {
-            x,
-            y,
-            yaw: wrap_angle(yaw),
-        }
+        Self { x, y, yaw: wrap_angle(yaw) }
     }
 
     /// The identity transform.
@@ -59,10 +55,7 @@ impl Pose2 {
     pub fn transform_points(&self, src: &[[f64; 2]], dst: &mut Vec<[f64; 2]>) {
         let (c, s) = self.cos_sin();
         dst.clear();
-        dst.extend(
-            src.iter()
-                .map(|p| [c * p[0] - s * p[1] + self.x, s * p[0] + c * p[1] + self.y]),
-        );
+        dst.extend(src.iter().map(|p| [c * p[0] - s * p[1] + self.x, s * p[0] + c * p[1] + self.y]));
     }
 
     /// `self * other`: first `other`, then `self` (T_A_C = T_A_B * T_B_C).
@@ -74,11 +67,7 @@ impl Pose2 {
     /// The inverse transform (T_B_A from T_A_B).
     pub fn inverse(&self) -> Pose2 {
         let (c, s) = self.cos_sin();
-        Pose2::new(
-            -(c * self.x + s * self.y),
-            s * self.x - c * self.y,
-            -self.yaw,
-        )
+        Pose2::new(-(c * self.x + s * self.y), s * self.x - c * self.y, -self.yaw)
     }
 
     /// Euclidean length of the translation, metres.
@@ -103,9 +92,7 @@ mod tests {
     use super::*;
 
     fn close(a: &Pose2, b: &Pose2) -> bool {
-        (a.x - b.x).abs() < 1e-12
-            && (a.y - b.y).abs() < 1e-12
-            && wrap_angle(a.yaw - b.yaw).abs() < 1e-12
+        (a.x - b.x).abs() < 1e-12 && (a.y - b.y).abs() < 1e-12 && wrap_angle(a.yaw - b.yaw).abs() < 1e-12
     }
 
     #[test]

@@ -76,10 +76,7 @@ impl RigidAccumulator {
         // Undo the reference shift: R (s + ref_s) + t = d + ref_d.
         let ms = [ms[0] + self.ref_s[0], ms[1] + self.ref_s[1]];
         let md = [md[0] + self.ref_d[0], md[1] + self.ref_d[1]];
-        let t = [
-            md[0] - (c * ms[0] - s * ms[1]),
-            md[1] - (s * ms[0] + c * ms[1]),
-        ];
+        let t = [md[0] - (c * ms[0] - s * ms[1]), md[1] - (s * ms[0] + c * ms[1])];
         let pose = Pose2::new(t[0], t[1], theta);
         pose.is_finite().then_some(pose)
     }
@@ -123,28 +120,21 @@ mod tests {
     #[test]
     fn needs_three_pairs() {
         assert!(solve_rigid(&[[0.0, 0.0], [1.0, 0.0]], &[[0.0, 0.0], [1.0, 0.0]]).is_none());
-        assert!(solve_rigid(
-            &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            &[[1.0, 0.0], [2.0, 0.0], [1.0, 1.0]]
-        )
-        .is_some());
+        assert!(solve_rigid(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], &[[1.0, 0.0], [2.0, 0.0], [1.0, 1.0]])
+            .is_some());
     }
 
     #[test]
     fn least_squares_with_noise_is_unbiased_on_average() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let truth = Pose2::new(0.3, -0.2, 0.05);
-        let src: Vec<[f64; 2]> = (0..5000)
-            .map(|_| [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)])
-            .collect();
+        let src: Vec<[f64; 2]> =
+            (0..5000).map(|_| [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)]).collect();
         let dst: Vec<[f64; 2]> = src
             .iter()
             .map(|p| {
                 let q = truth.transform_point(*p);
-                [
-                    q[0] + rng.random_range(-0.01..0.01),
-                    q[1] + rng.random_range(-0.01..0.01),
-                ]
+                [q[0] + rng.random_range(-0.01..0.01), q[1] + rng.random_range(-0.01..0.01)]
             })
             .collect();
         let est = solve_rigid(&src, &dst).unwrap();

@@ -22,9 +22,7 @@ impl Tolerances {
 
     /// True when `step` is within both tolerances (never when disabled).
     pub fn is_small(&self, step: &Pose2) -> bool {
-        !self.disabled()
-            && step.translation_norm() <= self.translation
-            && step.yaw.abs() <= self.rotation
+        !self.disabled() && step.translation_norm() <= self.translation && step.yaw.abs() <= self.rotation
     }
 }
 
@@ -56,66 +54,36 @@ mod tests {
 
     #[test]
     fn zero_tolerances_never_stop_early() {
-        let tol = Tolerances {
-            translation: 0.0,
-            rotation: 0.0,
-        };
+        let tol = Tolerances { translation: 0.0, rotation: 0.0 };
         assert!(tol.disabled());
         assert!(!tol.is_small(&Pose2::identity()));
     }
 
     #[test]
     fn small_step_needs_both_components_small() {
-        let tol = Tolerances {
-            translation: 1e-3,
-            rotation: 1e-3,
-        };
+        let tol = Tolerances { translation: 1e-3, rotation: 1e-3 };
         assert!(tol.is_small(&Pose2::new(5e-4, 5e-4, 5e-4)));
         assert!(!tol.is_small(&Pose2::new(2e-3, 0.0, 0.0)));
         assert!(!tol.is_small(&Pose2::new(0.0, 0.0, -2e-3)));
         // A translation-only tolerance still lets the rotation decide.
-        let t_only = Tolerances {
-            translation: 1e-3,
-            rotation: 0.0,
-        };
+        let t_only = Tolerances { translation: 1e-3, rotation: 0.0 };
         assert!(!t_only.is_small(&Pose2::new(0.0, 0.0, 1e-9)));
         assert!(t_only.is_small(&Pose2::new(1e-4, 0.0, 0.0)));
     }
 
     #[test]
     fn stages_share_the_budget() {
-        assert_eq!(
-            (0..3).map(|s| stage_end(s, 3, 30)).collect::<Vec<_>>(),
-            vec![10, 20, 30]
-        );
-        assert_eq!(
-            (0..3).map(|s| stage_end(s, 3, 31)).collect::<Vec<_>>(),
-            vec![10, 20, 31]
-        );
+        assert_eq!((0..3).map(|s| stage_end(s, 3, 30)).collect::<Vec<_>>(), vec![10, 20, 30]);
+        assert_eq!((0..3).map(|s| stage_end(s, 3, 31)).collect::<Vec<_>>(), vec![10, 20, 31]);
         assert_eq!(stage_end(0, 1, 7), 7);
-        assert_eq!(
-            (0..3).map(|s| stage_end(s, 3, 2)).collect::<Vec<_>>(),
-            vec![0, 1, 2]
-        );
+        assert_eq!((0..3).map(|s| stage_end(s, 3, 2)).collect::<Vec<_>>(), vec![0, 1, 2]);
     }
 
     #[test]
     fn fingerprint_ignores_order_but_not_content() {
-        let a = Pair {
-            source: 1,
-            target: 7,
-            sq_dist: 0.1,
-        };
-        let b = Pair {
-            source: 2,
-            target: 9,
-            sq_dist: 0.2,
-        };
-        let c = Pair {
-            source: 2,
-            target: 8,
-            sq_dist: 0.2,
-        };
+        let a = Pair { source: 1, target: 7, sq_dist: 0.1 };
+        let b = Pair { source: 2, target: 9, sq_dist: 0.2 };
+        let c = Pair { source: 2, target: 8, sq_dist: 0.2 };
         assert_eq!(pair_fingerprint(&[a, b]), pair_fingerprint(&[b, a]));
         assert_ne!(pair_fingerprint(&[a, b]), pair_fingerprint(&[a, c]));
         assert_ne!(pair_fingerprint(&[a]), pair_fingerprint(&[a, b]));

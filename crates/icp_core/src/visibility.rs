@@ -15,76 +15,65 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 /// Indices (ascending, unique) of the plan points in the wall cells that rays from `position`
 /// (map frame, metres) reach first, within `max_range` metres.
 ///
-/// [`BASE_RAYS`] rays are cast evenly; between two neighbouring rays whose first wall cells do not
-/// touch (a depth jump, a doorway, a far wall), a ray is added halfway, recursively, until the
+/// [`BASE_RAYS`] rays are cast evenly; between two neighbouring rays whose first wall cells are not
+/// adjacent (a depth jump, a doorway, a far wall; see `adjacent`), a ray is added halfway, recursively, until the
 /// cells touch or the angle between the rays is below one cell at `max_range` (at most
 /// [`MAX_REFINEMENT_DEPTH`] halvings). The cell holding `position` itself is skipped, so a
 /// position that falls inside a wall (a poor guess) still sees the walls around it.
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
     if !(max_range.is_finite() && max_range > 0.0) {
-        return Err(invalid(
-            "max_range",
-            max_range,
-            "must be a positive finite number of metres",
-        ));
+        return Err(invalid("max_range", max_range, "must be a positive finite number of metres"));
     }
     if !(position[0].is_finite() && position[1].is_finite()) {
-        return Err(invalid(
-            "position",
-            format!("{position:?}"),
-            "must be finite",
-        ));
+        return Err(invalid("position", format!("{position:?}"), "must be finite"));
     }
     let mut hit_cells = Vec::new();
     visible_cells(raster, position, max_range, &mut hit_cells);
-    let mut out: Vec<u32> = hit_cells
-        .iter()
-        .flat_map(|&cell| raster.points_in_cell(cell).iter().copied())
-        .collect();
+    let mut out: Vec<u32> =
+        hit_cells.iter().flat_map(|&cell| raster.points_in_cell(cell).iter().copied()).collect();
     out.sort_unstable();
     Ok(out)
 }
 
 /// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop.
-pub fn visible_cells(
-    raster: &WallRaster,
-    position: [f64; 2],
-    max_range: f64,
-    out: &mut Vec<usize>,
-) {
+pub fn visible_cells(raster: &WallRaster, position: [f64; 2], max_range: f64, out: &mut Vec<usize>) {
     out.clear();
     let res = raster.resolution();
     let origin = raster.origin();
     let (cols, rows) = raster.shape();
     let caster = RayCaster {
         raster,
-        origin: (
-            (position[0] - origin[0]) / res,
-            (position[1] - origin[1]) / res,
-        ),
+        origin: ((position[0] - origin[0]) / res, (position[1] - origin[1]) / res),
         max_t: max_range / res,
         shape: (cols, rows),
     };
-    // Finest angle worth resolving: one cell at the maximum range.
-    let min_gap = (res / max_range).min(TAU / BASE_RAYS as f64);
+    // Finest angle worth resolving: an eighth of a cell at the maximum range (walls seen at a
+    // grazing angle need more than one ray per cell width).
+    let min_gap = res / max_range / 8.0;
     let step = TAU / BASE_RAYS as f64;
     let first = caster.cast(0.0);
     let mut previous = first;
     let mut stack: Vec<Bracket> = Vec::new();
     for k in 1..=BASE_RAYS {
         let angle = k as f64 * step;
-        let hit = if k == BASE_RAYS {
-            first
-        } else {
-            caster.cast(angle)
-        };
+        let hit = if k == BASE_RAYS { first } else { caster.cast(angle) };
         stack.push(((k - 1) as f64 * step, previous, angle, hit, 0));
         while let Some((a0, h0, a1, h1, depth)) = stack.pop() {
-            if let Some((cx, cy)) = h0 {
+            if let Some(((cx, cy), came_from)) = h0 {
                 out.push(cy as usize * cols + cx as usize);
+                // Wall cells bordering the last free cell are seen too: an inner corner's cell
+                // can only be entered through its two wall neighbours, so no ray stops in it.
+                if let Some((fx, fy)) = came_from {
+                    for (nx, ny) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                        let (x, y) = (fx + nx, fy + ny);
+                        if (x, y) != (cx, cy) && raster.is_wall(x, y) {
+                            out.push(y as usize * cols + x as usize);
+                        }
+                    }
+                }
             }
             let touching = match (h0, h1) {
-                (Some(p), Some(q)) => (p.0 - q.0).abs() <= 1 && (p.1 - q.1).abs() <= 1,
+                (Some((p, _)), Some((q, _))) => adjacent(raster, p, q),
                 (None, None) => true,
                 _ => false,
             };
@@ -104,8 +93,20 @@ pub fn visible_cells(
     out.dedup();
 }
 
-/// The first wall cell (col, row) a ray reaches, if any.
-type Hit = Option<(i64, i64)>;
+/// Whether rays between two that stopped in cells `p` and `q` can only stop in `p` or `q`: the
+/// cells are the same, share an edge, or touch at a corner with both cells beside that corner free
+/// (a diagonal wall); otherwise a wall cell may lie between them.
+fn adjacent(raster: &WallRaster, p: (i64, i64), q: (i64, i64)) -> bool {
+    let (dx, dy) = ((p.0 - q.0).abs(), (p.1 - q.1).abs());
+    match (dx, dy) {
+        (0, 0) | (0, 1) | (1, 0) => true,
+        (1, 1) => !raster.is_wall(p.0, q.1) && !raster.is_wall(q.0, p.1),
+        _ => false,
+    }
+}
+
+/// The first wall cell (col, row) a ray reaches and the free cell it came from, if any.
+type Hit = Option<((i64, i64), Option<(i64, i64)>)>;
 
 /// Two rays to refine between: (angle, hit) of each, and the refinement depth.
 type Bracket = (f64, Hit, f64, Hit, u32);
@@ -119,23 +120,47 @@ struct RayCaster<'a> {
 }
 
 impl RayCaster<'_> {
-    /// The first wall cell (col, row) after the start cell along `angle` (radians), if any.
+    /// The first wall cell (col, row) along `angle` (radians), if any: after the start cell when
+    /// the position is inside the raster, from the cell where the ray enters it otherwise.
     #[inline]
     fn cast(&self, angle: f64) -> Hit {
         let (dy, dx) = angle.sin_cos();
-        let start = (self.origin.0.floor() as i64, self.origin.1.floor() as i64);
-        first_wall_cell(
-            self.raster,
-            self.origin,
-            start,
-            (dx, dy),
-            self.max_t,
-            self.shape,
-        )
+        let (cols, rows) = (self.shape.0 as f64, self.shape.1 as f64);
+        let (ox, oy) = self.origin;
+        if (0.0..cols).contains(&ox) && (0.0..rows).contains(&oy) {
+            let start = (ox.floor() as i64, oy.floor() as i64);
+            return first_wall_cell(self.raster, self.origin, start, (dx, dy), self.max_t, self.shape);
+        }
+        // Outside: clip the ray to the raster's box (slab method) and start where it enters.
+        let (mut t_in, mut t_out) = (0.0f64, self.max_t);
+        for (o, d, size) in [(ox, dx, cols), (oy, dy, rows)] {
+            if d == 0.0 {
+                if !(0.0..size).contains(&o) {
+                    return None;
+                }
+            } else {
+                let (a, b) = ((0.0 - o) / d, (size - o) / d);
+                t_in = t_in.max(a.min(b));
+                t_out = t_out.min(a.max(b));
+            }
+        }
+        if t_in > t_out {
+            return None;
+        }
+        let entry = (ox + dx * t_in, oy + dy * t_in);
+        let cell = (
+            (entry.0.floor() as i64).clamp(0, self.shape.0 as i64 - 1),
+            (entry.1.floor() as i64).clamp(0, self.shape.1 as i64 - 1),
+        );
+        if self.raster.is_wall(cell.0, cell.1) {
+            return Some((cell, None));
+        }
+        first_wall_cell(self.raster, entry, cell, (dx, dy), self.max_t - t_in, self.shape)
     }
 }
 
-/// Walks the cells along one ray (cell units) and returns the first wall cell after the start.
+/// Walks the cells along one ray (cell units) and returns the first wall cell after the start, with
+/// the free cell the ray left to enter it (None when that was the start cell, which may be a wall).
 #[inline]
 fn first_wall_cell(
     raster: &WallRaster,
@@ -144,19 +169,12 @@ fn first_wall_cell(
     (dx, dy): (f64, f64),
     max_t: f64,
     (cols, rows): (usize, usize),
-) -> Option<(i64, i64)> {
+) -> Hit {
+    let start = (cx, cy);
     let step_x: i64 = if dx > 0.0 { 1 } else { -1 };
     let step_y: i64 = if dy > 0.0 { 1 } else { -1 };
-    let t_delta_x = if dx != 0.0 {
-        (1.0 / dx).abs()
-    } else {
-        f64::INFINITY
-    };
-    let t_delta_y = if dy != 0.0 {
-        (1.0 / dy).abs()
-    } else {
-        f64::INFINITY
-    };
+    let t_delta_x = if dx != 0.0 { (1.0 / dx).abs() } else { f64::INFINITY };
+    let t_delta_y = if dy != 0.0 { (1.0 / dy).abs() } else { f64::INFINITY };
     let mut t_max_x = if dx > 0.0 {
         (cx as f64 + 1.0 - ox) * t_delta_x
     } else if dx < 0.0 {
@@ -171,7 +189,10 @@ fn first_wall_cell(
     } else {
         f64::INFINITY
     };
-    loop {
+    // A ray crosses at most cols + rows cell borders inside the raster: a hard bound on the walk,
+    // whatever rounding does to the crossing times.
+    for _ in 0..cols + rows + 2 {
+        let before = (cx, cy);
         let t = if t_max_x < t_max_y {
             cx += step_x;
             let t = t_max_x;
@@ -192,9 +213,11 @@ fn first_wall_cell(
             return None;
         }
         if raster.is_wall(cx, cy) {
-            return Some((cx, cy));
+            let came_from = (before != start || !raster.is_wall(start.0, start.1)).then_some(before);
+            return Some(((cx, cy), came_from));
         }
     }
+    None
 }
 
 #[cfg(test)]
@@ -212,12 +235,7 @@ mod tests {
         let n = 80;
         for i in 0..=n {
             let t = i as f64 * 0.05;
-            for (p, is_inner) in [
-                ([t, 0.0], true),
-                ([t, 4.0], true),
-                ([0.0, t], true),
-                ([4.0, t], true),
-            ] {
+            for (p, is_inner) in [([t, 0.0], true), ([t, 4.0], true), ([0.0, t], true), ([4.0, t], true)] {
                 pts.push(p);
                 inner.push(is_inner);
             }
@@ -238,18 +256,10 @@ mod tests {
         let raster = WallRaster::new(&pts, RES).unwrap();
         let vis = visible_points(&raster, [1.3, 2.1], 10.0).unwrap();
         assert!(!vis.is_empty());
-        assert!(
-            vis.iter().all(|&i| inner[i as usize]),
-            "an outer-face point was visible"
-        );
+        assert!(vis.iter().all(|&i| inner[i as usize]), "an outer-face point was visible");
         let inner_total = inner.iter().filter(|&&b| b).count();
         // Nearly every inner point is seen (corner cells may hold two points, both seen).
-        assert!(
-            vis.len() as f64 > 0.95 * inner_total as f64,
-            "{} of {}",
-            vis.len(),
-            inner_total
-        );
+        assert!(vis.len() as f64 > 0.95 * inner_total as f64, "{} of {}", vis.len(), inner_total);
     }
 
     #[test]
@@ -257,9 +267,7 @@ mod tests {
         let (pts, _) = thick_box();
         let raster = WallRaster::new(&pts, RES).unwrap();
         let near = visible_points(&raster, [0.5, 2.0], 1.0).unwrap();
-        assert!(near
-            .iter()
-            .all(|&i| (pts[i as usize][0] - 0.0).abs() < 1e-9));
+        assert!(near.iter().all(|&i| (pts[i as usize][0] - 0.0).abs() < 1e-9));
         assert!(!near.is_empty());
     }
 
@@ -270,6 +278,38 @@ mod tests {
         let vis = visible_points(&raster, [6.0, 2.0], 20.0).unwrap();
         assert!(!vis.is_empty());
         assert!(vis.iter().all(|&i| !inner[i as usize]));
+    }
+
+    #[test]
+    fn far_outside_positions_finish_and_see_the_outer_faces() {
+        let (pts, inner) = thick_box();
+        let raster = WallRaster::new(&pts, RES).unwrap();
+        // Far away, with an absurd range: the walk through the raster is bounded, so this returns
+        // (the building may be too small to be hit by any ray), and sees only outer faces.
+        for position in [[1e8, 0.0], [-3e8, 5e8], [2.0, -1e9]] {
+            let vis = visible_points(&raster, position, 1e10).unwrap();
+            assert!(vis.iter().all(|&i| !inner[i as usize]), "{position:?}");
+        }
+        let vis = visible_points(&raster, [60.0, 2.0], 1e10).unwrap();
+        assert!(vis.len() > 20 && vis.iter().all(|&i| !inner[i as usize]));
+        assert!(visible_points(&raster, [1e8, 0.0], 100.0).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_shorter_range_sees_no_fewer_near_points() {
+        let (pts, _) = thick_box();
+        let raster = WallRaster::new(&pts, RES).unwrap();
+        // Close to a corner, the far walls are seen at grazing angles.
+        let position = [3.7, 3.8];
+        let far = visible_points(&raster, position, 30.0).unwrap();
+        let near = visible_points(&raster, position, 6.0).unwrap();
+        let within = |i: &u32| {
+            let p = pts[*i as usize];
+            (p[0] - position[0]).hypot(p[1] - position[1]) < 5.5
+        };
+        let far_near: Vec<u32> = far.iter().copied().filter(within).collect();
+        let near_near: Vec<u32> = near.iter().copied().filter(within).collect();
+        assert_eq!(far_near, near_near);
     }
 
     #[test]

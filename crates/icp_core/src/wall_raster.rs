@@ -48,11 +48,7 @@ impl WallRaster {
         let rows_f = ((hi[1] - origin[1]) / resolution).floor() + 2.0;
         let cells = cols_f * rows_f;
         if !(cells.is_finite() && cells <= MAX_RASTER_CELLS as f64) {
-            return Err(IcpError::RasterTooLarge {
-                resolution,
-                cells,
-                limit: MAX_RASTER_CELLS,
-            });
+            return Err(IcpError::RasterTooLarge { resolution, cells, limit: MAX_RASTER_CELLS });
         }
         let (cols, rows) = (cols_f as usize, rows_f as usize);
         let mut raster = Self {
@@ -68,9 +64,7 @@ impl WallRaster {
             .iter()
             .enumerate()
             .map(|(i, p)| {
-                let cell = raster
-                    .cell_of(*p)
-                    .expect("every plan point lies inside its own raster");
+                let cell = raster.cell_of(*p).expect("every plan point lies inside its own raster");
                 (cell as u32, i as u32)
             })
             .collect();
@@ -152,18 +146,9 @@ mod tests {
 
     #[test]
     fn rejects_bad_resolution_and_huge_extent() {
-        assert!(matches!(
-            WallRaster::new(&[[0.0, 0.0]], 0.0),
-            Err(IcpError::InvalidParameter { .. })
-        ));
-        assert!(matches!(
-            WallRaster::new(&[[0.0, 0.0]], f64::NAN),
-            Err(IcpError::InvalidParameter { .. })
-        ));
+        assert!(matches!(WallRaster::new(&[[0.0, 0.0]], 0.0), Err(IcpError::InvalidParameter { .. })));
+        assert!(matches!(WallRaster::new(&[[0.0, 0.0]], f64::NAN), Err(IcpError::InvalidParameter { .. })));
         let far = [[0.0, 0.0], [1e7, 1e7]];
-        assert!(matches!(
-            WallRaster::new(&far, 0.01),
-            Err(IcpError::RasterTooLarge { .. })
-        ));
+        assert!(matches!(WallRaster::new(&far, 0.01), Err(IcpError::RasterTooLarge { .. })));
     }
 }

@@ -41,9 +41,7 @@ fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".to_string());
-            Err(PlanicpInternalError::new_err(format!(
-                "internal error in planicp's native core: {msg}"
-            )))
+            Err(PlanicpInternalError::new_err(format!("internal error in planicp's native core: {msg}")))
         }
     }
 }
@@ -57,19 +55,12 @@ fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f
             shape[0], shape[1]
         )));
     }
-    Ok(array
-        .as_array()
-        .rows()
-        .into_iter()
-        .map(|r| [r[0], r[1]])
-        .collect())
+    Ok(array.as_array().rows().into_iter().map(|r| [r[0], r[1]]).collect())
 }
 
 fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyArray2<f64>> {
     let flat: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1]]).collect();
-    Array2::from_shape_vec((points.len(), 2), flat)
-        .expect("length matches shape")
-        .into_pyarray(py)
+    Array2::from_shape_vec((points.len(), 2), flat).expect("length matches shape").into_pyarray(py)
 }
 
 /// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster.
@@ -89,9 +80,7 @@ impl PyPointMap {
     ) -> PyResult<Self> {
         let pts = points_from("plan points", &points)?;
         let map = py.detach(|| guarded(|| PointMap::new(pts, raster_resolution)))?;
-        Ok(Self {
-            inner: Arc::new(map),
-        })
+        Ok(Self { inner: Arc::new(map) })
     }
 
     fn __len__(&self) -> usize {
@@ -142,7 +131,7 @@ impl IcpSettings {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
                         rotation_tolerance, subsample, correspondence_schedule, use_visibility,
-                        visibility_range=None))]
+                        accelerate, visibility_range=None))]
     fn new(
         max_correspondence_distance: f64,
         max_iterations: usize,
@@ -152,6 +141,7 @@ impl IcpSettings {
         subsample: usize,
         correspondence_schedule: Vec<f64>,
         use_visibility: bool,
+        accelerate: bool,
         visibility_range: Option<f64>,
     ) -> PyResult<Self> {
         let inner = IcpConfig {
@@ -163,6 +153,7 @@ impl IcpSettings {
             subsample,
             correspondence_schedule,
             use_visibility,
+            accelerate,
             visibility_range,
         };
         inner.validate().map_err(core_error)?;
@@ -249,10 +240,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MIN_SCAN_POINTS", icp_core::rigid_solver::MIN_PAIRS)?;
     m.add("PlanicpError", m.py().get_type::<PlanicpError>())?;
-    m.add(
-        "PlanicpInternalError",
-        m.py().get_type::<PlanicpInternalError>(),
-    )?;
+    m.add("PlanicpInternalError", m.py().get_type::<PlanicpInternalError>())?;
     m.add_class::<PyPointMap>()?;
     m.add_class::<IcpSettings>()?;
     m.add_class::<Alignment>()?;

@@ -1,0 +1,273 @@
+"""The Localizer: tracking with drifting odometry, the map -> odom transform, the acceptance gate
+and reset."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from planicp import AcceptanceGate, IcpConfig, Localizer, PlanMap, se2
+from planicp import synthetic as syn
+
+DEG = math.pi / 180.0
+Pose = tuple[float, float, float]
+
+
+def clear_path(floor: Any, rng: np.random.Generator, steps: int, step: float, clearance: float) -> list[Pose]:
+    """`steps + 1` poses `step` metres apart along a straight line through free space, every one at
+    least `clearance` metres (as a square window of cells) from walls and furniture; the heading
+    follows the line with a slow +-10 deg weave so that the robot also turns."""
+    occ = floor.occupied()
+    res = floor.resolution
+    ox, oy = floor.origin
+    k = int(math.ceil(clearance / res))
+    rows, cols = occ.shape
+    for _ in range(2000):
+        x0, y0, _ = floor.sample_pose(rng, clearance=clearance)
+        heading = float(rng.uniform(-math.pi, math.pi))
+        poses = []
+        for i in range(steps + 1):
+            x = x0 + i * step * math.cos(heading)
+            y = y0 + i * step * math.sin(heading)
+            c, r = int((x - ox) / res), int((y - oy) / res)
+            if not (k <= r < rows - k and k <= c < cols - k) or occ[r - k : r + k + 1, c - k : c + k + 1].any():
+                break
+            poses.append((x, y, se2.wrap_angle(heading + 10 * DEG * math.sin(i / 6.0))))
+        else:
+            return poses
+    raise AssertionError("no straight free path found")
+
+
+def drifting_odometry(truth: list[Pose], start: Pose, drift: Pose) -> list[Pose]:
+    """Odometry readings (T_odom_base) whose every increment is the true one composed with `drift`."""
+    odom = [start]
+    for a, b in zip(truth[:-1], truth[1:]):
+        odom.append(se2.compose(se2.compose(odom[-1], se2.between(a, b)), drift))
+    return odom
+
+
+def error(a: Pose, b: Pose) -> tuple[float, float]:
+    dx, dy, dyaw = se2.between(a, b)
+    return math.hypot(dx, dy), abs(dyaw)
+
+
+@pytest.fixture(scope="module")
+def office() -> Any:
+    return syn.generate_floor(3, "office")
+
+
+@pytest.fixture(scope="module")
+def plan(office: Any) -> PlanMap:
+    return PlanMap.from_points(office.wall_points())
+
+
+@pytest.fixture(scope="module")
+def path(office: Any) -> list[Pose]:
+    return clear_path(office, np.random.default_rng(42), steps=40, step=0.1, clearance=0.6)
+
+
+@pytest.fixture(scope="module")
+def scans(office: Any, path: list[Pose]) -> list[np.ndarray]:
+    rng = np.random.default_rng(7)
+    return [syn.simulate_scan(office, p, rng)[0] for p in path]
+
+
+DRIFT = (0.002, 0.0, 0.1 * DEG)  # added to every 10 cm odometry increment
+
+
+def track(plan: PlanMap, path: list[Pose], scans: list[np.ndarray], config: IcpConfig | None = None) -> Any:
+    """Tracks the path from the true start with odometry drifting by DRIFT per step."""
+    odom = drifting_odometry(path, (3.0, -1.0, 0.7), DRIFT)
+    loc = Localizer(plan, path[0], config)
+    estimates = [loc.update(s, o) for s, o in zip(scans, odom)]
+    return odom, estimates, loc
+
+
+@pytest.fixture(scope="module")
+def tracking(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> Any:
+    return track(plan, path, scans)
+
+
+def test_odometry_drift_is_large(path: list[Pose], tracking: Any) -> None:
+    odom, _, _ = tracking
+    assert len(path) == 41
+    # dead reckoning from the true start with the drifting odometry
+    dead = [se2.compose(path[0], se2.between(odom[0], o)) for o in odom]
+    odom_error = error(path[-1], dead[-1])[0]
+    assert odom_error > 0.10, f"odometry drift of only {odom_error:.3f} m: the tests would prove nothing"
+
+
+def test_every_estimate_accepted_with_default_settings(tracking: Any) -> None:
+    """Each scan starts ICP within ~2 mm / 0.1 deg of the truth: nothing should be rejected."""
+    _, estimates, _ = tracking
+    rejected = [(i, e.reason, repr(e.result)) for i, e in enumerate(estimates) if not e.accepted]
+    assert not rejected, rejected
+
+
+def test_every_estimate_accepted_with_a_larger_iteration_budget(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    _, estimates, _ = track(plan, path, scans, IcpConfig(max_iterations=100))
+    rejected = [(i, e.reason) for i, e in enumerate(estimates) if not e.accepted]
+    assert not rejected, rejected
+    assert error(path[-1], estimates[-1].pose)[0] < 0.05
+
+
+def test_tracking_beats_drifting_odometry(path: list[Pose], tracking: Any) -> None:
+    odom, estimates, loc = tracking
+    assert sum(e.accepted for e in estimates) >= 0.9 * len(estimates)
+    final_t, final_r = error(path[-1], estimates[-1].pose)
+    assert final_t < 0.05 and final_r < 0.5 * DEG, (final_t, math.degrees(final_r), odom_error)
+    worst = max(error(t, e.pose)[0] for t, e in zip(path, estimates))
+    assert worst < 0.05, worst
+    assert loc.pose == estimates[-1].pose
+
+
+def test_estimates_are_consistent(path: list[Pose], tracking: Any) -> None:
+    odom, estimates, _ = tracking
+    previous = path[0]
+    for i, (o, est) in enumerate(zip(odom, estimates)):
+        assert est.odom_pose == o
+        assert est.result is not None
+        if est.accepted:
+            assert est.pose == est.result.pose
+            assert est.reason == ""
+        else:
+            assert est.pose == est.predicted_pose
+            assert est.reason != ""
+        # the prediction is the previous pose plus the odometry motion
+        motion = (0.0, 0.0, 0.0) if i == 0 else se2.between(odom[i - 1], o)
+        np.testing.assert_allclose(est.predicted_pose, se2.compose(previous, motion), rtol=0, atol=1e-12)
+        previous = est.pose
+
+
+def test_map_to_odom_transform(tracking: Any) -> None:
+    odom, estimates, _ = tracking
+    for o, est in zip(odom, estimates):
+        lhs = est.T_map_odom @ se2.pose_to_matrix(o)
+        np.testing.assert_allclose(lhs, est.T_map_base, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(est.T_map_base, se2.pose_to_matrix(est.pose), rtol=0, atol=0)
+        # a proper rigid transform
+        r = est.T_map_odom[:2, :2]
+        np.testing.assert_allclose(r @ r.T, np.eye(2), atol=1e-12)
+        np.testing.assert_array_equal(est.T_map_odom[2], [0.0, 0.0, 1.0])
+    # the correction grows with the drift: the last map->odom differs from the first
+    first, last = se2.matrix_to_pose(estimates[0].T_map_odom), se2.matrix_to_pose(estimates[-1].T_map_odom)
+    assert abs(se2.wrap_angle(last[2] - first[2])) > 2 * DEG
+
+
+def test_gate_rejects_a_wild_odometry_jump(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
+    """Odometry claims a 2 m step the robot did not make: whatever ICP makes of it, the estimate is
+    rejected and the pose follows the prediction."""
+    loc = Localizer(plan, path[0])
+    assert loc.update(scans[0], (0.0, 0.0, 0.0)).accepted
+    est = loc.update(scans[1], (2.1, 0.0, 0.0))
+    assert not est.accepted
+    assert est.reason
+    np.testing.assert_allclose(est.pose, est.predicted_pose, atol=0)
+    assert loc.pose == est.predicted_pose
+
+
+def test_gate_rejects_a_correction_beyond_max_translation_jump(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    gate = AcceptanceGate(max_translation_jump=0.1)
+    loc = Localizer(plan, path[0], gate=gate)
+    first = loc.update(scans[0], (0.0, 0.0, 0.0))
+    assert first.accepted
+    # odometry says 35 cm; the robot moved 10 cm: ICP pulls back by ~0.25 m > 0.1 m
+    true_motion = se2.between(path[0], path[1])
+    claimed = se2.compose(true_motion, (0.25, 0.0, 0.0))
+    est = loc.update(scans[1], claimed)
+    assert est.result is not None
+    assert error(path[1], est.result.pose)[0] < 0.05, est.result  # ICP found the truth...
+    assert not est.accepted  # ...but the correction is too large to trust
+    assert "correction of" in est.reason and "exceeds 0.100 m" in est.reason, est.reason
+    jump = float(est.reason.split("correction of ")[1].split(" m")[0])
+    assert 0.2 < jump < 0.3
+    expected = se2.compose(first.pose, claimed)
+    np.testing.assert_allclose(est.pose, expected, atol=1e-12)
+    np.testing.assert_allclose(est.predicted_pose, expected, atol=1e-12)
+    assert loc.pose == est.pose
+
+
+def test_gate_rejects_a_correction_beyond_max_rotation_jump(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    gate = AcceptanceGate(max_rotation_jump=1 * DEG)
+    loc = Localizer(plan, path[0], gate=gate)
+    first = loc.update(scans[0], (0.0, 0.0, 0.0))
+    assert first.accepted
+    claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 3 * DEG))
+    est = loc.update(scans[1], claimed)
+    assert est.result is not None and error(path[1], est.result.pose)[1] < 0.5 * DEG
+    assert not est.accepted
+    assert "deg exceeds 1.00 deg" in est.reason, est.reason
+    np.testing.assert_allclose(est.pose, se2.compose(first.pose, claimed), atol=1e-12)
+
+
+def test_gate_rejects_poor_inlier_ratio(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
+    loc = Localizer(plan, path[0], gate=AcceptanceGate(min_inlier_ratio=1.0))
+    est = loc.update(scans[0], (0.0, 0.0, 0.0))
+    assert est.result is not None and est.result.inlier_ratio < 1.0
+    assert not est.accepted and "inlier ratio" in est.reason
+    loc = Localizer(plan, path[0], gate=AcceptanceGate(min_inliers=100_000))
+    est = loc.update(scans[0], (0.0, 0.0, 0.0))
+    assert not est.accepted and "inliers (need 100000)" in est.reason
+
+
+def test_gate_rejects_non_convergence_only_when_required(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    cfg = IcpConfig(max_iterations=1)
+    off = se2.compose(path[0], (0.15, -0.1, 2 * DEG))
+    est = Localizer(plan, off, cfg).update(scans[0], (0.0, 0.0, 0.0))
+    assert est.result is not None and not est.result.converged
+    assert not est.accepted and "did not converge in 1 iterations" in est.reason
+    lenient = AcceptanceGate(require_convergence=False)
+    est = Localizer(plan, off, cfg, gate=lenient).update(scans[0], (0.0, 0.0, 0.0))
+    assert est.accepted and est.pose == est.result.pose  # type: ignore[union-attr]
+
+
+def test_rejection_then_recovery(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
+    """After a rejected step the localizer keeps tracking from the prediction with the next scan."""
+    loc = Localizer(plan, path[0], gate=AcceptanceGate(max_translation_jump=0.1))
+    assert loc.update(scans[0], (0.0, 0.0, 0.0)).accepted
+    odom1 = se2.compose(se2.between(path[0], path[1]), (0.15, 0.0, 0.0))  # 15 cm slip, rejected
+    assert not loc.update(scans[1], odom1).accepted
+    # odometry continues from its (slipped) reading; the next correction is 0.15 m: still rejected
+    odom2 = se2.compose(odom1, se2.between(path[1], path[2]))
+    assert not loc.update(scans[2], odom2).accepted
+    # a lenient gate would have accepted it: tracking recovers once the gate allows the correction
+    loc.gate = AcceptanceGate()
+    est = loc.update(scans[3], se2.compose(odom2, se2.between(path[2], path[3])))
+    assert est.accepted and error(path[3], est.pose)[0] < 0.05
+
+
+def test_reset_pairs_the_new_pose_with_the_next_odometry(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    loc = Localizer(plan, (0.0, 0.0, 0.0))
+    loc.update(scans[0], (5.0, 5.0, 1.0))  # somewhere wrong, and an odometry history
+    loc.reset(path[10])
+    assert loc.pose == path[10]
+    # far-away odometry reading: after reset, it only anchors the odometry, it moves nothing
+    est = loc.update(scans[10], (-40.0, 12.0, -2.0))
+    assert est.predicted_pose == path[10]
+    assert est.accepted and error(path[10], est.pose)[0] < 0.05
+    # the next reading moves the robot by the odometry difference since the reset
+    motion = se2.between(path[10], path[11])
+    odom_next = se2.compose((-40.0, 12.0, -2.0), motion)
+    est2 = loc.update(scans[11], odom_next)
+    np.testing.assert_allclose(est2.predicted_pose, se2.compose(est.pose, motion), atol=1e-12)
+    assert est2.accepted and error(path[11], est2.pose)[0] < 0.05
+
+
+def test_first_update_uses_no_motion(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
+    loc = Localizer(plan, path[5])
+    est = loc.update(scans[5], (100.0, -100.0, 3.0))
+    assert est.predicted_pose == path[5]
+    assert est.accepted
