@@ -12,6 +12,7 @@ Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_m
 
 from __future__ import annotations
 
+from . import se2, synthetic
 from ._core import PlanicpError, PlanicpInternalError
 from ._core import __version__ as __version__
 from .icp_config import IcpConfig
@@ -33,4 +34,6 @@ __all__ = [
     "__version__",
     "localize",
     "scan_to_points",
+    "se2",
+    "synthetic",
 ]

@@ -1,11 +1,13 @@
 //! Criterion benches of the alignment hot path: KD-tree build, one correspondence pass over a
-//! 1080-point scan, visibility ray casting and a full 30-iteration alignment.
+//! 1080-point scan (KD-tree, and the settled candidate cache), visibility ray casting and a full
+//! alignment (30 fixed iterations with and without visibility, and the default termination).
 //!
 //! The test case is a generated office floor (40 x 25 m, rooms along a corridor, 0.2 m thick
 //! walls with both faces sampled every 5 cm) and a 1080-beam scan cast against it from inside a
 //! room, with 1.5 cm noise. Run `cargo bench`; compare numbers within one run only.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::point_map::Tree2;
 use icp_core::{align, IcpConfig, PointMap, Pose2};
@@ -93,6 +95,13 @@ fn benches(c: &mut Criterion) {
     let visible = TargetSet::subset(&map, map.visible_from(guess, 30.0).unwrap()).unwrap();
     g.bench_function("visible_subset", |b| {
         b.iter(|| find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
+    });
+    // The cached path ICP iterations take once the pose has settled: candidates fetched once.
+    let mut cache = CandidateCache::new(0.8);
+    cache.find_pairs(&visible, &moved, 0.4, &mut pairs);
+    cache.find_pairs(&visible, &moved, 0.4, &mut pairs);
+    g.bench_function("candidate_cache_settled", |b| {
+        b.iter(|| cache.find_pairs(&visible, black_box(&moved), 0.1, &mut pairs))
     });
     g.finish();
 
