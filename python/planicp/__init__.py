@@ -21,6 +21,8 @@ from .laser_scan import scan_to_points
 from .localize import localize
 from .localizer import AcceptanceGate, Estimate, Localizer
 from .plan_map import PlanMap
+from .plan_raster import PlanRaster, resolution_from_pixels
+from .ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",
@@ -29,10 +31,14 @@ __all__ = [
     "IcpResult",
     "Localizer",
     "PlanMap",
+    "PlanRaster",
+    "RosMap",
     "PlanicpError",
     "PlanicpInternalError",
     "__version__",
     "localize",
+    "read_ros_map",
+    "resolution_from_pixels",
     "scan_to_points",
     "se2",
     "synthetic",

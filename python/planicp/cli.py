@@ -25,6 +25,41 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _plan(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .plan_figure import plot_plan_overlay
+    from .plan_map import PlanMap
+
+    source = Path(args.image)
+    if source.suffix.lower() in (".yaml", ".yml"):
+        plan = PlanMap.from_ros_map(source, cache=not args.no_cache)
+    else:
+        if args.resolution is None:
+            raise ValueError("--resolution (metres per pixel) is required for an image plan")
+        plan = PlanMap.from_image(
+            source,
+            args.resolution,
+            tuple(args.origin),
+            threshold=args.threshold,
+            open_px=args.open_px,
+            close_px=args.close_px,
+            cache=not args.no_cache,
+        )
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    points_path = out / "wall_points.csv"
+    np.savetxt(points_path, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
+    overlay_path = out / "overlay.png"
+    plot_plan_overlay(plan, title=source.name).savefig(overlay_path)
+    yaml_path = plan.to_ros_map(out / "plan.yaml")
+    xmin, ymin, xmax, ymax = plan.extent
+    print(f"{source}: {len(plan)} wall points, extent x {xmin:.2f}..{xmax:.2f} m, y {ymin:.2f}..{ymax:.2f} m "
+          f"({xmax - xmin:.2f} x {ymax - ymin:.2f} m){' (from cache)' if plan.from_cache else ''}")
+    print(f"wrote {points_path}, {overlay_path}, {yaml_path} (+ {yaml_path.with_suffix('.pgm').name})")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -45,6 +80,21 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--offset-deg", type=float, default=3.0, help="initial-guess offset, degrees")
     demo.add_argument("--out", type=Path, default=None, help="folder for metrics.json")
     demo.set_defaults(func=_demo)
+    plan = sub.add_parser(
+        "plan",
+        help="extract wall points from a plan image or ROS map; write points, an overlay and a ROS map",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP) or a ROS map YAML")
+    plan.add_argument("--resolution", type=float, help="metres per pixel (images; a YAML has its own)")
+    plan.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
+                      help="pose of the image's lower-left corner in the map frame (m, m, rad)")
+    plan.add_argument("--threshold", type=int, default=None, help="wall grey level 1..255 (default: Otsu)")
+    plan.add_argument("--open-px", type=int, default=0, help="remove dark specks up to this many pixels")
+    plan.add_argument("--close-px", type=int, default=0, help="close wall gaps up to this many pixels")
+    plan.add_argument("--no-cache", action="store_true", help="do not read or write the plan cache")
+    plan.add_argument("--out", type=Path, required=True, help="output folder")
+    plan.set_defaults(func=_plan)
     return parser
 
 

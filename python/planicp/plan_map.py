@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -9,6 +10,22 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._validation import as_pose, as_points, positive
+from .plan_cache import cache_key, cached, default_cache_dir
+from .plan_raster import PlanRaster, load_gray, wall_mask
+from .ros_map import read_ros_map, write_ros_map
+
+CacheSetting = bool | str | Path
+"""True: the default cache folder; False: no cache; a path: that folder."""
+
+
+def _cache_folder(cache: CacheSetting) -> Path | None:
+    if cache is True:
+        return default_cache_dir()
+    if cache is False:
+        return None
+    if isinstance(cache, (str, Path)):
+        return Path(cache)
+    raise TypeError(f"cache must be True, False or a folder path, got {cache!r}")
 
 
 class PlanMap:
@@ -19,9 +36,9 @@ class PlanMap:
     number of alignments, from any number of threads.
     """
 
-    __slots__ = ("_native", "_points")
+    __slots__ = ("_native", "_points", "raster", "from_cache")
 
-    def __init__(self, native: _core.PointMap) -> None:
+    def __init__(self, native: _core.PointMap, raster: PlanRaster | None = None, from_cache: bool = False) -> None:
         """Wraps a native map; use a `from_*` constructor instead."""
         if not isinstance(native, _core.PointMap):
             raise TypeError("use PlanMap.from_points(...) (or another from_* constructor) to build a PlanMap")
@@ -29,6 +46,10 @@ class PlanMap:
         points = native.points
         points.setflags(write=False)
         self._points = points
+        self.raster = raster
+        """The wall raster the plan was extracted from (None for plans built from points)."""
+        self.from_cache = from_cache
+        """Whether the wall points were loaded from the on-disk cache."""
 
     @classmethod
     def from_points(cls, xy: Any, *, resolution: float | None = None) -> PlanMap:
@@ -48,6 +69,106 @@ class PlanMap:
         if resolution is not None:
             resolution = positive(resolution, "resolution", "metres")
         return cls(_core.PointMap(points, resolution))
+
+    @classmethod
+    def from_raster(cls, raster: PlanRaster, *, edge_detector: str = "boundary") -> PlanMap:
+        """A plan from a wall raster: one point per pixel face of wall surface (see `PlanRaster`).
+        The visibility raster uses 1.5 pixels."""
+        return cls._from_raster_points(raster, raster.surface_points(edge_detector), from_cache=False)
+
+    @classmethod
+    def _from_raster_points(cls, raster: PlanRaster, points: NDArray[np.float64], from_cache: bool) -> PlanMap:
+        native = _core.PointMap(np.ascontiguousarray(points, dtype=np.float64), 1.5 * raster.resolution)
+        return cls(native, raster, from_cache)
+
+    @classmethod
+    def from_image(
+        cls,
+        source: str | Path | NDArray[Any],
+        resolution: float,
+        origin: Any = (0.0, 0.0, 0.0),
+        *,
+        threshold: int | None = None,
+        open_px: int = 0,
+        close_px: int = 0,
+        edge_detector: str = "boundary",
+        cache: CacheSetting = True,
+    ) -> PlanMap:
+        """A plan from an image of it (PNG, JPG, PGM, BMP, ... or an array).
+
+        Args:
+            source: image path, or a grey/colour array (row 0 is the top of the plan).
+            resolution: metres per pixel (see `resolution_from_pixels` to measure it).
+            origin: (x, y, yaw) of the image's lower-left corner in the map frame, exactly as a
+                ROS map YAML's `origin`, so that a plan and a ROS map of it give the same points.
+            threshold: grey level (1..255) below which a pixel is wall; None: Otsu's threshold.
+            open_px, close_px: morphological opening (removes specks up to that size) and closing
+                (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
+            edge_detector: "boundary" or "canny" (see `PlanRaster.surface_points`).
+            cache: True (default folder, see `planicp.plan_cache`), False, or a folder.
+
+        Raises:
+            FileNotFoundError: the file does not exist.
+            ValueError: unreadable image, no walls (all white or all black), bad resolution/origin.
+        """
+        res = positive(resolution, "resolution", "metres per pixel")
+        pose = as_pose(origin, "origin")
+        if isinstance(source, (str, Path)):
+            path = Path(source)
+            if not path.is_file():
+                raise FileNotFoundError(f"plan image {path} does not exist")
+            contents = [path.read_bytes()]
+        else:
+            arr = np.ascontiguousarray(source)
+            contents = [str(arr.dtype).encode(), str(arr.shape).encode(), arr.tobytes()]
+        params = {"resolution": res, "origin": pose, "threshold": threshold, "open_px": open_px,
+                  "close_px": close_px, "edge_detector": edge_detector}
+
+        def build() -> dict[str, NDArray[Any]]:
+            gray = load_gray(source)
+            walls = wall_mask(gray, threshold, open_px=open_px, close_px=close_px,
+                              what=f"plan image {source}" if isinstance(source, (str, Path)) else "plan image")
+            raster = PlanRaster(walls, res, pose)
+            return {"points": raster.surface_points(edge_detector), "walls": np.packbits(walls),
+                    "shape": np.array(walls.shape)}
+
+        arrays, hit = cached(_cache_folder(cache), cache_key("image", params, contents), build)
+        return cls._from_cached(arrays, res, pose, hit)
+
+    @classmethod
+    def _from_cached(cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool) -> PlanMap:
+        rows, cols = (int(v) for v in arrays["shape"])
+        walls = np.unpackbits(arrays["walls"], count=rows * cols).reshape(rows, cols).astype(bool)
+        return cls._from_raster_points(PlanRaster(walls, resolution, origin), arrays["points"], from_cache=hit)
+
+    @classmethod
+    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str = "boundary", cache: CacheSetting = True) -> PlanMap:
+        """A plan from a ROS map_server map (YAML + image), with map_server's semantics: occupied
+        cells are walls; `resolution`, `origin`, `negate`, thresholds and `mode` from the YAML."""
+        ros_map = read_ros_map(yaml_path)
+        params = {"resolution": ros_map.resolution, "origin": ros_map.origin, "mode": ros_map.mode,
+                  "negate": ros_map.negate, "occupied": ros_map.occupied_thresh, "free": ros_map.free_thresh,
+                  "edge_detector": edge_detector}
+        contents = [ros_map.image_path.read_bytes()]
+
+        def build() -> dict[str, NDArray[Any]]:
+            raster = ros_map.wall_raster()
+            return {"points": raster.surface_points(edge_detector), "walls": np.packbits(raster.walls),
+                    "shape": np.array(raster.walls.shape)}
+
+        arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
+        return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit)
+
+    def to_ros_map(self, yaml_path: str | Path, resolution: float | None = None) -> Path:
+        """Writes the plan as a map_server map (YAML + PGM beside it): walls occupied (0), the
+        rest free (254). A plan read from an image or ROS map writes its own wall raster, which
+        `from_ros_map` reads back to the same points; a plan built from points is rasterised at
+        `resolution` (default: its visibility raster's), which moves points by up to a pixel."""
+        raster = self.raster
+        if raster is None or resolution is not None:
+            raster = PlanRaster.from_points(self._points, resolution or self.raster_resolution)
+        occupancy = np.where(raster.walls, 100, 0).astype(np.int8)
+        return write_ros_map(yaml_path, occupancy, raster.resolution, raster.origin)
 
     @property
     def points(self) -> NDArray[np.float64]:

@@ -1,0 +1,221 @@
+"""A plan as a raster of wall pixels, and the wall-surface points it yields.
+
+Pixel geometry follows ROS map_server: `resolution` is metres per pixel, `origin` = (x, y, yaw) is
+the pose of the LOWER-LEFT corner of the image in the map frame, and image row 0 is the TOP row.
+Pixel (row r, col c) therefore covers, before the origin's rotation and translation,
+x in [c, c + 1) * resolution and y in [H - r - 1, H - r) * resolution for an image of H rows.
+
+Wall surfaces are the faces between wall and non-wall pixels of the thresholded image: one point
+at the middle of each face. That is the boundary an edge detector such as Canny (the thesis's
+choice, available as `edge_detector="canny"`) traces on a binary mask, taken completely and placed
+exactly on the surface instead of half a pixel inside it; one point per pixel of wall surface. A
+plan read from an image and from the ROS map of that image therefore give identical points.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import Pose, as_pose, positive
+
+
+def _cv2() -> Any:
+    try:
+        import cv2
+    except ImportError as exc:  # pragma: no cover - a declared dependency
+        raise ImportError("reading plan images needs OpenCV: pip install opencv-python-headless") from exc
+    return cv2
+
+
+@dataclass(frozen=True, eq=False)
+class PlanRaster:
+    """Wall pixels of a plan with their geometry.
+
+    Attributes:
+        walls: (H, W) bool, image order (row 0 is the top of the map); True where a wall is.
+        resolution: metres per pixel.
+        origin: (x, y, yaw) of the lower-left image corner in the map frame, metres and radians.
+    """
+
+    walls: NDArray[np.bool_]
+    resolution: float
+    origin: Pose
+
+    def __post_init__(self) -> None:
+        walls = np.asarray(self.walls)
+        if walls.ndim != 2 or walls.dtype != np.bool_:
+            raise ValueError(f"walls must be a 2-D bool array, got shape {walls.shape} dtype {walls.dtype}")
+        if walls.size == 0:
+            raise ValueError("walls is empty (an image with no pixels)")
+        walls = walls.copy()
+        walls.setflags(write=False)
+        object.__setattr__(self, "walls", walls)
+        object.__setattr__(self, "resolution", positive(self.resolution, "resolution", "metres per pixel"))
+        object.__setattr__(self, "origin", as_pose(self.origin, "origin"))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, cols) of the image."""
+        return (int(self.walls.shape[0]), int(self.walls.shape[1]))
+
+    def pixel_to_map(self, rows: NDArray[np.float64], cols: NDArray[np.float64]) -> NDArray[np.float64]:
+        """(N, 2) map-frame metres of image positions (fractional rows/cols; pixel centres are +0.5)."""
+        height = self.shape[0]
+        x = cols * self.resolution
+        y = (height - rows) * self.resolution
+        ox, oy, yaw = self.origin
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.column_stack([ox + c * x - s * y, oy + s * x + c * y])
+
+    def surface_points(self, edge_detector: str = "boundary") -> NDArray[np.float64]:
+        """(N, 2) wall-surface points in metres: the middle of each face between a wall pixel and a
+        non-wall pixel (outside the image is non-wall). Deterministic order.
+
+        `edge_detector`: "boundary" (default) takes every such face. "canny" keeps only the faces
+        next to an edge OpenCV's Canny detector finds on the wall mask (the thesis's method); on a
+        binary mask it finds the same boundary but thins it away at corners and one-pixel walls: it
+        kept 8,015 of depot.pgm's 9,184 faces (tests/test_plans.py checks the loss).
+        """
+        walls = np.pad(self.walls, 1, constant_values=False)
+        vertical = walls[:-1, :] != walls[1:, :]  # face between padded rows r and r+1, column c
+        horizontal = walls[:, :-1] != walls[:, 1:]  # face between padded cols c and c+1, row r
+        if edge_detector == "canny":
+            cv2 = _cv2()
+            edges = cv2.Canny(walls.astype(np.uint8) * 255, 100, 200, L2gradient=True) > 0
+            vertical &= edges[:-1, :] | edges[1:, :]
+            horizontal &= edges[:, :-1] | edges[:, 1:]
+        elif edge_detector != "boundary":
+            raise ValueError(f'edge_detector must be "boundary" or "canny", got {edge_detector!r}')
+        vr, vc = np.nonzero(vertical)
+        hr, hc = np.nonzero(horizontal)
+        # Unpadded image coordinates: the boundary between padded rows vr and vr+1 is image row vr.
+        rows = np.concatenate([vr.astype(np.float64), hr - 1 + 0.5])
+        cols = np.concatenate([vc - 1 + 0.5, hc.astype(np.float64)])
+        return self.pixel_to_map(rows, cols)
+
+    def boundary_face_count(self) -> int:
+        """Number of wall/non-wall pixel faces (what `surface_points` yields when Canny misses none)."""
+        walls = np.pad(self.walls, 1, constant_values=False)
+        return int((walls[:-1, :] != walls[1:, :]).sum() + (walls[:, :-1] != walls[:, 1:]).sum())
+
+    @classmethod
+    def from_points(cls, points: NDArray[np.float64], resolution: float, margin: int = 2) -> PlanRaster:
+        """Rasterises wall points: a pixel is wall when a point falls into it. The image is
+        axis-aligned (yaw 0) with `margin` free pixels around the points."""
+        res = positive(resolution, "resolution", "metres per pixel")
+        lo = points.min(axis=0) - margin * res
+        cols_rows = np.floor((points.max(axis=0) - lo) / res).astype(np.int64) + margin + 1
+        cols, rows = int(cols_rows[0]), int(cols_rows[1])
+        if cols * rows > 400_000_000:
+            raise ValueError(f"a raster of {cols} x {rows} pixels at {res} m is too large; use a coarser resolution")
+        c = np.floor((points[:, 0] - lo[0]) / res).astype(np.int64)
+        r_up = np.floor((points[:, 1] - lo[1]) / res).astype(np.int64)
+        walls = np.zeros((rows, cols), dtype=bool)
+        walls[rows - 1 - r_up, c] = True
+        return cls(walls, res, (float(lo[0]), float(lo[1]), 0.0))
+
+
+def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:
+    """An 8-bit grey image from a path (PNG, JPG, PGM, BMP, ...) or an array.
+
+    Colour is converted to grey, transparent pixels become white (no wall), 16-bit and float images
+    are rescaled to 0..255.
+    """
+    cv2 = _cv2()
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        if not path.is_file():
+            raise FileNotFoundError(f"{what} {path} does not exist")
+        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if image is None:
+            raise ValueError(f"{what} {path} could not be read as an image (unsupported or corrupt file)")
+        name = str(path)
+    else:
+        image = np.asarray(source)
+        name = f"{what} array"
+        if image.dtype.kind not in "uifb":
+            raise TypeError(f"{name} must hold numbers, got dtype {image.dtype}")
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        alpha = image[:, :, 3] if image.shape[2] == 4 else None
+        gray = image[:, :, :3].astype(np.float64).mean(axis=2)
+        if alpha is not None:
+            a = alpha.astype(np.float64) / (np.iinfo(alpha.dtype).max if alpha.dtype.kind in "ui" else 1.0)
+            top = np.iinfo(image.dtype).max if image.dtype.kind in "ui" else 1.0
+            gray = gray * a + top * (1.0 - a)
+        image = gray.astype(image.dtype) if image.dtype.kind in "ui" else gray
+    if image.ndim != 2:
+        raise ValueError(f"{name} must be a 2-D grey image (or colour), got shape {image.shape}")
+    if image.size == 0:
+        raise ValueError(f"{name} has no pixels")
+    if image.dtype == np.uint8:
+        return np.ascontiguousarray(image)
+    if image.dtype == np.bool_:
+        return np.where(image, 255, 0).astype(np.uint8)
+    if image.dtype.kind in "ui":
+        top = float(np.iinfo(image.dtype).max)
+        scaled: NDArray[np.uint8] = np.clip(np.round(image.astype(np.float64) * 255.0 / top), 0, 255).astype(np.uint8)
+        return scaled
+    values = image.astype(np.float64)
+    if not np.isfinite(values).all():
+        raise ValueError(f"{name} has NaN or inf pixels")
+    top = 1.0 if values.max() <= 1.0 else 255.0
+    out: NDArray[np.uint8] = np.clip(np.round(values * 255.0 / top), 0, 255).astype(np.uint8)
+    return out
+
+
+def wall_mask(
+    gray: NDArray[np.uint8],
+    threshold: int | None = None,
+    *,
+    open_px: int = 0,
+    close_px: int = 0,
+    what: str = "plan image",
+) -> NDArray[np.bool_]:
+    """Walls = dark pixels: grey < `threshold` (0..255), or Otsu's threshold when None.
+
+    `open_px` removes dark specks smaller than that many pixels (text, dirt of a scan);
+    `close_px` closes gaps up to that many pixels in walls (a scanned drawing's broken lines).
+    Raises ValueError when the result has no wall or is all wall.
+    """
+    cv2 = _cv2()
+    if threshold is None:
+        if int(gray.min()) == int(gray.max()):
+            raise ValueError(f"{what} is a single grey level ({int(gray.min())}): no walls to find")
+        level, _ = cv2.threshold(gray, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+        mask = gray <= level
+    else:
+        if isinstance(threshold, bool) or not isinstance(threshold, (int, np.integer)) or not 1 <= threshold <= 255:
+            raise ValueError(f"threshold must be an integer grey level in 1..255, got {threshold!r}")
+        mask = gray < threshold
+    for size, op in ((open_px, cv2.MORPH_OPEN), (close_px, cv2.MORPH_CLOSE)):
+        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0:
+            raise ValueError(f"morphology sizes must be integers >= 0, got {size!r}")
+        if size > 0:
+            kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (int(size), int(size)))
+            mask = cv2.morphologyEx(mask.astype(np.uint8), op, kernel) > 0
+    if not mask.any():
+        raise ValueError(f"{what} has no walls (no pixel darker than the threshold)")
+    if mask.all():
+        raise ValueError(f"{what} is all wall (every pixel darker than the threshold)")
+    return np.asarray(mask, dtype=bool)
+
+
+def resolution_from_pixels(
+    pixel_a: tuple[float, float], pixel_b: tuple[float, float], distance_m: float
+) -> float:
+    """Metres per pixel from two image positions (col, row; e.g. the ends of a wall or of the
+    drawing's scale bar) and the real distance between them in metres."""
+    a = np.asarray(pixel_a, dtype=np.float64)
+    b = np.asarray(pixel_b, dtype=np.float64)
+    if a.shape != (2,) or b.shape != (2,) or not (np.isfinite(a).all() and np.isfinite(b).all()):
+        raise ValueError(f"pixel positions must be finite (col, row) pairs, got {pixel_a!r} and {pixel_b!r}")
+    pixels = float(np.hypot(*(b - a)))
+    if pixels == 0.0:
+        raise ValueError("the two pixel positions are the same point")
+    return positive(distance_m, "distance_m", "metres") / pixels

@@ -1,0 +1,191 @@
+"""ROS map_server maps: a YAML file describing an occupancy image.
+
+Keys (map_server / nav2_map_server): `image` (path, relative to the YAML), `resolution` (metres per
+pixel), `origin` ([x, y, yaw] of the lower-left pixel corner), `negate` (0/1), `occupied_thresh`,
+`free_thresh`, optional `mode` (trinary (default), scale, raw). A pixel value v in 0..255 becomes
+p = (255 - v) / 255 (v / 255 when negate); trinary: p > occupied_thresh -> 100, p < free_thresh
+-> 0, else -1 (unknown); scale: as trinary but between the thresholds 99 * (p - free) / (occ -
+free); raw: the value v itself (0..100, anything else unknown). Image row 0 is the top of the map.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import Pose
+from .plan_raster import PlanRaster, load_gray
+
+MODES = ("trinary", "scale", "raw")
+REQUIRED_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")
+
+
+@dataclass(frozen=True, eq=False)
+class RosMap:
+    """A map_server map read from its YAML.
+
+    Attributes:
+        yaml_path: the YAML file.
+        image_path: the image it names, resolved against the YAML's folder.
+        occupancy: (H, W) int8 in image order (row 0 = top): -1 unknown, 0..100 occupancy.
+        resolution: metres per pixel.
+        origin: (x, y, yaw) of the lower-left image corner in the map frame.
+        mode, negate, occupied_thresh, free_thresh: as in the YAML.
+    """
+
+    yaml_path: Path
+    image_path: Path
+    occupancy: NDArray[np.int8]
+    resolution: float
+    origin: Pose
+    mode: str
+    negate: bool
+    occupied_thresh: float
+    free_thresh: float
+
+    def wall_raster(self) -> PlanRaster:
+        """The occupied cells (100, or above `occupied_thresh` in raw mode) as plan walls."""
+        if self.mode == "raw":
+            walls = self.occupancy > self.occupied_thresh * 100.0
+        else:
+            walls = self.occupancy == 100
+        if not walls.any():
+            raise ValueError(f"ROS map {self.yaml_path} has no occupied cells: no walls to extract")
+        return PlanRaster(walls, self.resolution, self.origin)
+
+
+def _yaml() -> Any:
+    try:
+        import yaml
+    except ImportError as exc:  # pragma: no cover - a declared dependency
+        raise ImportError("reading ROS maps needs PyYAML: pip install pyyaml") from exc
+    return yaml
+
+
+def _number(meta: dict[str, Any], key: str, path: Path) -> float:
+    value = meta[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"ROS map {path}: {key} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def read_ros_map(yaml_path: str | Path) -> RosMap:
+    """Reads a map_server YAML and its image with map_server's semantics (see the module doc)."""
+    path = Path(yaml_path)
+    if not path.is_file():
+        raise FileNotFoundError(f"ROS map YAML {path} does not exist")
+    try:
+        meta = _yaml().safe_load(path.read_text())
+    except Exception as exc:  # yaml.YAMLError, UnicodeDecodeError
+        raise ValueError(f"ROS map {path} is not valid YAML: {exc}") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"ROS map {path} must be a YAML mapping, got {type(meta).__name__}")
+    missing = [k for k in REQUIRED_KEYS if k not in meta]
+    if missing:
+        raise ValueError(f"ROS map {path} is missing keys {missing} (needs {list(REQUIRED_KEYS)})")
+    resolution = _number(meta, "resolution", path)
+    if resolution <= 0:
+        raise ValueError(f"ROS map {path}: resolution must be positive, got {resolution}")
+    origin = meta["origin"]
+    if not isinstance(origin, (list, tuple)) or len(origin) != 3:
+        raise ValueError(f"ROS map {path}: origin must be [x, y, yaw], got {origin!r}")
+    try:
+        origin_pose = tuple(float(v) for v in origin)
+    except (TypeError, ValueError):
+        raise ValueError(f"ROS map {path}: origin must be three numbers, got {origin!r}") from None
+    if not all(math.isfinite(v) for v in origin_pose):
+        raise ValueError(f"ROS map {path}: origin must be finite, got {origin!r}")
+    occ = _number(meta, "occupied_thresh", path)
+    free = _number(meta, "free_thresh", path)
+    if not 0.0 <= free <= occ <= 1.0:
+        raise ValueError(f"ROS map {path}: need 0 <= free_thresh <= occupied_thresh <= 1, got {free}, {occ}")
+    mode = str(meta.get("mode", "trinary"))
+    if mode not in MODES:
+        raise ValueError(f"ROS map {path}: mode must be one of {MODES}, got {mode!r}")
+    negate = meta["negate"]
+    if negate not in (0, 1, True, False):
+        raise ValueError(f"ROS map {path}: negate must be 0 or 1, got {negate!r}")
+    image_path = (path.parent / str(meta["image"])).resolve()
+    if not image_path.is_file():
+        raise FileNotFoundError(f"ROS map {path} names image {meta['image']!r}, which does not exist ({image_path})")
+    gray = load_gray(image_path, what=f"ROS map image (from {path})")
+    occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
+    return RosMap(path, image_path, occupancy, resolution, origin_pose, mode, bool(negate), occ, free)  # type: ignore[arg-type]
+
+
+def occupancy_from_gray(
+    gray: NDArray[np.uint8], mode: str, negate: bool, occupied_thresh: float, free_thresh: float
+) -> NDArray[np.int8]:
+    """map_server's pixel -> occupancy rule (image order kept)."""
+    if mode == "raw":
+        raw = gray.astype(np.int16)
+        raw[raw > 100] = -1
+        as_int8: NDArray[np.int8] = raw.astype(np.int8)
+        return as_int8
+    v = gray.astype(np.float64)
+    p = v / 255.0 if negate else (255.0 - v) / 255.0
+    out = np.full(gray.shape, -1, dtype=np.int8)
+    out[p > occupied_thresh] = 100
+    out[p < free_thresh] = 0
+    if mode == "scale":
+        between = (p >= free_thresh) & (p <= occupied_thresh)
+        span = max(occupied_thresh - free_thresh, 1e-12)
+        out[between] = np.round(99.0 * (p[between] - free_thresh) / span).astype(np.int8)
+    return out
+
+
+def write_ros_map(
+    yaml_path: str | Path,
+    occupancy: NDArray[np.int8],
+    resolution: float,
+    origin: Pose,
+    *,
+    occupied_thresh: float = 0.65,
+    free_thresh: float = 0.196,
+) -> Path:
+    """Writes a trinary map the way map_saver does: PGM beside the YAML (same stem), occupied
+    (> occupied_thresh*100) 0, free (0..free_thresh*100) 254, unknown 205. `occupancy` is in image
+    order (row 0 = top). Both files are written to temporary names first and then renamed, so a
+    failure leaves no half-written map. Returns the YAML path."""
+    path = Path(yaml_path)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        raise ValueError(f"ROS map path {path} must end in .yaml or .yml")
+    occ = np.asarray(occupancy)
+    if occ.ndim != 2 or occ.size == 0:
+        raise ValueError(f"occupancy must be a non-empty 2-D array, got shape {occ.shape}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    image = np.full(occ.shape, 205, dtype=np.uint8)
+    image[(occ >= 0) & (occ < free_thresh * 100.0)] = 254
+    image[occ > occupied_thresh * 100.0] = 0
+    pgm_path = path.with_suffix(".pgm")
+    header = f"P5\n# CREATOR: planicp {resolution:.6f} m/pix\n{occ.shape[1]} {occ.shape[0]}\n255\n".encode()
+    meta = (
+        f"image: {pgm_path.name}\n"
+        f"mode: trinary\n"
+        f"resolution: {resolution!r}\n"
+        f"origin: [{float(origin[0])!r}, {float(origin[1])!r}, {float(origin[2])!r}]\n"
+        f"negate: 0\n"
+        f"occupied_thresh: {occupied_thresh!r}\n"
+        f"free_thresh: {free_thresh!r}\n"
+    )
+    _atomic_write(pgm_path, header + image.tobytes())
+    _atomic_write(path, meta.encode())
+    return path
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

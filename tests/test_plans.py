@@ -1,0 +1,279 @@
+"""Plans from images and ROS maps: geometry, map_server semantics, round trips, cache, CLI, errors."""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import planicp
+from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels, synthetic
+from planicp.cli import main as cli_main
+
+DATA = Path(__file__).parent / "data"
+
+
+def sorted_rows(points: np.ndarray) -> np.ndarray:
+    return points[np.lexsort((points[:, 1], points[:, 0]))]
+
+
+@pytest.fixture(autouse=True)
+def cache_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("PLANICP_CACHE_DIR", str(folder))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def floor() -> synthetic.Floor:
+    return synthetic.generate_floor(3, "office", width=20.0, height=12.0, rooms=4)
+
+
+def test_image_points_are_the_wall_surfaces(floor: synthetic.Floor) -> None:
+    """A plan image of a known floor gives exactly the faces between wall and free cells."""
+    ox, oy = floor.origin
+    plan = PlanMap.from_image(floor.to_image(), floor.resolution, (ox, oy, 0.0))
+    expected = floor.wall_points()
+    assert len(plan) == len(expected)
+    np.testing.assert_allclose(sorted_rows(plan.points), sorted_rows(expected), atol=1e-9)
+
+
+def test_origin_yaw_rotates_the_plan(floor: synthetic.Floor) -> None:
+    flat = PlanMap.from_image(floor.to_image(), floor.resolution, (1.0, -2.0, 0.0))
+    yaw = math.radians(30.0)
+    turned = PlanMap.from_image(floor.to_image(), floor.resolution, (1.0, -2.0, yaw))
+    rel = flat.points - [1.0, -2.0]
+    c, s = math.cos(yaw), math.sin(yaw)
+    expected = rel @ np.array([[c, s], [-s, c]]) + [1.0, -2.0]
+    np.testing.assert_allclose(turned.points, expected, atol=1e-9)
+
+
+def test_image_ros_map_round_trip(floor: synthetic.Floor, tmp_path: Path) -> None:
+    plan = PlanMap.from_image(floor.to_image(), floor.resolution, (floor.origin[0], floor.origin[1], 0.0))
+    yaml_path = plan.to_ros_map(tmp_path / "out" / "floor.yaml")
+    back = PlanMap.from_ros_map(yaml_path, cache=False)
+    np.testing.assert_array_equal(back.points, plan.points)
+    meta = read_ros_map(yaml_path)
+    assert meta.resolution == floor.resolution
+    assert meta.origin == (floor.origin[0], floor.origin[1], 0.0)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["floor.pgm", "floor.yaml"]
+
+
+@pytest.mark.parametrize("name", ["tb3_sandbox", "depot"])
+def test_ros_map_and_image_of_it_agree(name: str) -> None:
+    """nav2 maps (negative origins, trinary): the ROS map and the same PGM read as an image with the
+    equivalent threshold give identical points, inside the map's extent."""
+    ros = read_ros_map(DATA / f"{name}.yaml")
+    plan = PlanMap.from_ros_map(DATA / f"{name}.yaml")
+    # trinary occupied: (255 - v) / 255 > occupied_thresh  <=>  v < 255 * (1 - occupied_thresh)
+    threshold = math.ceil(255 * (1 - ros.occupied_thresh))
+    image_plan = PlanMap.from_image(DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold)
+    np.testing.assert_array_equal(plan.points, image_plan.points)
+    rows, cols = ros.occupancy.shape
+    xmin, ymin, xmax, ymax = plan.extent
+    assert ros.origin[0] <= xmin and xmax <= ros.origin[0] + cols * ros.resolution
+    assert ros.origin[1] <= ymin and ymax <= ros.origin[1] + rows * ros.resolution
+    assert len(plan) == plan.raster.boundary_face_count()  # type: ignore[union-attr]
+
+
+def test_willow_at_ten_centimetres() -> None:
+    plan = PlanMap.from_image(DATA / "willow-full.pgm", 0.1)
+    xmin, ymin, xmax, ymax = plan.extent
+    # 540 x 587 px at 0.1 m: the building fills most of the 54.0 x 58.7 m image.
+    assert 50.0 < xmax - xmin <= 54.0 and 55.0 < ymax - ymin <= 58.7
+    assert 20_000 < len(plan) < 30_000
+
+
+def write_map(folder: Path, pixels: np.ndarray, **meta: object) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    h, w = pixels.shape
+    (folder / "m.pgm").write_bytes(f"P5\n{w} {h}\n255\n".encode() + pixels.astype(np.uint8).tobytes())
+    fields = {"image": "m.pgm", "resolution": 0.1, "origin": [0.0, 0.0, 0.0], "negate": 0,
+              "occupied_thresh": 0.65, "free_thresh": 0.196, **meta}
+    text = "".join(f"{k}: {v}\n" for k, v in fields.items())
+    (folder / "m.yaml").write_text(text)
+    return folder / "m.yaml"
+
+
+def test_map_server_modes(tmp_path: Path) -> None:
+    # p = (255 - v) / 255 = 1.0, 0.608, 0.196078, 0.0039, 0.0 (thresholds 0.65 / 0.196)
+    pixels = np.array([[0, 100, 205, 254, 255]])
+    assert read_ros_map(write_map(tmp_path / "t", pixels)).occupancy.tolist() == [[100, -1, -1, 0, 0]]
+    # scale: 99 * (0.6078 - 0.196) / (0.65 - 0.196) = 89.8 -> 90; 0.196078 -> 0
+    assert read_ros_map(write_map(tmp_path / "s", pixels, mode="scale")).occupancy.tolist() == [[100, 90, 0, 0, 0]]
+    # negate: p = v / 255
+    assert read_ros_map(write_map(tmp_path / "n", pixels, negate=1)).occupancy.tolist() == [[0, -1, 100, 100, 100]]
+    raw = read_ros_map(write_map(tmp_path / "r", np.array([[0, 50, 100, 101, 255]]), mode="raw")).occupancy
+    assert raw.tolist() == [[0, 50, 100, -1, -1]]
+
+
+def test_ros_map_errors(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        PlanMap.from_ros_map(tmp_path / "nope.yaml")
+    good = write_map(tmp_path / "g", np.array([[0, 254], [254, 254]]))
+    text = good.read_text()
+    (tmp_path / "g" / "missing.yaml").write_text(text.replace("resolution: 0.1\n", ""))
+    with pytest.raises(ValueError, match=r"missing\.yaml is missing keys \['resolution'\]"):
+        PlanMap.from_ros_map(tmp_path / "g" / "missing.yaml")
+    (tmp_path / "g" / "noimg.yaml").write_text(text.replace("m.pgm", "gone.pgm"))
+    with pytest.raises(FileNotFoundError, match="names image 'gone.pgm', which does not exist"):
+        PlanMap.from_ros_map(tmp_path / "g" / "noimg.yaml")
+    (tmp_path / "g" / "res.yaml").write_text(text.replace("resolution: 0.1", "resolution: -0.1"))
+    with pytest.raises(ValueError, match="resolution must be positive"):
+        PlanMap.from_ros_map(tmp_path / "g" / "res.yaml")
+    (tmp_path / "g" / "mode.yaml").write_text(text + "mode: fancy\n")
+    with pytest.raises(ValueError, match="mode must be one of"):
+        PlanMap.from_ros_map(tmp_path / "g" / "mode.yaml")
+    (tmp_path / "g" / "bad.yaml").write_text("image: [unclosed\n")
+    with pytest.raises(ValueError, match="not valid YAML"):
+        PlanMap.from_ros_map(tmp_path / "g" / "bad.yaml")
+    empty = write_map(tmp_path / "e", np.full((3, 3), 254))
+    with pytest.raises(ValueError, match="has no occupied cells"):
+        PlanMap.from_ros_map(empty)
+
+
+def test_image_errors(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match=r"plan image .*missing\.png does not exist"):
+        PlanMap.from_image(tmp_path / "missing.png", 0.05)
+    junk = tmp_path / "junk.png"
+    junk.write_bytes(b"not an image at all")
+    with pytest.raises(ValueError, match=r"junk\.png could not be read as an image"):
+        PlanMap.from_image(junk, 0.05)
+    with pytest.raises(ValueError, match="single grey level"):
+        PlanMap.from_image(np.full((20, 20), 255, np.uint8), 0.05)
+    with pytest.raises(ValueError, match="single grey level"):
+        PlanMap.from_image(np.zeros((20, 20), np.uint8), 0.05)
+    with pytest.raises(ValueError, match="has no walls"):
+        PlanMap.from_image(np.full((20, 20), 255, np.uint8), 0.05, threshold=100)
+    with pytest.raises(ValueError, match="is all wall"):
+        PlanMap.from_image(np.zeros((20, 20), np.uint8), 0.05, threshold=100)
+    image = np.full((20, 20), 255, np.uint8)
+    image[5:8, 2:18] = 0
+    for bad in (0.0, -1.0, math.nan):
+        with pytest.raises(ValueError, match="resolution must be a positive"):
+            PlanMap.from_image(image, bad)
+    with pytest.raises(ValueError, match="threshold must be an integer grey level"):
+        PlanMap.from_image(image, 0.05, threshold=300)
+    with pytest.raises(ValueError, match="edge_detector must be"):
+        PlanMap.from_image(image, 0.05, edge_detector="sobel", cache=False)
+    assert list((tmp_path / "cache").glob("*.tmp")) == [] if (tmp_path / "cache").exists() else True
+
+
+def test_colour_alpha_and_morphology() -> None:
+    rgba = np.full((30, 30, 4), 255, np.uint8)
+    rgba[10:13, 3:27, :3] = 0  # a black wall
+    rgba[20, 20, :3] = 0  # a speck of dirt
+    rgba[0:5, 0:5, 3] = 0  # transparent black corner counts as background
+    rgba[0:5, 0:5, :3] = 0
+    plan = PlanMap.from_image(rgba, 0.05, threshold=128)
+    cleaned = PlanMap.from_image(rgba, 0.05, threshold=128, open_px=2)
+    assert len(plan) == 2 * 24 + 2 * 3 + 4  # the wall's perimeter faces plus the speck's 4
+    assert len(cleaned) == 2 * 24 + 2 * 3
+
+
+def test_canny_option_loses_faces_on_a_real_map() -> None:
+    ros = read_ros_map(DATA / "depot.yaml")
+    raster = ros.wall_raster()
+    boundary = raster.surface_points("boundary")
+    canny = raster.surface_points("canny")
+    assert len(boundary) == raster.boundary_face_count()
+    assert 0.8 * len(boundary) < len(canny) < len(boundary)
+
+
+def test_cache_hits_misses_and_corruption(floor: synthetic.Floor, tmp_path: Path, cache_dir: Path) -> None:
+    path = tmp_path / "plan.png"
+    import cv2
+
+    cv2.imwrite(str(path), floor.to_image())
+    first = PlanMap.from_image(path, 0.05)
+    assert not first.from_cache
+    second = PlanMap.from_image(path, 0.05)
+    assert second.from_cache
+    np.testing.assert_array_equal(first.points, second.points)
+    assert not PlanMap.from_image(path, 0.05, (1.0, 0.0, 0.0)).from_cache  # another parameter
+    assert not PlanMap.from_image(path, 0.05, close_px=1).from_cache
+    image = floor.to_image().copy()
+    image[image.shape[0] // 2, image.shape[1] // 2] = 0  # the file changes
+    cv2.imwrite(str(path), image)
+    changed = PlanMap.from_image(path, 0.05)
+    assert not changed.from_cache and len(changed) == len(first) + 4
+    entries = sorted(cache_dir.glob("*.npz"))
+    assert len(entries) == 4
+    for entry in entries:
+        entry.write_bytes(b"corrupt")
+    rebuilt = PlanMap.from_image(path, 0.05)
+    assert not rebuilt.from_cache and len(rebuilt) == len(changed)
+    assert PlanMap.from_image(path, 0.05).from_cache
+    assert list(cache_dir.glob("*.tmp")) == []
+    assert not PlanMap.from_image(path, 0.05, cache=False).from_cache
+    assert PlanMap.from_image(path, 0.05, cache=tmp_path / "other").from_cache is False
+    with pytest.raises(TypeError, match="cache must be"):
+        PlanMap.from_image(path, 0.05, cache=3)  # type: ignore[arg-type]
+
+
+def test_resolution_from_pixels() -> None:
+    assert resolution_from_pixels((10, 10), (110, 10), 5.0) == pytest.approx(0.05)
+    assert resolution_from_pixels((0, 0), (30, 40), 2.5) == pytest.approx(0.05)
+    with pytest.raises(ValueError, match="same point"):
+        resolution_from_pixels((3, 3), (3, 3), 1.0)
+    with pytest.raises(ValueError, match="distance_m must be a positive"):
+        resolution_from_pixels((0, 0), (1, 0), 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        resolution_from_pixels((0, math.nan), (1, 0), 1.0)
+
+
+def test_points_plan_to_ros_map_is_within_a_pixel(tmp_path: Path) -> None:
+    t = np.linspace(0.0, 4.0, 161)
+    pts = np.concatenate([np.column_stack([t, np.zeros_like(t)]), np.column_stack([np.zeros_like(t), t])])
+    plan = PlanMap.from_points(pts)
+    back = PlanMap.from_ros_map(plan.to_ros_map(tmp_path / "p.yaml", resolution=0.05), cache=False)
+    d = np.min(np.hypot(*(back.points[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)), axis=1)
+    assert d.max() <= 0.05 * math.sqrt(2) + 1e-9
+
+
+def test_localize_on_a_real_map_with_visibility() -> None:
+    """Scans simulated in the depot map (its own occupied cells), aligned from 0.2 m / 3 deg off."""
+    ros = read_ros_map(DATA / "depot.yaml")
+    # synthetic.Floor rows grow with y; a frame of unknown cells closes the map's open edges.
+    up = np.pad(ros.occupancy[::-1], 3, constant_values=-1)
+    corner = (ros.origin[0] - 3 * ros.resolution, ros.origin[1] - 3 * ros.resolution)
+    # Unknown cells (outside the mapped area) block beams like walls but are not in the plan.
+    floor = synthetic.Floor(up == 100, up == -1, ros.resolution, corner)
+    plan = PlanMap.from_ros_map(DATA / "depot.yaml")
+    rng = np.random.default_rng(5)
+    ok = []
+    for _ in range(12):
+        truth = floor.sample_pose(rng, clearance=0.6)
+        scan, _ = synthetic.simulate_scan(floor, truth, rng)
+        guess = synthetic.perturb_pose(truth, rng, 0.2, math.radians(3.0))
+        result = planicp.localize(scan, plan, guess)
+        dx, dy, dyaw = planicp.se2.between(truth, result.pose)
+        ok.append(math.hypot(dx, dy) < 0.05 and abs(dyaw) < math.radians(0.5))
+    assert np.mean(ok) >= 11 / 12
+
+
+def test_cli_plan(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "out"
+    assert cli_main(["plan", str(DATA / "willow-full.pgm"), "--resolution", "0.1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "wall points, extent x" in text and "(53.20 x 57.10 m)" in text
+    assert sorted(p.name for p in out.iterdir()) == ["overlay.png", "plan.pgm", "plan.yaml", "wall_points.csv"]
+    points = np.loadtxt(out / "wall_points.csv", delimiter=",", skiprows=1)
+    assert points.shape[1] == 2 and len(points) > 20_000
+    shutil.copy(DATA / "depot.yaml", tmp_path / "depot.yaml")
+    shutil.copy(DATA / "depot.pgm", tmp_path / "depot.pgm")
+    assert cli_main(["plan", str(tmp_path / "depot.yaml"), "--out", str(tmp_path / "d")]) == 0
+    assert cli_main(["plan", str(tmp_path / "nothing.png"), "--resolution", "0.1", "--out", str(out)]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert cli_main(["plan", str(DATA / "willow-full.pgm"), "--out", str(out)]) == 2
+    assert "--resolution" in capsys.readouterr().err
+
+
+def test_plan_raster_validation() -> None:
+    with pytest.raises(ValueError, match="2-D bool"):
+        PlanRaster(np.zeros((3, 3), np.uint8), 0.1, (0.0, 0.0, 0.0))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="resolution must be a positive"):
+        PlanRaster(np.zeros((3, 3), bool), 0.0, (0.0, 0.0, 0.0))
