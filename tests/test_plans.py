@@ -204,6 +204,7 @@ def test_cache_hits_misses_and_corruption(floor: synthetic.Floor, tmp_path: Path
     assert len(entries) == 4
     for entry in entries:
         entry.write_bytes(b"corrupt")
+    np.testing.assert_array_equal(second.normals, first.normals)  # stored with the entry
     rebuilt = PlanMap.from_image(path, 0.05)
     assert not rebuilt.from_cache and len(rebuilt) == len(changed)
     assert PlanMap.from_image(path, 0.05).from_cache

@@ -30,7 +30,12 @@ class PlanicpInternalError(RuntimeError):
 class PointMap:
     """Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster."""
 
-    def __new__(cls, points: NDArray[np.float64], raster_resolution: float | None = None) -> PointMap: ...
+    def __new__(
+        cls,
+        points: NDArray[np.float64],
+        raster_resolution: float | None = None,
+        normals: NDArray[np.float64] | None = None,
+    ) -> PointMap: ...
     def __len__(self) -> int: ...
     @property
     def points(self) -> NDArray[np.float64]: ...

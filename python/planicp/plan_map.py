@@ -77,8 +77,16 @@ class PlanMap:
         return cls._from_raster_points(raster, raster.surface_points(edge_detector), from_cache=False)
 
     @classmethod
-    def _from_raster_points(cls, raster: PlanRaster, points: NDArray[np.float64], from_cache: bool) -> PlanMap:
-        native = _core.PointMap(np.ascontiguousarray(points, dtype=np.float64), 1.5 * raster.resolution)
+    def _from_raster_points(
+        cls,
+        raster: PlanRaster,
+        points: NDArray[np.float64],
+        from_cache: bool,
+        normals: NDArray[np.float64] | None = None,
+    ) -> PlanMap:
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        nrm = None if normals is None else np.ascontiguousarray(normals, dtype=np.float64)
+        native = _core.PointMap(pts, 1.5 * raster.resolution, nrm)
         return cls(native, raster, from_cache)
 
     @classmethod
@@ -128,9 +136,7 @@ class PlanMap:
             gray = load_gray(source)
             walls = wall_mask(gray, threshold, open_px=open_px, close_px=close_px,
                               what=f"plan image {source}" if isinstance(source, (str, Path)) else "plan image")
-            raster = PlanRaster(walls, res, pose)
-            return {"points": raster.surface_points(edge_detector), "walls": np.packbits(walls),
-                    "shape": np.array(walls.shape)}
+            return cls._prepared(PlanRaster(walls, res, pose), edge_detector)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("image", params, contents), build)
         return cls._from_cached(arrays, res, pose, hit)
@@ -139,7 +145,17 @@ class PlanMap:
     def _from_cached(cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool) -> PlanMap:
         rows, cols = (int(v) for v in arrays["shape"])
         walls = np.unpackbits(arrays["walls"], count=rows * cols).reshape(rows, cols).astype(bool)
-        return cls._from_raster_points(PlanRaster(walls, resolution, origin), arrays["points"], from_cache=hit)
+        raster = PlanRaster(walls, resolution, origin)
+        return cls._from_raster_points(raster, arrays["points"], from_cache=hit, normals=arrays["normals"])
+
+    @staticmethod
+    def _prepared(raster: PlanRaster, edge_detector: str) -> dict[str, NDArray[Any]]:
+        """What a cache entry holds: points, their wall normals (the slow part of a map build), and
+        the packed wall raster."""
+        points = raster.surface_points(edge_detector)
+        normals = _core.PointMap(points, 1.5 * raster.resolution).normals
+        return {"points": points, "normals": normals, "walls": np.packbits(raster.walls),
+                "shape": np.array(raster.walls.shape)}
 
     @classmethod
     def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str = "boundary", cache: CacheSetting = True) -> PlanMap:
@@ -152,9 +168,7 @@ class PlanMap:
         contents = [ros_map.image_path.read_bytes()]
 
         def build() -> dict[str, NDArray[Any]]:
-            raster = ros_map.wall_raster()
-            return {"points": raster.surface_points(edge_detector), "walls": np.packbits(raster.walls),
-                    "shape": np.array(raster.walls.shape)}
+            return cls._prepared(ros_map.wall_raster(), edge_detector)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
         return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit)

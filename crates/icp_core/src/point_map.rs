@@ -34,6 +34,16 @@ impl PointMap {
     /// `raster_resolution` is the cell size of the visibility raster in metres; `None` estimates it
     /// from the point spacing (see [`estimate_raster_resolution`]).
     pub fn new(points: Vec<[f64; 2]>, raster_resolution: Option<f64>) -> Result<Self> {
+        Self::with_normals(points, None, raster_resolution)
+    }
+
+    /// Like [`PointMap::new`], with wall normals computed before (e.g. stored with a cached plan)
+    /// instead of fitted again: one per point, unit length or `[0, 0]`.
+    pub fn with_normals(
+        points: Vec<[f64; 2]>,
+        normals: Option<Vec<[f64; 2]>>,
+        raster_resolution: Option<f64>,
+    ) -> Result<Self> {
         if points.is_empty() {
             return Err(IcpError::Empty { what: "plan" });
         }
@@ -52,7 +62,20 @@ impl PointMap {
             None => estimate_raster_resolution(&points, spacing),
         };
         let raster = WallRaster::new(&points, resolution)?;
-        let normals = covariance::estimate_normals(&points, &tree);
+        let normals = match normals {
+            Some(n) if n.len() != points.len() => {
+                return Err(IcpError::InvalidParameter {
+                    name: "normals",
+                    value: format!("{} rows", n.len()),
+                    requirement: "must have one row per plan point",
+                })
+            }
+            Some(n) => {
+                check_finite("normals", &n)?;
+                n
+            }
+            None => covariance::estimate_normals(&points, &tree),
+        };
         Ok(Self { points, tree, raster, normals, spacing })
     }
 
@@ -183,6 +206,22 @@ mod tests {
             PointMap::new(vec![[0.0, 0.0], [f64::NAN, 1.0]], None).unwrap_err(),
             IcpError::NonFinite { what: "plan", row: 1 }
         );
+    }
+
+    #[test]
+    fn given_normals_are_used_and_checked() {
+        let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
+        let fitted = PointMap::new(pts.clone(), None).unwrap();
+        let given = PointMap::with_normals(pts.clone(), Some(fitted.normals().to_vec()), None).unwrap();
+        assert_eq!(given.normals(), fitted.normals());
+        assert!(matches!(
+            PointMap::with_normals(pts.clone(), Some(vec![[0.0, 1.0]; 3]), None),
+            Err(IcpError::InvalidParameter { name: "normals", .. })
+        ));
+        assert!(matches!(
+            PointMap::with_normals(pts, Some(vec![[f64::NAN, 1.0]; 100]), None),
+            Err(IcpError::NonFinite { what: "normals", row: 0 })
+        ));
     }
 
     #[test]

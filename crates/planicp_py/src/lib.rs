@@ -72,14 +72,16 @@ struct PyPointMap {
 #[pymethods]
 impl PyPointMap {
     #[new]
-    #[pyo3(signature = (points, raster_resolution=None))]
+    #[pyo3(signature = (points, raster_resolution=None, normals=None))]
     fn new(
         py: Python<'_>,
         points: PyReadonlyArray2<'_, f64>,
         raster_resolution: Option<f64>,
+        normals: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
         let pts = points_from("plan points", &points)?;
-        let map = py.detach(|| guarded(|| PointMap::new(pts, raster_resolution)))?;
+        let normals = normals.map(|n| points_from("normals", &n)).transpose()?;
+        let map = py.detach(|| guarded(|| PointMap::with_normals(pts, normals, raster_resolution)))?;
         Ok(Self { inner: Arc::new(map) })
     }
 
