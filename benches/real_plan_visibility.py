@@ -2,7 +2,8 @@
 """The visibility step on plans made from real buildings, against matching without it.
 
 Each plan is a ROS map or plan image: Willow Garage (BSD, its own furniture is in the map), nav2's
-depot and tb3_sandbox (Apache-2.0), all in tests/data, plus any map given with --map. Scans are
+depot and tb3_sandbox (Apache-2.0), the HouseExpo sample (MIT, its outline rendered with 15 cm
+walls), all in tests/data, plus any --map. Scans are
 simulated in the map itself (occupied cells are walls, unknown cells block beams but are not in
 the plan), with --people discs of 0.15-0.35 m radius standing in free space that are not in the
 plan. The guess is 0.2 m and 3 deg off; success = < 5 cm and < 0.5 deg.
@@ -40,6 +41,27 @@ def floor_from_image(path: Path, resolution: float) -> tuple[synthetic.Floor, Pl
     return synthetic.Floor(up, frame, resolution, (-3 * resolution, -3 * resolution)), plan
 
 
+def floor_from_house_expo(path: Path, resolution: float = 0.05) -> tuple[synthetic.Floor, PlanMap]:
+    """The HouseExpo outline (free space) rendered at `resolution` with 0.15 m walls around it; the
+    plan is that rendering (both wall faces), so that plan and simulated building agree exactly."""
+    import cv2
+
+    segments, (xmin, ymin, xmax, ymax) = planicp.vector_plan.house_expo_segments(path)
+    margin = 1.0
+    cols = int(math.ceil((xmax - xmin + 2 * margin) / resolution))
+    rows = int(math.ceil((ymax - ymin + 2 * margin) / resolution))
+    corner = (xmin - margin, ymin - margin)
+    polygon = np.round((segments[:, 0, :] - corner) / resolution).astype(np.int32)  # rows grow with y
+    inside = np.zeros((rows, cols), np.uint8)
+    cv2.fillPoly(inside, [polygon], 1)
+    band = int(round(0.15 / resolution))
+    walls = cv2.dilate(inside, np.ones((2 * band + 1, 2 * band + 1), np.uint8)).astype(bool) & ~inside.astype(bool)
+    frame = np.ones_like(walls)
+    frame[3:-3, 3:-3] = False
+    plan = PlanMap.from_raster(planicp.PlanRaster(walls[::-1], resolution, (corner[0], corner[1], 0.0)))
+    return synthetic.Floor(walls, frame, resolution, corner), plan
+
+
 def people(floor: synthetic.Floor, rng: np.random.Generator, count: int, robot: tuple[float, ...]) -> np.ndarray:
     """`count` discs in free space, none within 1 m of the robot."""
     discs: list[tuple[float, float, float]] = []
@@ -61,6 +83,7 @@ def main() -> None:
         "willow (0.1 m)": floor_from_image(DATA / "willow-full.pgm", 0.1),
         "depot (0.05 m)": floor_from_map(DATA / "depot.yaml"),
         "tb3_sandbox (0.05 m)": floor_from_map(DATA / "tb3_sandbox.yaml"),
+        "HouseExpo 4 rooms (0.05 m)": floor_from_house_expo(DATA / "house_expo_room_0000.json"),
     }
     for extra in args.map:
         floors[Path(extra).name] = floor_from_map(Path(extra))

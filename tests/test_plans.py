@@ -278,3 +278,27 @@ def test_plan_raster_validation() -> None:
         PlanRaster(np.zeros((3, 3), np.uint8), 0.1, (0.0, 0.0, 0.0))  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="resolution must be a positive"):
         PlanRaster(np.zeros((3, 3), bool), 0.0, (0.0, 0.0, 0.0))
+
+
+def test_vector_constructors_and_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import ezdxf
+
+    segments = np.array([[[0.0, 0.0], [4.0, 0.0]], [[4.0, 0.0], [4.0, 3.0]], [[4.0, 3.0], [0.0, 0.0]]])
+    plan = PlanMap.from_segments(segments, spacing=0.05)
+    assert plan.raster_resolution == pytest.approx(0.075)
+    assert len(plan) == 80 + 60 + 100  # 4 m, 3 m, 5 m at 5 cm, shared corners once
+    house = PlanMap.from_house_expo(DATA / "house_expo_room_0000.json")
+    xmin, ymin, xmax, ymax = house.extent
+    assert (xmin, ymin, xmax, ymax) == pytest.approx((0.1, 0.1, 10.17, 8.16))
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 4  # millimetres
+    doc.modelspace().add_line((0, 0), (4000, 0), dxfattribs={"layer": "WALLS"})
+    doc.modelspace().add_line((0, 500), (1000, 500), dxfattribs={"layer": "FURNITURE"})
+    doc.saveas(tmp_path / "room.dxf")
+    walls_only = PlanMap.from_dxf(tmp_path / "room.dxf", layers=["walls"], spacing=0.1)
+    assert len(walls_only) == 41 and walls_only.extent == pytest.approx((0.0, 0.0, 4.0, 0.0))
+    assert cli_main(["plan", str(tmp_path / "room.dxf"), "--layer", "WALLS", "--out", str(tmp_path / "o")]) == 0
+    assert "201 wall points" in capsys.readouterr().out
+    assert cli_main(["plan", str(DATA / "house_expo_room_0000.json"), "--out", str(tmp_path / "h")]) == 0
+    assert cli_main(["plan", str(tmp_path / "room.dxf"), "--layer", "DOORS", "--out", str(tmp_path / "x")]) == 2
+    assert "no layer 'doors'" in capsys.readouterr().err.lower()

@@ -12,7 +12,7 @@ Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_m
 
 from __future__ import annotations
 
-from . import se2, synthetic
+from . import se2, synthetic, vector_plan
 from ._core import PlanicpError, PlanicpInternalError
 from ._core import __version__ as __version__
 from .icp_config import IcpConfig
@@ -42,4 +42,5 @@ __all__ = [
     "scan_to_points",
     "se2",
     "synthetic",
+    "vector_plan",
 ]

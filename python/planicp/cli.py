@@ -32,8 +32,13 @@ def _plan(args: argparse.Namespace) -> int:
     from .plan_map import PlanMap
 
     source = Path(args.image)
-    if source.suffix.lower() in (".yaml", ".yml"):
+    suffix = source.suffix.lower()
+    if suffix in (".yaml", ".yml"):
         plan = PlanMap.from_ros_map(source, cache=not args.no_cache)
+    elif suffix == ".json":
+        plan = PlanMap.from_house_expo(source, spacing=args.spacing)
+    elif suffix == ".dxf":
+        plan = PlanMap.from_dxf(source, args.layer or None, spacing=args.spacing)
     else:
         if args.resolution is None:
             raise ValueError("--resolution (metres per pixel) is required for an image plan")
@@ -82,10 +87,10 @@ def build_parser() -> argparse.ArgumentParser:
     demo.set_defaults(func=_demo)
     plan = sub.add_parser(
         "plan",
-        help="extract wall points from a plan image or ROS map; write points, an overlay and a ROS map",
+        help="extract wall points from a plan; write the points, an overlay figure and a ROS map",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP) or a ROS map YAML")
+    plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON or DXF")
     plan.add_argument("--resolution", type=float, help="metres per pixel (images; a YAML has its own)")
     plan.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
                       help="pose of the image's lower-left corner in the map frame (m, m, rad)")
@@ -93,6 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--open-px", type=int, default=0, help="remove dark specks up to this many pixels")
     plan.add_argument("--close-px", type=int, default=0, help="close wall gaps up to this many pixels")
     plan.add_argument("--no-cache", action="store_true", help="do not read or write the plan cache")
+    plan.add_argument("--layer", action="append", default=[], help="DXF layer holding walls (repeatable)")
+    plan.add_argument("--spacing", type=float, default=0.02, help="point spacing for vector plans, metres")
     plan.add_argument("--out", type=Path, required=True, help="output folder")
     plan.set_defaults(func=_plan)
     return parser

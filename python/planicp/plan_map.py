@@ -13,6 +13,7 @@ from ._validation import as_pose, as_points, positive
 from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
+from .vector_plan import dxf_segments, house_expo_segments, sample_segments
 
 CacheSetting = bool | str | Path
 """True: the default cache folder; False: no cache; a path: that folder."""
@@ -172,6 +173,33 @@ class PlanMap:
 
         arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
         return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit)
+
+    @classmethod
+    def from_segments(cls, segments: Any, spacing: float = 0.02) -> PlanMap:
+        """A plan from wall segments (M, 2, 2) in metres, map frame, sampled every `spacing` metres
+        (both ends included). Each segment is one wall surface: give both faces of a thick wall."""
+        return cls.from_points(sample_segments(segments, spacing), resolution=1.5 * spacing)
+
+    @classmethod
+    def from_house_expo(cls, source: str | Path | dict[str, Any], spacing: float = 0.02) -> PlanMap:
+        """A plan from a HouseExpo JSON file (or its parsed dict): the outline polygon `verts`
+        (metres) sampled every `spacing` metres."""
+        segments, _ = house_expo_segments(source)
+        return cls.from_segments(segments, spacing)
+
+    @classmethod
+    def from_dxf(
+        cls,
+        path: str | Path,
+        layers: str | list[str] | None = None,
+        *,
+        spacing: float = 0.02,
+        arc_tolerance: float = 0.01,
+    ) -> PlanMap:
+        """A plan from a DXF drawing: LINE, LWPOLYLINE (with bulges), POLYLINE, ARC and CIRCLE on
+        `layers` (all when None), in metres from `$INSUNITS`, sampled every `spacing` metres.
+        Needs the optional extra: `pip install 'planicp[cad]'`."""
+        return cls.from_segments(dxf_segments(path, layers, arc_tolerance=arc_tolerance), spacing)
 
     def to_ros_map(self, yaml_path: str | Path, resolution: float | None = None) -> Path:
         """Writes the plan as a map_server map (YAML + PGM beside it): walls occupied (0), the
