@@ -302,3 +302,33 @@ def test_vector_constructors_and_cli(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert cli_main(["plan", str(DATA / "house_expo_room_0000.json"), "--out", str(tmp_path / "h")]) == 0
     assert cli_main(["plan", str(tmp_path / "room.dxf"), "--layer", "DOORS", "--out", str(tmp_path / "x")]) == 2
     assert "no layer 'doors'" in capsys.readouterr().err.lower()
+
+
+@pytest.mark.parametrize("suffix", [".bmp", ".jpg"])
+def test_other_image_formats(floor: synthetic.Floor, tmp_path: Path, suffix: str) -> None:
+    import cv2
+
+    reference = PlanMap.from_image(floor.to_image(), floor.resolution, cache=False)
+    path = tmp_path / f"plan{suffix}"
+    assert cv2.imwrite(str(path), floor.to_image())
+    plan = PlanMap.from_image(path, floor.resolution, cache=False)
+    if suffix == ".bmp":  # lossless
+        np.testing.assert_array_equal(plan.points, reference.points)
+    else:  # JPEG ringing moves a few boundary pixels; Otsu still separates walls from floor
+        assert abs(len(plan) - len(reference)) < 0.02 * len(reference)
+        d = np.min(np.hypot(*(plan.points[:, None, :] - reference.points[None, ::7, :]).transpose(2, 0, 1)), axis=1)
+        assert np.percentile(d, 99) < 0.35
+
+
+def test_overlay_figure(floor: synthetic.Floor) -> None:
+    from matplotlib.figure import Figure
+
+    from planicp.plan_figure import plot_plan_overlay
+
+    plan = PlanMap.from_image(floor.to_image(), floor.resolution, cache=False)
+    fig = plot_plan_overlay(plan, title="office")
+    assert isinstance(fig, Figure)
+    ax = fig.axes[0]
+    assert len(ax.images) == 1 and ax.collections[0].get_offsets().shape == (len(plan), 2)
+    bare = plot_plan_overlay(PlanMap.from_points(plan.points))
+    assert len(bare.axes[0].images) == 0
