@@ -1,0 +1,133 @@
+"""Figures of a localization run, in the style of the thesis (figs 5.9-5.12) plus driven paths.
+
+Every function takes plain arrays (map frame, metres, radians, seconds), returns a matplotlib
+`Figure` and never shows it: save it with `fig.savefig(path)`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .se2 import transform_points
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from .plan_map import PlanMap
+
+COLOURS = {"odometry": "tab:red", "planicp": "tab:green", "truth": "black"}
+
+
+def _figure(size: tuple[float, float] = (8.0, 4.5)) -> tuple[Figure, Axes]:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, dpi=120)
+    return fig, fig.add_subplot()
+
+
+def _series(ax: Axes, times: NDArray[np.float64], values: Mapping[str, NDArray[np.float64]], scale: float) -> None:
+    t = np.asarray(times, dtype=np.float64)
+    for label, v in values.items():
+        v = np.asarray(v, dtype=np.float64)
+        if v.shape != t.shape:
+            raise ValueError(f"series {label!r} has shape {v.shape}, times have {t.shape}")
+        ax.plot(t, v * scale, label=label, color=COLOURS.get(label), linewidth=1.2)
+    ax.set_xlabel("time (s)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+
+
+def plot_position_error(times: Any, errors: Mapping[str, Any]) -> Figure:
+    """Euclidean distance from ground truth over time, one line per source (thesis fig. 5.11).
+    `errors` maps a label ("odometry", "planicp", ...) to metres per time."""
+    fig, ax = _figure()
+    _series(ax, np.asarray(times), {k: np.asarray(v) for k, v in errors.items()}, 1.0)
+    ax.set_ylabel("position error (m)")
+    ax.set_title("Distance from ground truth")
+    fig.tight_layout()
+    return fig
+
+
+def plot_heading_error(times: Any, errors: Mapping[str, Any]) -> Figure:
+    """Absolute heading error over time in degrees (thesis fig. 5.12); `errors` in radians."""
+    fig, ax = _figure()
+    _series(ax, np.asarray(times), {k: np.abs(np.asarray(v)) for k, v in errors.items()}, 180.0 / math.pi)
+    ax.set_ylabel("heading error (deg)")
+    ax.set_title("Heading deviation from ground truth")
+    fig.tight_layout()
+    return fig
+
+
+def _plan_background(ax: Axes, plan: PlanMap, size: float = 1.0) -> None:
+    pts = plan.points
+    ax.scatter(pts[:, 0], pts[:, 1], s=size, c="tab:blue", linewidths=0, label="plan walls")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+def _arrow(ax: Axes, pose: tuple[float, float, float], colour: str, label: str, length: float = 0.6) -> None:
+    x, y, yaw = pose
+    ax.annotate(
+        "", xy=(x + length * math.cos(yaw), y + length * math.sin(yaw)), xytext=(x, y),
+        arrowprops={"arrowstyle": "->", "color": colour, "linewidth": 2.0},
+    )
+    ax.plot([], [], color=colour, label=label)
+
+
+def plot_scan_match(
+    plan: PlanMap,
+    scan_xy: Any,
+    pose: tuple[float, float, float],
+    inlier_mask: Any | None = None,
+    *,
+    initial_pose: tuple[float, float, float] | None = None,
+    window: float = 8.0,
+    title: str | None = None,
+) -> Figure:
+    """One scan placed at `pose` over the plan (thesis figs. 5.7, 5.9, 5.10): inliers green,
+    outliers black (all green when `inlier_mask` is None), the estimate as a green arrow and the
+    initial guess (odometry) as a red one. The view is `window` metres around the pose."""
+    scan = np.asarray(scan_xy, dtype=np.float64)
+    world = transform_points(pose, scan)
+    mask = np.ones(len(scan), dtype=bool) if inlier_mask is None else np.asarray(inlier_mask, dtype=bool)
+    if mask.shape != (len(scan),):
+        raise ValueError(f"inlier_mask has shape {mask.shape}, the scan has {len(scan)} points")
+    fig, ax = _figure((7.0, 7.0))
+    _plan_background(ax, plan)
+    ax.scatter(world[mask, 0], world[mask, 1], s=4, c="tab:green", linewidths=0, label=f"inliers ({mask.sum()})")
+    if (~mask).any():
+        ax.scatter(world[~mask, 0], world[~mask, 1], s=4, c="black", linewidths=0, label=f"outliers ({(~mask).sum()})")
+    if initial_pose is not None:
+        _arrow(ax, initial_pose, "tab:red", "initial guess (odometry)")
+    _arrow(ax, pose, "tab:green", "estimate")
+    half = window / 2.0
+    ax.set_xlim(pose[0] - half, pose[0] + half)
+    ax.set_ylim(pose[1] - half, pose[1] + half)
+    ax.legend(loc="upper right", markerscale=3, fontsize=8)
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def plot_paths(plan: PlanMap, paths: Mapping[str, Any], *, title: str | None = None) -> Figure:
+    """Driven paths over the plan: each value an (N, 2) or (N, 3) array of map-frame poses."""
+    fig, ax = _figure((8.0, 6.0))
+    _plan_background(ax, plan, size=0.5)
+    for label, path in paths.items():
+        p = np.asarray(path, dtype=np.float64)
+        if p.ndim != 2 or p.shape[1] not in (2, 3):
+            raise ValueError(f"path {label!r} must be (N, 2) or (N, 3), got {p.shape}")
+        ax.plot(p[:, 0], p[:, 1], label=label, color=COLOURS.get(label), linewidth=1.2)
+    ax.legend(loc="upper right", fontsize=8)
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig
