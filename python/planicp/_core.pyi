@@ -3,12 +3,13 @@
 from typing import final
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "MIN_SCAN_POINTS",
     "Alignment",
     "IcpSettings",
+    "OccupancyGrid",
     "PlanicpError",
     "PlanicpInternalError",
     "PointMap",
@@ -85,6 +86,33 @@ class Alignment:
     def covariance(self) -> NDArray[np.float64]: ...
     @property
     def inlier_mask(self) -> NDArray[np.bool_]: ...
+
+@final
+class OccupancyGrid:
+    """An occupancy grid to simulate LIDAR scans in; rows grow with +y (row 0 is the lowest y)."""
+
+    def __new__(
+        cls, cells: NDArray[np.bool_], resolution: float, origin: tuple[float, float]
+    ) -> OccupancyGrid: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def origin(self) -> tuple[float, float]: ...
+    def cast(
+        self,
+        sensor_pose: tuple[float, float, float],
+        angle_min: float,
+        angle_increment: float,
+        beams: int,
+        range_min: float,
+        range_max: float,
+        range_sigma: float = 0.0,
+        dropout: float = 0.0,
+        seed: int | None = None,
+        discs: ArrayLike | None = None,
+    ) -> NDArray[np.float64]: ...
 
 def align(
     map: PointMap,

@@ -8,6 +8,7 @@
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
+//! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
 //! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
@@ -27,6 +28,7 @@ pub mod error;
 pub mod icp;
 pub mod point_map;
 pub mod pose;
+pub mod ray_casting;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;

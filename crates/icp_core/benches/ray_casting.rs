@@ -1,0 +1,97 @@
+//! Criterion bench of the simulated LIDAR: one 1081-beam, 270-degree, 30 m scan cast through the
+//! office floor of the `alignment` bench (40 x 25 m, 0.2 m thick walls, eight rooms along a
+//! corridor) rasterised at 5 cm, from inside a room and from the corridor (long beams), with and
+//! without noise and a few people (discs). Run `cargo bench --bench ray_casting`.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use icp_core::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel, OccupancyRaster};
+use icp_core::Pose2;
+use std::f64::consts::PI;
+use std::hint::black_box;
+
+const RES: f64 = 0.05;
+
+/// Walls of the `alignment` bench's office as (a, b) centre lines, 0.2 m thick.
+fn office_walls() -> Vec<([f64; 2], [f64; 2])> {
+    let mut walls = vec![
+        ([0.0, 0.0], [40.0, 0.0]),
+        ([0.0, 25.0], [40.0, 25.0]),
+        ([0.0, 0.0], [0.0, 25.0]),
+        ([40.0, 0.0], [40.0, 25.0]),
+    ];
+    for (y, far) in [(11.0, 0.0), (13.5, 25.0)] {
+        let mut x = 0.0;
+        for k in 0..4 {
+            let x1 = 10.0 * (k + 1) as f64;
+            walls.push(([x, y], [x + 4.0, y]));
+            walls.push(([x + 5.0, y], [x1, y]));
+            if k < 3 {
+                walls.push(([x1, y], [x1, far]));
+            }
+            x = x1;
+        }
+    }
+    walls
+}
+
+/// The office at 5 cm with a 1 m free margin: a cell is occupied when its centre lies within 0.1 m
+/// of a wall's centre line (axis-aligned walls, so a box test).
+fn office_raster() -> OccupancyRaster {
+    let origin = [-1.0, -1.0];
+    let (cols, rows) = ((42.0 / RES) as usize, (27.0 / RES) as usize);
+    let walls = office_walls();
+    let mut cells = vec![false; rows * cols];
+    for r in 0..rows {
+        for c in 0..cols {
+            let (x, y) = (origin[0] + (c as f64 + 0.5) * RES, origin[1] + (r as f64 + 0.5) * RES);
+            cells[r * cols + c] = walls.iter().any(|(a, b)| {
+                let (x0, x1) = (a[0].min(b[0]) - 0.1, a[0].max(b[0]) + 0.1);
+                let (y0, y1) = (a[1].min(b[1]) - 0.1, a[1].max(b[1]) + 0.1);
+                (x0..x1).contains(&x) && (y0..y1).contains(&y)
+            });
+        }
+    }
+    OccupancyRaster::new(cells, rows, cols, RES, origin).unwrap()
+}
+
+fn benches(c: &mut Criterion) {
+    let raster = office_raster();
+    let fov = 270f64.to_radians();
+    let model = LidarModel {
+        angle_min: -0.5 * fov,
+        angle_increment: fov / 1080.0,
+        beams: 1081,
+        range_min: 0.05,
+        range_max: 30.0,
+    };
+    let room = Pose2::new(6.0, 5.0, 0.3);
+    let corridor = Pose2::new(3.0, 12.25, 0.0);
+    let people: Vec<Disc> =
+        (0..5).map(|k| Disc { x: 8.0 + 5.0 * k as f64, y: 12.0 + 0.3 * k as f64, radius: 0.25 }).collect();
+    let mut out = Vec::with_capacity(model.beams);
+
+    let mut g = c.benchmark_group("ray_casting");
+    g.throughput(Throughput::Elements(model.beams as u64));
+    g.bench_function("scan_1081_room", |b| {
+        b.iter(|| cast_ranges(&raster, black_box(room), &model, &[], &mut out).unwrap())
+    });
+    g.bench_function("scan_1081_corridor", |b| {
+        b.iter(|| cast_ranges(&raster, black_box(corridor), &model, &[], &mut out).unwrap())
+    });
+    g.bench_function("scan_1081_corridor_5_people_noise", |b| {
+        let mut rng = noise_rng(Some(1));
+        b.iter(|| {
+            cast_ranges(&raster, black_box(corridor), &model, &people, &mut out).unwrap();
+            add_noise(&mut out, &model, 0.015, 0.01, &mut rng).unwrap();
+        })
+    });
+    // A full circle of 3600 beams from the corridor, the widest case.
+    let circle = LidarModel { angle_min: -PI, angle_increment: 2.0 * PI / 3600.0, beams: 3600, ..model };
+    g.bench_function("scan_3600_full_circle_corridor", |b| {
+        b.iter(|| cast_ranges(&raster, black_box(corridor), &circle, &[], &mut out).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(ray_casting, benches);
+criterion_main!(ray_casting);
