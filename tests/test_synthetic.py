@@ -707,3 +707,15 @@ def test_simulate_ranges_speed() -> None:
     median_ms = statistics.median(times) * 1e3
     print(f"\nsimulate_ranges office 1080 beams: median {median_ms:.1f} ms, max {max(times) * 1e3:.1f} ms")
     assert median_ms < 30.0
+
+
+def test_beam_along_an_axis_from_the_raster_edge() -> None:
+    """A sensor exactly on the raster's bottom edge with a beam along +-x must still hit the wall
+    (0 * inf in the exit time once turned such beams into misses)."""
+    walls = np.zeros((20, 20), dtype=bool)
+    walls[:, 10] = True
+    floor = syn.Floor(walls, np.zeros_like(walls), 0.1, (0.0, 0.0))
+    ranges, _, _ = syn.simulate_ranges(
+        floor, (0.25, 0.0, math.pi), np.random.default_rng(0), beams=2, fov=2 * math.pi, range_sigma=0.0, min_range=0.0
+    )
+    assert ranges[0] == pytest.approx(0.75, abs=1e-12)

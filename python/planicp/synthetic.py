@@ -1076,7 +1076,12 @@ def _cast_grid(
     fx = np.where(adx > 0.0, fx, 1.0)
     fy = np.where(ady > 0.0, fy, 1.0)
     # parameter (cells) at which the ray leaves the raster: nothing beyond can be hit
-    t_exit = np.minimum(np.where(dx > 0.0, cols - gx, gx) * inv_x, np.where(dy > 0.0, rows - gy, gy) * inv_y)
+    # (an axis the ray does not move along never bounds it: 0 * inf would give NaN on an edge)
+    with np.errstate(invalid="ignore"):
+        t_exit = np.minimum(
+            np.where(adx > 0.0, np.where(dx > 0.0, cols - gx, gx) * inv_x, np.inf),
+            np.where(ady > 0.0, np.where(dy > 0.0, rows - gy, gy) * inv_y, np.inf),
+        )
     t_max = max_range / res
     t_end = np.minimum(t_exit, t_max)
     per_axis = ((fx, inv_x, adx, sx), (fy, inv_y, ady, sy))
