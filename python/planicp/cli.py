@@ -14,11 +14,10 @@ def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
     run_demo(
+        plan_path=args.plan,
+        resolution=args.resolution,
+        duration=args.duration,
         seed=args.seed,
-        layout=args.layout,
-        trials=args.trials,
-        offset_m=args.offset,
-        offset_deg=args.offset_deg,
         out=args.out,
         stream=sys.stdout,
     )
@@ -75,15 +74,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
         "demo",
-        help="align simulated scans to a generated floor plan and print the errors",
+        help="the drift experiment: a simulated robot whose odometry drifts, localized against the plan",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    demo.add_argument("--seed", type=int, default=0, help="seed of the floor, poses and noise")
-    demo.add_argument("--layout", choices=synthetic.LAYOUTS, default="office", help="kind of floor")
-    demo.add_argument("--trials", type=int, default=100, help="number of scans to align")
-    demo.add_argument("--offset", type=float, default=0.2, help="initial-guess offset, metres")
-    demo.add_argument("--offset-deg", type=float, default=3.0, help="initial-guess offset, degrees")
-    demo.add_argument("--out", type=Path, default=None, help="folder for metrics.json")
+    demo.add_argument("--plan", type=Path, default=None, help="plan image or ROS map YAML (default: shipped office)")
+    demo.add_argument("--resolution", type=float, default=None, help="metres per pixel of --plan IMAGE")
+    demo.add_argument("--duration", type=float, default=300.0, help="simulated seconds")
+    demo.add_argument("--seed", type=int, default=0, help="seed of furniture, route, noise")
+    demo.add_argument("--out", type=Path, default=Path("planicp-demo"), help="output folder")
     demo.set_defaults(func=_demo)
     plan = sub.add_parser(
         "plan",

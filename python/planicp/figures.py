@@ -93,7 +93,7 @@ def plot_scan_match(
 ) -> Figure:
     """One scan placed at `pose` over the plan (thesis figs. 5.7, 5.9, 5.10): inliers green,
     outliers black (all green when `inlier_mask` is None), the estimate as a green arrow and the
-    initial guess (odometry) as a red one. The view is `window` metres around the pose."""
+    initial guess (the odometry prediction) as a red one. The view is `window` metres around the pose."""
     scan = np.asarray(scan_xy, dtype=np.float64)
     world = transform_points(pose, scan)
     mask = np.ones(len(scan), dtype=bool) if inlier_mask is None else np.asarray(inlier_mask, dtype=bool)
@@ -105,7 +105,7 @@ def plot_scan_match(
     if (~mask).any():
         ax.scatter(world[~mask, 0], world[~mask, 1], s=4, c="black", linewidths=0, label=f"outliers ({(~mask).sum()})")
     if initial_pose is not None:
-        _arrow(ax, initial_pose, "tab:red", "initial guess (odometry)")
+        _arrow(ax, initial_pose, "tab:red", "initial guess")
     _arrow(ax, pose, "tab:green", "estimate")
     half = window / 2.0
     ax.set_xlim(pose[0] - half, pose[0] + half)

@@ -23,6 +23,9 @@ use nalgebra::Matrix3;
 /// (see [`CandidateCache`]).
 pub const CACHE_RADIUS_FACTOR: f64 = 2.0;
 
+/// Largest stage distance (metres) for which the candidate cache is used.
+pub const MAX_CACHED_DISTANCE: f64 = 1.0;
+
 /// A stage's rejection distance: `factor * max_distance`, but never below `SPACING_FLOOR` plan
 /// point spacings (nor above `max_distance`): closer than that, correct pairs are lost to the
 /// plan's sampling (a scan point between two samples is half a spacing from both) plus noise.
@@ -195,8 +198,10 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     let mut converged = false;
     let mut moved = Vec::with_capacity(used.len());
     let mut pairs: Vec<Pair> = Vec::with_capacity(used.len());
-    let radius_factor = CACHE_RADIUS_FACTOR;
-    let mut cache = CandidateCache::new(radius_factor * largest_factor * config.max_correspondence_distance);
+    let largest_distance = largest_factor * config.max_correspondence_distance;
+    // Beyond a metre a candidate list holds whole rooms: plain KD-tree queries are cheaper.
+    let use_cache = largest_distance <= MAX_CACHED_DISTANCE;
+    let mut cache = CandidateCache::new(CACHE_RADIUS_FACTOR * largest_distance);
     'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
         let distance = stage_distance(*factor, config.max_correspondence_distance, map.spacing());
         let end = stage_end(stage, stages, config.max_iterations);
@@ -208,7 +213,11 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
         let mut cooldown = 0usize;
         while iterations < end {
             pose.transform_points(&used, &mut moved);
-            cache.find_pairs(&target, &moved, distance, &mut pairs);
+            if use_cache {
+                cache.find_pairs(&target, &moved, distance, &mut pairs);
+            } else {
+                find_pairs(&target, &moved, distance, &mut pairs);
+            }
             if let Some((before, bound)) = pending.take() {
                 if truncated_cost(&pairs, used.len(), distance) > bound {
                     // The jump made the fit worse: go back and spend this iteration there.
@@ -257,7 +266,7 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
             last_update = Some(update);
         }
     }
-    let scored_with = (config.subsample == 1).then_some(&mut cache);
+    let scored_with = (use_cache && config.subsample == 1).then_some(&mut cache);
     let outcome = LoopOutcome { pose, converged, iterations };
     Ok(score(map, &target, scored_with, scan, config, outcome))
 }
@@ -433,6 +442,20 @@ mod tests {
         assert!((res.pose.x - truth.x).abs() < 0.01 && (res.pose.y - truth.y).abs() < 0.01, "{:?}", res.pose);
         assert!(res.inlier_mask[clean..].iter().all(|&m| !m), "cabinet points counted as inliers");
         assert!(res.num_inliers >= clean * 95 / 100);
+    }
+
+    #[test]
+    fn a_huge_correspondence_distance_finishes_and_matches_the_plain_search() {
+        // Without outlier rejection (every pair counts) the candidate cache is skipped.
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        let truth = Pose2::new(5.0, 2.0, 0.1);
+        let scan = scan_from(&map, truth, &mut rng, 0.005);
+        let cfg =
+            IcpConfig { max_correspondence_distance: 50.0, use_visibility: false, ..IcpConfig::default() };
+        let res = align(&map, &scan, Pose2::new(5.05, 2.05, 0.12), &cfg).unwrap();
+        assert_eq!(res.num_inliers, scan.len());
+        assert!((res.pose.x - truth.x).abs() < 0.02 && (res.pose.y - truth.y).abs() < 0.02, "{:?}", res.pose);
     }
 
     #[test]

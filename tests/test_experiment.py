@@ -1,0 +1,107 @@
+"""The drift experiment end to end: odometry drifts, planicp stays on the truth, on several plans."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planicp import PlanMap, PlanRaster, synthetic
+from planicp.cli import main as cli_main
+from planicp.default_plan import load_default_plan
+from planicp.sim.experiment import ExperimentConfig, LidarModel, replay, run_experiment
+from planicp.icp_config import IcpConfig
+
+
+def check_flat(metrics: dict[str, float]) -> None:
+    assert metrics["planicp_position_rms_m"] < 0.03
+    assert metrics["planicp_heading_rms_deg"] < 0.5
+    assert metrics["planicp_position_max_m"] < 0.10
+    assert metrics["odometry_position_max_m"] > 5 * metrics["planicp_position_max_m"]
+    assert metrics["accepted_share"] > 0.9
+
+
+def test_default_plan_odometry_drifts_planicp_does_not() -> None:
+    recording, world = run_experiment(load_default_plan(), ExperimentConfig(duration_s=60.0, seed=1))
+    metrics = recording.metrics()
+    check_flat(metrics)
+    assert metrics["odometry_heading_max_deg"] > 5.0
+    assert len(recording.times) == 601 and len(world.people) >= 3
+    # odometry and truth start together (the odom frame is the start pose)
+    np.testing.assert_allclose(recording.odometry[0], recording.truth[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("layout", ["hall", "diagonal"])
+def test_generated_floors(layout: str) -> None:
+    floor = synthetic.generate_floor(11, layout, furniture_per_room=0)
+    raster = PlanRaster(floor.walls[::-1], floor.resolution, (floor.origin[0], floor.origin[1], 0.0))
+    recording, _ = run_experiment(PlanMap.from_raster(raster), ExperimentConfig(duration_s=30.0, seed=2))
+    check_flat(recording.metrics())
+
+
+def test_real_layout_house_expo() -> None:
+    """The HouseExpo sample (a real home's outline), rendered with 15 cm walls."""
+    import cv2
+
+    from planicp import vector_plan
+
+    segments, (xmin, ymin, xmax, ymax) = vector_plan.house_expo_segments(
+        Path(__file__).parent / "data" / "house_expo_room_0000.json")
+    res, margin = 0.05, 1.0
+    rows, cols = int(math.ceil((ymax - ymin + 2 * margin) / res)), int(math.ceil((xmax - xmin + 2 * margin) / res))
+    inside = np.zeros((rows, cols), np.uint8)
+    cv2.fillPoly(inside, [np.round((segments[:, 0, :] - (xmin - margin, ymin - margin)) / res).astype(np.int32)], 1)
+    walls = cv2.dilate(inside, np.ones((7, 7), np.uint8)).astype(bool) & ~inside.astype(bool)
+    plan = PlanMap.from_raster(PlanRaster(walls[::-1], res, (xmin - margin, ymin - margin, 0.0)))
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=30.0, seed=3))
+    check_flat(recording.metrics())
+
+
+def test_without_outlier_rejection_is_worse_and_replay_is_deterministic() -> None:
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=20.0, seed=4))
+    again = replay(plan, recording, IcpConfig())
+    np.testing.assert_array_equal(again.estimate, recording.estimate)
+    naive = replay(plan, recording, IcpConfig(max_correspondence_distance=50.0, use_visibility=False,
+                                              correspondence_schedule=(1.0,)))
+    assert naive.metrics()["planicp_position_rms_m"] > 3 * recording.metrics()["planicp_position_rms_m"]
+
+
+def test_bad_experiment_settings() -> None:
+    with pytest.raises(ValueError, match="duration_s must be a positive"):
+        ExperimentConfig(duration_s=-1.0)
+    with pytest.raises(ValueError, match="odometry_rate_hz .* must be at least the LIDAR rate"):
+        ExperimentConfig(odometry_rate_hz=5.0)
+    with pytest.raises(ValueError, match="rate_hz must be a positive"):
+        LidarModel(rate_hz=-10.0)
+    with pytest.raises(ValueError, match="dropout must be in"):
+        LidarModel(dropout=1.5)
+    with pytest.raises(ValueError, match="needs a plan made from a raster"):
+        run_experiment(PlanMap.from_points(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])))
+    full = np.ones((40, 40), dtype=bool)
+    with pytest.raises(ValueError, match="no enclosed free space"):
+        run_experiment(PlanMap.from_raster(PlanRaster(full, 0.05, (0.0, 0.0, 0.0))))
+
+
+def test_demo_writes_figures_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "demo"
+    assert cli_main(["demo", "--duration", "15", "--seed", "3", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "odometry" in printed and "planicp" in printed
+    names = {p.name for p in out.iterdir()}
+    assert names == {"position_error.png", "heading_error.png", "paths.png", "plan.png", "scan_without_rejection.png",
+                     "scan_with_rejection.png", "metrics.json", "report.md"}
+    metrics = json.loads((out / "metrics.json").read_text())
+    default = metrics["runs"]["planicp (default)"]
+    assert metrics["scans"] == 151 and set(metrics["runs"]) == {
+        "planicp (default)", "without outlier rejection", "with trimming (trim_ratio 0.8)"}
+    report = (out / "report.md").read_text()
+    # The report states this run's numbers.
+    assert f"{default['planicp_position_rms_m']:.3f} m" in report
+    assert f"{default['odometry_heading_max_deg']:.2f} deg" in report
+    assert cli_main(["demo", "--plan", str(tmp_path / "none.png"), "--resolution", "0.05", "--out", str(out)]) == 2
+    assert cli_main(["demo", "--plan", str(out / "plan.png"), "--out", str(out)]) == 2
+    assert "--resolution" in capsys.readouterr().err
