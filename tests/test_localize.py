@@ -12,6 +12,7 @@ import pytest
 import planicp
 from planicp import IcpConfig, IcpResult, PlanMap, localize, scan_to_points, se2
 from planicp import synthetic as syn
+from geometry_checks import nearest_distance
 
 DEG = math.pi / 180.0
 LAYOUTS = ("office", "hall", "diagonal")
@@ -107,15 +108,6 @@ def pose_error(truth: tuple[float, float, float], est: tuple[float, float, float
     dx, dy, dyaw = se2.between(truth, est)
     return math.hypot(dx, dy), abs(dyaw)
 
-
-def nearest_distance(queries: np.ndarray, points: np.ndarray, chunk: int = 256) -> np.ndarray:
-    """Distance from each query to its nearest point (brute force, chunked)."""
-    out = np.empty(len(queries))
-    for i in range(0, len(queries), chunk):
-        q = queries[i : i + chunk]
-        d2 = ((q[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
-        out[i : i + chunk] = np.sqrt(d2.min(axis=1))
-    return out
 
 
 @pytest.fixture(scope="module")

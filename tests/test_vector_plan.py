@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 import planicp
 from planicp.vector_plan import dxf_segments, house_expo_segments, sample_segments
+from geometry_checks import nearest_distance
 
 DATA = Path(__file__).parent / "data"
 HOUSE_EXPO = DATA / "house_expo_room_0000.json"
@@ -48,15 +49,6 @@ def distance_to_segments(points: Array, segments: Array) -> Array:
     """Distance of each point to the nearest of the segments."""
     return np.asarray(np.min([segment_distance(points, s[0], s[1]) for s in segments], axis=0))
 
-
-def nearest_distance(queries: Array, points: Array, chunk: int = 2048) -> Array:
-    """Distance of each query to its nearest point (brute force, in chunks)."""
-    out = np.empty(len(queries))
-    for i in range(0, len(queries), chunk):
-        q = queries[i : i + chunk]
-        d2 = ((q[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
-        out[i : i + chunk] = np.sqrt(d2.min(axis=1))
-    return out
 
 
 def check_sampling(points: Array, segments: Array, spacing: float) -> None:
