@@ -66,6 +66,19 @@ pub enum IcpError {
         /// The most cells allowed.
         limit: usize,
     },
+    /// An occupancy grid would need more cells than its budget allows.
+    #[error(
+        "the occupancy grid at {resolution} m would need {cells} cells (limit {limit}); \
+         give a coarser resolution, a larger cell budget or a shorter max_range"
+    )]
+    GridTooLarge {
+        /// Cells it would need.
+        cells: f64,
+        /// The most cells allowed.
+        limit: usize,
+        /// Resolution, metres per cell.
+        resolution: f64,
+    },
 }
 
 /// Largest coordinate magnitude accepted, metres. At 1e9 m a double still resolves 0.1 micrometre;

@@ -8,6 +8,8 @@
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
+//! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
+//! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
 //! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
@@ -22,10 +24,12 @@
 pub mod acceleration;
 pub mod bucket_grid;
 pub mod candidate_cache;
+pub mod cell_traversal;
 pub mod correspondence;
 pub mod covariance;
 pub mod error;
 pub mod icp;
+pub mod log_odds_grid;
 pub mod point_map;
 pub mod pose;
 pub mod ray_casting;
