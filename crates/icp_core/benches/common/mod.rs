@@ -1,0 +1,50 @@
+//! The office floor shared by the ray casting and occupancy grid benches: 40 x 25 m, 0.2 m thick
+//! walls, eight rooms along a corridor (the floor of the `alignment` bench), rasterised at 5 cm.
+
+use icp_core::ray_casting::OccupancyRaster;
+
+/// Raster resolution, metres per cell.
+pub const RES: f64 = 0.05;
+
+/// Walls of the `alignment` bench's office as (a, b) centre lines, 0.2 m thick.
+fn office_walls() -> Vec<([f64; 2], [f64; 2])> {
+    let mut walls = vec![
+        ([0.0, 0.0], [40.0, 0.0]),
+        ([0.0, 25.0], [40.0, 25.0]),
+        ([0.0, 0.0], [0.0, 25.0]),
+        ([40.0, 0.0], [40.0, 25.0]),
+    ];
+    for (y, far) in [(11.0, 0.0), (13.5, 25.0)] {
+        let mut x = 0.0;
+        for k in 0..4 {
+            let x1 = 10.0 * (k + 1) as f64;
+            walls.push(([x, y], [x + 4.0, y]));
+            walls.push(([x + 5.0, y], [x1, y]));
+            if k < 3 {
+                walls.push(([x1, y], [x1, far]));
+            }
+            x = x1;
+        }
+    }
+    walls
+}
+
+/// The office at 5 cm with a 1 m free margin: a cell is occupied when its centre lies within 0.1 m
+/// of a wall's centre line (axis-aligned walls, so a box test).
+pub fn office_raster() -> OccupancyRaster {
+    let origin = [-1.0, -1.0];
+    let (cols, rows) = ((42.0 / RES) as usize, (27.0 / RES) as usize);
+    let walls = office_walls();
+    let mut cells = vec![false; rows * cols];
+    for r in 0..rows {
+        for c in 0..cols {
+            let (x, y) = (origin[0] + (c as f64 + 0.5) * RES, origin[1] + (r as f64 + 0.5) * RES);
+            cells[r * cols + c] = walls.iter().any(|(a, b)| {
+                let (x0, x1) = (a[0].min(b[0]) - 0.1, a[0].max(b[0]) + 0.1);
+                let (y0, y1) = (a[1].min(b[1]) - 0.1, a[1].max(b[1]) + 0.1);
+                (x0..x1).contains(&x) && (y0..y1).contains(&y)
+            });
+        }
+    }
+    OccupancyRaster::new(cells, rows, cols, RES, origin).unwrap()
+}
