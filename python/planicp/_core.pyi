@@ -9,6 +9,7 @@ __all__ = [
     "MIN_SCAN_POINTS",
     "Alignment",
     "IcpSettings",
+    "LogOddsGrid",
     "OccupancyGrid",
     "PlanicpError",
     "PlanicpInternalError",
@@ -113,6 +114,42 @@ class OccupancyGrid:
         seed: int | None = None,
         discs: ArrayLike | None = None,
     ) -> NDArray[np.float64]: ...
+
+@final
+class LogOddsGrid:
+    """A growing log-odds occupancy grid updated by scans; rows grow with +y."""
+
+    def __new__(
+        cls,
+        rows: int,
+        cols: int,
+        resolution: float,
+        origin: tuple[float, float],
+        hit: float,
+        miss: float,
+        min: float,
+        max: float,
+        max_cells: int,
+    ) -> LogOddsGrid: ...
+    def integrate(
+        self,
+        sensor: tuple[float, float],
+        hits: NDArray[np.float64],
+        misses: NDArray[np.float64],
+        max_range: float,
+    ) -> None: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def origin(self) -> tuple[float, float]: ...
+    @property
+    def scans(self) -> int: ...
+    @property
+    def max_cells(self) -> int: ...
+    def log_odds(self) -> NDArray[np.float32]: ...
+    def observed(self) -> NDArray[np.bool_]: ...
 
 def align(
     map: PointMap,

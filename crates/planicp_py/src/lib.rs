@@ -13,6 +13,8 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
+mod log_odds_grid;
+
 create_exception!(
     _core,
     PlanicpError,
@@ -31,7 +33,7 @@ fn core_error(err: IcpError) -> PyErr {
 }
 
 /// Runs `f`, turning a core error into `PlanicpError` and a panic into `PlanicpInternalError`.
-fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
+pub(crate) fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
     match catch_unwind(AssertUnwindSafe(f)) {
         Ok(Ok(v)) => Ok(v),
         Ok(Err(e)) => Err(core_error(e)),
@@ -47,7 +49,7 @@ fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
 }
 
 /// Copies an (N, 2) float64 array into owned points; `what` names it in errors.
-fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
+pub(crate) fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
     let shape = array.shape();
     if shape[1] != 2 {
         return Err(PlanicpError::new_err(format!(
@@ -247,6 +249,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<IcpSettings>()?;
     m.add_class::<Alignment>()?;
     m.add_class::<OccupancyGrid>()?;
+    m.add_class::<log_odds_grid::LogOddsGrid>()?;
     m.add_function(wrap_pyfunction!(align, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
