@@ -15,6 +15,8 @@ from __future__ import annotations
 from . import se2, synthetic, vector_plan
 from ._core import PlanicpError, PlanicpInternalError
 from ._core import __version__ as __version__
+from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState, OccupancyGridMessage, OccupancyModel
+from .grid_agreement import GridAgreement, compare_grids
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .laser_scan import scan_to_points
@@ -26,6 +28,11 @@ from .ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",
+    "EnhancedOccupancyGrid",
+    "EogState",
+    "GridAgreement",
+    "OccupancyGridMessage",
+    "OccupancyModel",
     "Estimate",
     "IcpConfig",
     "IcpResult",
@@ -36,6 +43,7 @@ __all__ = [
     "PlanicpError",
     "PlanicpInternalError",
     "__version__",
+    "compare_grids",
     "localize",
     "read_ros_map",
     "resolution_from_pixels",

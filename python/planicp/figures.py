@@ -1,4 +1,4 @@
-"""Figures of a localization run, in the style of the thesis (figs 5.9-5.12) plus driven paths.
+"""Figures of a localization run, in the style of the thesis (figs 5.9-5.14) plus driven paths.
 
 Every function takes plain arrays (map frame, metres, radians, seconds), returns a matplotlib
 `Figure` and never shows it: save it with `fig.savefig(path)`.
@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from .enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .plan_map import PlanMap
 
 COLOURS = {"odometry": "tab:red", "planicp": "tab:green", "truth": "black"}
@@ -129,5 +130,46 @@ def plot_paths(plan: PlanMap, paths: Mapping[str, Any], *, title: str | None = N
     ax.legend(loc="upper right", fontsize=8)
     if title:
         ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def _draw_eog(ax: Axes, grid: EnhancedOccupancyGrid, title: str | None) -> None:
+    from matplotlib.patches import Patch
+
+    from .enhanced_occupancy_grid import STATE_COLOURS, EogState
+
+    xmin, ymin, xmax, ymax = grid.extent
+    ax.imshow(grid.to_image(), extent=(xmin, xmax, ymin, ymax), interpolation="nearest")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    handles = []
+    for state in EogState:
+        r, g, b = STATE_COLOURS[state]
+        handles.append(Patch(facecolor=(r / 255.0, g / 255.0, b / 255.0), edgecolor="0.3", label=state.name.lower()))
+    ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
+    if title:
+        ax.set_title(title)
+
+
+def plot_eog(grid: EnhancedOccupancyGrid, *, title: str | None = None) -> Figure:
+    """An enhanced occupancy grid in the thesis's colours (figs 5.13, 5.14), in map coordinates."""
+    fig, ax = _figure((8.0, 6.0))
+    _draw_eog(ax, grid, title)
+    fig.tight_layout()
+    return fig
+
+
+def plot_eog_comparison(grids: Mapping[str, EnhancedOccupancyGrid]) -> Figure:
+    """Several grids side by side on shared axes (e.g. built from odometry and from planicp)."""
+    from matplotlib.figure import Figure
+
+    if not grids:
+        raise ValueError("plot_eog_comparison needs at least one grid")
+    fig = Figure(figsize=(6.0 * len(grids), 5.5), dpi=120)
+    axes = fig.subplots(1, len(grids), squeeze=False)[0]
+    for ax, (label, grid) in zip(axes, grids.items()):
+        _draw_eog(ax, grid, label)
     fig.tight_layout()
     return fig
