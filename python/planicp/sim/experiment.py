@@ -16,12 +16,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
+from ..enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..icp_config import IcpConfig
 from ..laser_scan import scan_to_points
 from ..localizer import AcceptanceGate, Localizer
@@ -132,10 +134,30 @@ class Recording:
 
     def errors(self, which: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error m, heading error rad) over time of "odometry" or "estimate"."""
-        poses = {"odometry": self.odometry, "estimate": self.estimate}[which]
+        if which not in ("odometry", "estimate"):
+            raise ValueError(f"which must be 'odometry' or 'estimate', got {which!r}")
+        poses = self.poses(which)
         d = poses[:, :2] - self.truth[:, :2]
         dyaw = np.array([wrap_angle(a) for a in poses[:, 2] - self.truth[:, 2]])
         return np.hypot(d[:, 0], d[:, 1]), dyaw
+
+    def poses(self, which: str) -> NDArray[np.float64]:
+        """(K, 3) map-frame poses of "truth", "odometry" or "estimate"."""
+        table = {"truth": self.truth, "odometry": self.odometry, "estimate": self.estimate}
+        if which not in table:
+            raise ValueError(f"which must be one of {sorted(table)}, got {which!r}")
+        return table[which]
+
+    def occupancy_grid(self, plan: PlanMap, which: str, sensor_offset: Pose, resolution: float = 0.05,
+                       **options: Any) -> EnhancedOccupancyGrid:
+        """The enhanced occupancy grid of every scan placed at the poses of `which` ("truth",
+        "odometry" or "estimate"); `sensor_offset` is the laser's mount in the base frame (the
+        LIDAR model's `mount`), `options` go to `EnhancedOccupancyGrid`."""
+        poses = self.poses(which)
+        grid = EnhancedOccupancyGrid(plan, resolution, **options)
+        for scan, pose in zip(self.scans, poses):
+            grid.integrate(scan, pose, sensor_offset)
+        return grid
 
     def metrics(self) -> dict[str, float]:
         """RMS, maximum and final errors of odometry and planicp, plus acceptance statistics."""
