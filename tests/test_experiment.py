@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planicp import PlanMap, PlanRaster, synthetic
+from planicp import EnhancedOccupancyGrid, PlanMap, PlanRaster, compare_grids, synthetic
 from planicp.cli import main as cli_main
 from planicp.default_plan import load_default_plan
 from planicp.sim.experiment import ExperimentConfig, LidarModel, replay, run_experiment
@@ -86,22 +86,54 @@ def test_bad_experiment_settings() -> None:
         run_experiment(PlanMap.from_raster(PlanRaster(full, 0.05, (0.0, 0.0, 0.0))))
 
 
-def test_demo_writes_figures_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_default_demo_writes_figures_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # The demo exactly as `planicp demo` runs it (300 s, seed 0), only the output folder differs.
     out = tmp_path / "demo"
-    assert cli_main(["demo", "--duration", "15", "--seed", "3", "--out", str(out)]) == 0
+    assert cli_main(["demo", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "odometry" in printed and "planicp" in printed
     names = {p.name for p in out.iterdir()}
     assert names == {"position_error.png", "heading_error.png", "paths.png", "plan.png", "scan_without_rejection.png",
-                     "scan_with_rejection.png", "metrics.json", "report.md"}
+                     "scan_with_rejection.png", "metrics.json", "report.md", "eog_odometry.png", "eog_planicp.png",
+                     "eog_comparison.png", "eog_planicp.yaml", "eog_planicp.pgm"}
     metrics = json.loads((out / "metrics.json").read_text())
     default = metrics["runs"]["planicp (default)"]
-    assert metrics["scans"] == 151 and set(metrics["runs"]) == {
+    assert metrics["scans"] == 3001 and set(metrics["runs"]) == {
         "planicp (default)", "without outlier rejection", "with trimming (trim_ratio 0.8)"}
+    # The enhanced occupancy grid from planicp's poses agrees with the ground-truth grid; the one
+    # from odometry does not.
+    grid = metrics["occupancy_grid"]
+    for share in ("occupied_near_reference", "free_in_reference"):
+        assert grid["planicp"][share] >= 0.95
+        assert grid["odometry"][share] < grid["planicp"][share] - 0.2
+    assert grid["planicp"]["occupied_cells"] > 1000 and grid["planicp"]["free_cells"] > 100_000
     report = (out / "report.md").read_text()
     # The report states this run's numbers.
     assert f"{default['planicp_position_rms_m']:.3f} m" in report
     assert f"{default['odometry_heading_max_deg']:.2f} deg" in report
+    assert f"{grid['planicp']['free_in_reference']:.3f}" in report
+    assert f"{grid['odometry']['occupied_near_reference']:.3f}" in report
+    # The exported grid is a map_server map whose walls include the plan's.
+    exported = PlanMap.from_ros_map(out / "eog_planicp.yaml", cache=False)
+    assert len(exported) > len(load_default_plan())
     assert cli_main(["demo", "--plan", str(tmp_path / "none.png"), "--resolution", "0.05", "--out", str(out)]) == 2
     assert cli_main(["demo", "--plan", str(out / "plan.png"), "--out", str(out)]) == 2
     assert "--resolution" in capsys.readouterr().err
+
+
+def test_recording_occupancy_grids() -> None:
+    plan = load_default_plan()
+    config = ExperimentConfig(duration_s=10.0, seed=5)
+    recording, _ = run_experiment(plan, config)
+    grid = recording.occupancy_grid(plan, "estimate", config.lidar.mount, 0.1)
+    by_hand = EnhancedOccupancyGrid(plan, 0.1)
+    for scan, pose in zip(recording.scans, recording.estimate):
+        by_hand.integrate(scan, pose, config.lidar.mount)
+    assert grid.scans == len(recording.scans) == 101
+    np.testing.assert_array_equal(grid.states(), by_hand.states())
+    truth = recording.occupancy_grid(plan, "truth", config.lidar.mount, 0.1)
+    assert compare_grids(grid, truth).free_in_reference > 0.99
+    with pytest.raises(ValueError, match="which must be one of"):
+        recording.poses("ground truth")
+    with pytest.raises(ValueError, match="which must be 'odometry' or 'estimate'"):
+        recording.errors("truth")

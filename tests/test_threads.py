@@ -140,3 +140,21 @@ def test_the_gil_is_released_during_alignment(floor: Any, plan: PlanMap) -> None
     res = box["result"]
     assert res.iterations == 4000
     assert all(math.isfinite(v) for v in res.pose)
+
+
+def test_the_gil_is_released_during_occupancy_grid_integration(plan: PlanMap) -> None:
+    """One scan of 40,000 beams of 20 m into a 2 cm grid (about 4e7 cell updates) runs in a worker
+    thread while this thread counts."""
+    from planicp import EnhancedOccupancyGrid, EogState
+
+    grid = EnhancedOccupancyGrid(plan, 0.02, margin=25.0)
+    angles = np.linspace(-math.pi, math.pi, 40_000, endpoint=False)
+    scan = 20.0 * np.column_stack([np.cos(angles), np.sin(angles)])
+    x0, y0 = plan.points.mean(axis=0)
+
+    count, running = python_progress_during(lambda: grid.integrate(scan, (float(x0), float(y0), 0.0)))
+    assert count == COUNT_TO and running, (
+        f"the integration finished after only {count} increments of a Python thread: the GIL was held"
+    )
+    assert grid.scans == 1
+    assert (grid.observation_states() == EogState.OCCUPIED).sum() > 5000
