@@ -1,0 +1,58 @@
+"""Line-by-line reading of text logs that may be gzip-compressed or a one-file zip archive."""
+
+from __future__ import annotations
+
+import gzip
+import zipfile
+import zlib
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+GZIP_MAGIC = b"\x1f\x8b"
+ZIP_MAGIC = b"PK\x03\x04"
+
+
+class TruncatedStream(ValueError):
+    """The compressed stream ends early; the lines before the break were read."""
+
+    def __init__(self, path: Path, line: int, detail: str) -> None:
+        super().__init__(f"{path}: compressed data ends early after line {line}: {detail}")
+        self.path = path
+        self.line = line
+
+
+def read_lines(path: Path) -> Iterator[tuple[int, str]]:
+    """(1-based line number, line without its newline) of a plain, gzip or zip text file.
+
+    The compression is recognised by content, not by suffix. A zip archive must hold exactly one
+    file besides macOS `__MACOSX/` metadata. Bytes that are not UTF-8 are replaced, never fatal.
+
+    Raises:
+        FileNotFoundError: `path` does not exist.
+        TruncatedStream: a gzip stream ends early (after yielding every complete line before it).
+    """
+    if not path.is_file():
+        raise FileNotFoundError(f"log file not found: {path}")
+    with path.open("rb") as raw:
+        magic = raw.read(4)
+    if magic.startswith(GZIP_MAGIC):
+        yield from _lines_of(path, gzip.open(path, "rb"))
+    elif magic == ZIP_MAGIC:
+        with zipfile.ZipFile(path) as archive:
+            members = [n for n in archive.namelist() if not n.startswith("__MACOSX/") and not n.endswith("/")]
+            if len(members) != 1:
+                raise ValueError(f"{path}: a zip log must hold exactly one file, found {members}")
+            yield from _lines_of(path, archive.open(members[0]))
+    else:
+        yield from _lines_of(path, path.open("rb"))
+
+
+def _lines_of(path: Path, stream: IO[bytes] | gzip.GzipFile) -> Iterator[tuple[int, str]]:
+    number = 0
+    with stream:
+        try:
+            for number, raw in enumerate(stream, start=1):  # noqa: B007 - number is read after the loop
+                yield number, raw.decode("utf-8", errors="replace").rstrip("\r\n")
+        except (EOFError, zlib.error, gzip.BadGzipFile) as exc:
+            raise TruncatedStream(path, number, str(exc) or type(exc).__name__) from None
