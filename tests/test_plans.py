@@ -332,3 +332,17 @@ def test_overlay_figure(floor: synthetic.Floor) -> None:
     assert len(ax.images) == 1 and ax.collections[0].get_offsets().shape == (len(plan), 2)
     bare = plot_plan_overlay(PlanMap.from_points(plan.points))
     assert len(bare.axes[0].images) == 0
+
+
+def test_pixel_centres_for_maps_whose_pixels_are_the_surfaces() -> None:
+    # A one-pixel line in image row 2 of a 4-row, 0.1 m image (y in [0.1, 0.2) above the origin), columns 1..3.
+    walls = np.zeros((4, 5), dtype=bool)
+    walls[2, 1:4] = True
+    raster = PlanRaster(walls, 0.1, (1.0, 2.0, 0.0))
+    centres = raster.surface_points("centres")
+    np.testing.assert_allclose(centres, [[1.15, 2.15], [1.25, 2.15], [1.35, 2.15]])
+    faces = raster.surface_points("boundary")
+    assert len(faces) == 8  # two long sides of 3 faces and two ends
+    assert set(np.round(faces[:, 1], 9)) == {2.1, 2.15, 2.2}
+    plan = PlanMap.from_raster(raster, edge_detector="centres")
+    np.testing.assert_allclose(plan.points, centres)

@@ -6,6 +6,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from . import __version__, synthetic
 
@@ -28,28 +29,12 @@ def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .plan_figure import plot_plan_overlay
-    from .plan_map import PlanMap
+    from .plan_loading import load_plan
 
     source = Path(args.image)
-    suffix = source.suffix.lower()
-    if suffix in (".yaml", ".yml"):
-        plan = PlanMap.from_ros_map(source, cache=not args.no_cache)
-    elif suffix == ".json":
-        plan = PlanMap.from_house_expo(source, spacing=args.spacing)
-    elif suffix == ".dxf":
-        plan = PlanMap.from_dxf(source, args.layer or None, spacing=args.spacing)
-    else:
-        if args.resolution is None:
-            raise ValueError("--resolution (metres per pixel) is required for an image plan")
-        plan = PlanMap.from_image(
-            source,
-            args.resolution,
-            tuple(args.origin),
-            threshold=args.threshold,
-            open_px=args.open_px,
-            close_px=args.close_px,
-            cache=not args.no_cache,
-        )
+    plan = load_plan(source, resolution=args.resolution, origin=args.origin, cache=not args.no_cache,
+                     spacing=args.spacing, layers=args.layer, threshold=args.threshold, open_px=args.open_px,
+                     close_px=args.close_px)
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     points_path = out / "wall_points.csv"
@@ -62,6 +47,83 @@ def _plan(args: argparse.Namespace) -> int:
           f"({xmax - xmin:.2f} x {ymax - ymin:.2f} m){' (from cache)' if plan.from_cache else ''}")
     print(f"wrote {points_path}, {overlay_path}, {yaml_path} (+ {yaml_path.with_suffix('.pgm').name})")
     return 0
+
+
+def _read_log(args: argparse.Namespace) -> Any:
+    from .io import open_log
+
+    options: dict[str, Any] = {}
+    path = Path(args.log)
+    if path.is_dir() or path.suffix == ".bag":
+        options = {"scan_topic": args.scan_topic, "odom_topic": args.odom_topic or None}
+    elif args.laser:
+        options = {"laser": args.laser}
+    log = open_log(path, **options)
+    skipped = ", ".join(f"{n} {kind}" for kind, n in sorted(log.skipped.items()))
+    print(f"{path}: {len(log)} scans{f' (skipped: {skipped})' if skipped else ''}")
+    return log
+
+
+def _icp_config(args: argparse.Namespace) -> Any:
+    from .icp_config import IcpConfig
+
+    return IcpConfig(max_correspondence_distance=args.max_distance)
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+    from .log_replay import track_log
+    from .plan_loading import load_plan
+    from .progress import progress_bar
+    from .replay_outputs import print_summary, write_outputs
+
+    plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
+    log = _read_log(args)
+    grid = None if args.no_eog else EnhancedOccupancyGrid(plan, args.eog_resolution)
+    tracked = track_log(log, plan, initial_pose=args.initial_pose, config=_icp_config(args), grid=grid,
+                        progress=progress_bar(sys.stdout, len(log), "scans"))
+    print()
+    extra = {"log": str(args.log), "plan": str(args.plan), "skipped": log.skipped,
+             "bad_lines": len(log.bad_lines)}
+    metrics = write_outputs(tracked, plan, grid, args.out, extra)
+    print_summary(metrics, args.out, sys.stdout)
+    return 0
+
+
+def _evaluate_log(args: argparse.Namespace) -> int:
+    from .log_evaluation import evaluate_log
+    from .progress import progress_bar
+    from .replay_outputs import print_summary, write_outputs
+
+    log = _read_log(args)
+    evaluation = evaluate_log(log, resolution=args.resolution, min_hits=args.min_hits, odometry=args.odometry,
+                              seed=args.seed, config=_icp_config(args),
+                              progress=progress_bar(sys.stdout, (len(log) + 1) // 2, "scans"))
+    print()
+    plan = evaluation.plan
+    args.out.mkdir(parents=True, exist_ok=True)
+    plan.to_ros_map(args.out / "plan.yaml")
+    extra = {"log": str(args.log), "protocol": {
+        "plan_scans": evaluation.plan_scans, "tracked_scans": evaluation.tracked_scans,
+        "scans_without_reference": evaluation.skipped_scans, "plan_resolution_m": args.resolution,
+        "min_hits": args.min_hits, "odometry": args.odometry, "seed": args.seed,
+        "max_correspondence_distance_m": args.max_distance}}
+    metrics = write_outputs(evaluation.tracked, plan, evaluation.grid, args.out, extra)
+    print(f"plan drawn from {evaluation.plan_scans} scans ({len(plan)} wall points, plan.yaml); "
+          f"tracked the other {evaluation.tracked_scans} with {args.odometry} odometry")
+    print_summary(metrics, args.out, sys.stdout)
+    return 0
+
+
+def _add_log_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("log", help="CARMEN log (.log/.clf[.gz]), g2o file, ROS 1 .bag or ROS 2 bag folder")
+    parser.add_argument("--scan-topic", default="/scan", help="LaserScan topic (bags)")
+    parser.add_argument("--odom-topic", default="/odom", help="Odometry topic (bags; '' for none)")
+    parser.add_argument("--laser", choices=("FLASER", "RLASER", "ROBOTLASER1"), default=None,
+                        help="which laser of a CARMEN log (default: the first one found)")
+    parser.add_argument("--max-distance", type=float, default=0.25,
+                        help="ICP max correspondence distance, metres")
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -100,6 +162,33 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--spacing", type=float, default=0.02, help="point spacing for vector plans, metres")
     plan.add_argument("--out", type=Path, required=True, help="output folder")
     plan.set_defaults(func=_plan)
+    replay = sub.add_parser(
+        "replay",
+        help="localize every scan of a recorded log or bag against a plan; write trajectory, figures, EOG",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    _add_log_options(replay)
+    replay.add_argument("--plan", type=Path, required=True, help="plan image, ROS map YAML, HouseExpo JSON or DXF")
+    replay.add_argument("--resolution", type=float, default=None, help="metres per pixel of a plan image")
+    replay.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
+                        help="pose of a plan image's lower-left corner in the map frame (m, m, rad)")
+    replay.add_argument("--initial-pose", type=float, nargs=3, default=None, metavar=("X", "Y", "YAW"),
+                        help="robot pose in the map at the first scan (default: the log's first reference pose)")
+    replay.add_argument("--eog-resolution", type=float, default=0.05, help="cell size of the EOG, metres")
+    replay.add_argument("--no-eog", action="store_true", help="do not build the enhanced occupancy grid")
+    replay.set_defaults(func=_replay)
+    evaluate = sub.add_parser(
+        "evaluate-log",
+        help="score planicp on a log with reference poses: plan from the even scans, track the odd ones",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    _add_log_options(evaluate)
+    evaluate.add_argument("--resolution", type=float, default=0.05, help="pixel size of the plan drawn, metres")
+    evaluate.add_argument("--min-hits", type=int, default=2, help="scan end points that make a pixel a wall")
+    evaluate.add_argument("--odometry", choices=("synthetic", "log"), default="synthetic",
+                          help="synthetic: reference motion + thesis drift + noise; log: the log's own odometry")
+    evaluate.add_argument("--seed", type=int, default=0, help="seed of the synthetic odometry noise")
+    evaluate.set_defaults(func=_evaluate_log)
     return parser
 
 

@@ -33,6 +33,7 @@ from .grid_agreement import compare_grids
 from .icp_config import IcpConfig
 from .localize import localize
 from .plan_figure import plot_plan_overlay
+from .plan_loading import load_plan
 from .plan_map import PlanMap
 from .sim.experiment import ExperimentConfig, Recording, replay, run_experiment
 
@@ -159,12 +160,8 @@ def run_demo(
     started = time.perf_counter()
     if plan_path is None:
         plan, plan_name = load_default_plan(), "the shipped office plan (30 x 20 m)"
-    elif plan_path.suffix.lower() in (".yaml", ".yml"):
-        plan, plan_name = PlanMap.from_ros_map(plan_path), str(plan_path)
     else:
-        if resolution is None:
-            raise ValueError("--resolution (metres per pixel) is required with --plan IMAGE")
-        plan, plan_name = PlanMap.from_image(plan_path, resolution), str(plan_path)
+        plan, plan_name = load_plan(plan_path, resolution=resolution), str(plan_path)
     config = ExperimentConfig(duration_s=duration, seed=seed)
     if stream is not None:
         print(f"planicp {__version__} demo: {plan_name}, {duration:.0f} s simulated, seed {seed}", file=stream)

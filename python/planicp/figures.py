@@ -173,3 +173,32 @@ def plot_eog_comparison(grids: Mapping[str, EnhancedOccupancyGrid]) -> Figure:
         _draw_eog(ax, grid, label)
     fig.tight_layout()
     return fig
+
+
+def plot_quality(times: Any, inlier_ratio: Any, rmse: Any, accepted: Any) -> Figure:
+    """Estimate quality over time: ICP inlier ratio and RMSE per scan, rejected scans marked."""
+    from matplotlib.figure import Figure
+
+    t = np.asarray(times, dtype=np.float64)
+    ratio = np.asarray(inlier_ratio, dtype=np.float64)
+    error = np.asarray(rmse, dtype=np.float64)
+    ok = np.asarray(accepted, dtype=bool)
+    if not (ratio.shape == error.shape == ok.shape == t.shape):
+        raise ValueError(f"times, inlier_ratio, rmse and accepted must have one shape, got "
+                         f"{t.shape}, {ratio.shape}, {error.shape}, {ok.shape}")
+    fig = Figure(figsize=(8.0, 5.0), dpi=120)
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    top.plot(t, ratio, color="tab:green", linewidth=1.0, label="inlier ratio")
+    if (~ok).any():
+        top.scatter(t[~ok], np.nan_to_num(ratio[~ok], nan=0.0), color="tab:red", s=10, zorder=3,
+                    label=f"rejected ({int((~ok).sum())})")
+    top.set_ylabel("inlier ratio")
+    top.set_ylim(0.0, 1.05)
+    top.legend(loc="lower right", fontsize=8)
+    top.grid(True, alpha=0.3)
+    bottom.plot(t, error * 100.0, color="tab:blue", linewidth=1.0)
+    bottom.set_ylabel("ICP RMSE (cm)")
+    bottom.set_xlabel("time (s)")
+    bottom.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig

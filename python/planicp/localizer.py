@@ -24,14 +24,18 @@ class AcceptanceGate:
     """When the `Localizer` trusts an ICP result instead of odometry.
 
     Attributes:
-        require_convergence: reject results whose ICP ran out of iterations.
+        require_convergence: reject results whose ICP ran out of iterations. Off by default: a
+            result still creeping by more than the tolerances after `max_iterations` is almost
+            always closer than the odometry prediction (on the Intel log with synthetic drift,
+            requiring convergence rejected 74 % of the scans and lost track); the inlier and jump
+            checks judge the fit instead.
         min_inliers: fewest scan points within `max_correspondence_distance` of the plan.
         min_inlier_ratio: smallest share of scan points that are inliers.
         max_translation_jump: largest correction (metres) of the odometry prediction.
         max_rotation_jump: largest correction (radians) of the odometry prediction.
     """
 
-    require_convergence: bool = True
+    require_convergence: bool = False
     min_inliers: int = 30
     min_inlier_ratio: float = 0.25
     max_translation_jump: float = 0.5

@@ -113,7 +113,7 @@ class PlanMap:
             threshold: grey level (1..255) below which a pixel is wall; None: Otsu's threshold.
             open_px, close_px: morphological opening (removes specks up to that size) and closing
                 (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
-            edge_detector: "boundary" or "canny" (see `PlanRaster.surface_points`).
+            edge_detector: "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
             cache: True (default folder, see `planicp.plan_cache`), False, or a folder.
 
         Raises:

@@ -80,8 +80,14 @@ class PlanRaster:
         `edge_detector`: "boundary" (default) takes every such face. "canny" keeps only the faces
         next to an edge OpenCV's Canny detector finds on the wall mask (the thesis's method); on a
         binary mask it finds the same boundary but thins it away at corners and one-pixel walls: it
-        kept 8,015 of depot.pgm's 9,184 faces (tests/test_plans.py checks the loss).
+        kept 8,015 of depot.pgm's 9,184 faces (tests/test_plans.py checks the loss). "centres" takes
+        the centre of every wall pixel instead: for maps whose wall pixels are the surfaces
+        themselves, one or two pixels thick (SLAM occupancy grids, maps drawn from scan end
+        points), where the faces would put two surfaces half a pixel either side of the real one.
         """
+        if edge_detector == "centres":
+            rows_c, cols_c = np.nonzero(self.walls)
+            return self.pixel_to_map(rows_c.astype(np.float64) + 0.5, cols_c.astype(np.float64) + 0.5)
         walls = np.pad(self.walls, 1, constant_values=False)
         vertical = walls[:-1, :] != walls[1:, :]  # face between padded rows r and r+1, column c
         horizontal = walls[:, :-1] != walls[:, 1:]  # face between padded cols c and c+1, row r
@@ -91,7 +97,7 @@ class PlanRaster:
             vertical &= edges[:-1, :] | edges[1:, :]
             horizontal &= edges[:, :-1] | edges[:, 1:]
         elif edge_detector != "boundary":
-            raise ValueError(f'edge_detector must be "boundary" or "canny", got {edge_detector!r}')
+            raise ValueError(f'edge_detector must be "boundary", "canny" or "centres", got {edge_detector!r}')
         vr, vc = np.nonzero(vertical)
         hr, hc = np.nonzero(horizontal)
         # Unpadded image coordinates: the boundary between padded rows vr and vr+1 is image row vr.

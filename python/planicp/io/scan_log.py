@@ -12,7 +12,7 @@ erroneous reading. `ScanFrame.points` drops all of them.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import overload
@@ -96,8 +96,8 @@ class BadLine:
 
 
 @dataclass(eq=False)
-class ScanLog:
-    """Scans and odometry read from one log file, in time order.
+class ScanLog(Sequence[ScanFrame]):
+    """Scans and odometry read from one log file, in time order (a sequence of its `frames`).
 
     Attributes:
         source: the file or bag folder read.

@@ -25,6 +25,7 @@ from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
 from ..enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..icp_config import IcpConfig
+from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
 from ..localizer import AcceptanceGate, Localizer
 from ..plan_map import PlanMap
@@ -120,6 +121,8 @@ class Recording:
         inlier_ratio, rmse: (K,) quality of the ICP result (NaN where there was none).
         scans: the K scans (robot frame, metres), kept for re-runs and figures.
         odometry_in_odom: (K, 3) T_odom_base fed to the Localizer.
+        ranges: the K scans as the LIDAR measured them (REP-117 ranges of `lidar`), or None.
+        lidar: the LIDAR model that measured them, or None.
     """
 
     times: NDArray[np.float64]
@@ -131,6 +134,8 @@ class Recording:
     rmse: NDArray[np.float64]
     scans: list[NDArray[np.float64]]
     odometry_in_odom: NDArray[np.float64]
+    ranges: list[NDArray[np.float64]] | None = None
+    lidar: LidarModel | None = None
 
     def errors(self, which: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error m, heading error rad) over time of "odometry" or "estimate"."""
@@ -140,6 +145,23 @@ class Recording:
         d = poses[:, :2] - self.truth[:, :2]
         dyaw = np.array([wrap_angle(a) for a in poses[:, 2] - self.truth[:, 2]])
         return np.hypot(d[:, 0], d[:, 1]), dyaw
+
+    def scan_frames(self) -> list[ScanFrame]:
+        """The scans as a robot would have logged them (`planicp.io.ScanFrame`: ranges, the LIDAR's
+        beam geometry and mount, odometry T_odom_base and the ground truth as reference), e.g. to
+        write a bag with `planicp.io.bag.write_bag`.
+
+        Raises:
+            ValueError: the recording kept no ranges (it was not made by `run_experiment`).
+        """
+        if self.ranges is None or self.lidar is None:
+            raise ValueError("this recording has no ranges and LIDAR model (record it with run_experiment)")
+        lidar = self.lidar
+        return [
+            ScanFrame(float(t), r, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max,
+                      lidar.mount, _pose(odom), _pose(truth))
+            for t, r, odom, truth in zip(self.times, self.ranges, self.odometry_in_odom, self.truth)
+        ]
 
     def poses(self, which: str) -> NDArray[np.float64]:
         """(K, 3) map-frame poses of "truth", "odometry" or "estimate"."""
@@ -178,12 +200,16 @@ class Recording:
         return out
 
 
+def _pose(row: NDArray[np.float64]) -> Pose:
+    return (float(row[0]), float(row[1]), float(row[2]))
+
+
 def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: AcceptanceGate | None = None) -> Recording:
     """The same scans and odometry through a Localizer with other settings (for ablations)."""
     localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate)
     estimate, accepted, ratio, rmse = _track(localizer, recording.scans, recording.odometry_in_odom)
     return Recording(recording.times, recording.truth, recording.odometry, estimate, accepted, ratio, rmse,
-                     recording.scans, recording.odometry_in_odom)
+                     recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar)
 
 
 def _track(localizer: Localizer, scans: list[NDArray[np.float64]], odometry: NDArray[np.float64]) -> tuple[
@@ -227,7 +253,7 @@ def run_experiment(
     every = max(1, int(round(config.odometry_rate_hz / lidar.rate_hz)))
     start: Pose = tuple(float(v) for v in trajectory.poses[0])  # type: ignore[assignment]
     localizer = Localizer(plan, start, config.icp, gate=config.gate)
-    times, truth, odom_map, odom_odom, scans = [], [], [], [], []
+    times, truth, odom_map, odom_odom, scans, measured = [], [], [], [], [], []
     estimate, accepted, ratio, rmse = [], [], [], []
     for k, (t, pose) in enumerate(zip(trajectory.times, trajectory.poses)):
         odom_pose = odometry.update(pose)
@@ -246,6 +272,7 @@ def run_experiment(
         odom_odom.append(odom_pose)
         odom_map.append(compose(start, odom_pose))
         scans.append(scan)
+        measured.append(ranges)
         estimate.append(est.pose)
         accepted.append(est.accepted)
         ratio.append(est.result.inlier_ratio if est.result is not None else math.nan)
@@ -254,6 +281,6 @@ def run_experiment(
             progress(float(t))
     recording = Recording(
         np.array(times), np.array(truth), np.array(odom_map), np.array(estimate), np.array(accepted),
-        np.array(ratio), np.array(rmse), scans, np.array(odom_odom),
+        np.array(ratio), np.array(rmse), scans, np.array(odom_odom), measured, lidar,
     )
     return recording, world
