@@ -37,7 +37,6 @@ with a ValueError naming the file and line. Unknown line types are counted in `s
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -48,8 +47,8 @@ from numpy.typing import NDArray
 from .._validation import Pose, as_pose
 from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
-from .scan_log import BadLine, ScanFrame, ScanLog
-from .text_source import TruncatedStream, read_lines
+from .scan_log import ScanFrame, ScanLog
+from .line_records import LineTally, records
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
@@ -209,73 +208,52 @@ def read_carmen(
         FileNotFoundError: no such file.
         ValueError: a bad line with errors="raise"; a log without any usable laser line.
     """
-    if errors not in ("skip", "raise"):
-        raise ValueError(f"errors must be 'skip' or 'raise', got {errors!r}")
+    tally = LineTally(Path(path), errors)
     if laser is not None and laser not in LASER_KINDS:
         raise ValueError(f"laser must be one of {LASER_KINDS} or None, got {laser!r}")
     mount_override = as_pose(laser_pose, "laser_pose") if laser_pose is not None else None
     if max_range is not None and not (math.isfinite(max_range) and max_range > 0.0):
         raise ValueError(f"max_range must be a positive number of metres, got {max_range!r}")
-    source = Path(path)
+    source = tally.source
     params: dict[str, str] = {}
-    skipped: dict[str, int] = {}
-    bad: list[BadLine] = []
     odom_rows: list[tuple[float, float, float, float]] = []
     lasers: dict[LaserKind, list[_LaserRecord]] = {k: [] for k in LASER_KINDS}
 
-    def reject(line: int, kind: str, reason: str) -> None:
-        if errors == "raise":
-            raise ValueError(f"{source}, line {line}: bad {kind} line: {reason}")
-        bad.append(BadLine(line, kind, reason))
-        skipped[f"{kind} (malformed)"] = skipped.get(f"{kind} (malformed)", 0) + 1
-
-    try:
-        for line, text in read_lines(source):
-            fields = text.split()
-            if not fields or fields[0].startswith("#"):
-                continue
-            kind = fields[0]
-            try:
-                if kind == "PARAM":
-                    if len(fields) < 3:
-                        raise _BadLine(f"truncated: PARAM needs a name and a value, got {len(fields)} fields")
-                    params[fields[1]] = fields[2]
-                elif kind == "ODOM":
-                    _expect_fields(fields, 10, "ODOM x y theta tv rv accel ts host logger_ts")
-                    x, y, yaw = _finite(fields, 1, 3, "the odometry pose")
-                    (t,) = _finite(fields, 7, 1, "the timestamp")
-                    odom_rows.append((t, x, y, yaw))
-                elif kind == "FLASER":
-                    lasers["FLASER"].append(_parse_old_laser("FLASER", fields, line))
-                elif kind == "RLASER":
-                    lasers["RLASER"].append(_parse_old_laser("RLASER", fields, line))
-                elif kind == "ROBOTLASER1":
-                    lasers["ROBOTLASER1"].append(_parse_robotlaser(fields, line))
-                else:
-                    skipped[kind] = skipped.get(kind, 0) + 1
-            except _BadLine as exc:
-                reject(line, kind, str(exc))
-    except TruncatedStream as exc:
-        if errors == "raise":
-            raise
-        bad.append(BadLine(exc.line + 1, "(compressed stream)", str(exc)))
-        skipped["(compressed stream ends early)"] = 1
+    for line, kind, fields in records(tally):
+        try:
+            if kind == "PARAM":
+                if len(fields) < 3:
+                    raise _BadLine(f"truncated: PARAM needs a name and a value, got {len(fields)} fields")
+                params[fields[1]] = fields[2]
+            elif kind == "ODOM":
+                _expect_fields(fields, 10, "ODOM x y theta tv rv accel ts host logger_ts")
+                x, y, yaw = _finite(fields, 1, 3, "the odometry pose")
+                (t,) = _finite(fields, 7, 1, "the timestamp")
+                odom_rows.append((t, x, y, yaw))
+            elif kind == "FLASER":
+                lasers["FLASER"].append(_parse_old_laser("FLASER", fields, line))
+            elif kind == "RLASER":
+                lasers["RLASER"].append(_parse_old_laser("RLASER", fields, line))
+            elif kind == "ROBOTLASER1":
+                lasers["ROBOTLASER1"].append(_parse_robotlaser(fields, line))
+            else:
+                tally.skip(kind)
+        except _BadLine as exc:
+            tally.reject(line, kind, str(exc))
 
     present = [k for k in AUTO_ORDER if lasers[k]]
     chosen = laser if laser is not None else (present[0] if present else None)
     if chosen is None or not lasers[chosen]:
         what = chosen or "FLASER, RLASER or ROBOTLASER1"
-        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {skipped or 'nothing'})")
+        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {tally.skipped or 'nothing'})")
     for other in LASER_KINDS:
         if other != chosen and lasers[other]:
-            skipped[f"{other} (other laser)"] = len(lasers[other])
+            tally.skip(f"{other} (other laser)", len(lasers[other]))
 
-    frames, odo_t, odo_p = _frames(lasers[chosen], odom_rows, params, mount_override, max_range, reference, skipped)
-    if bad:
-        first = bad[0]
-        warnings.warn(f"{source}: skipped {len(bad)} malformed line(s); first at line {first.line} "
-                      f"({first.kind}): {first.reason}", stacklevel=2)
-    return ScanLog(source, frames, odo_t, odo_p, skipped, bad, params)
+    frames, odo_t, odo_p = _frames(lasers[chosen], odom_rows, params, mount_override, max_range, reference,
+                                   tally.skipped)
+    tally.warn(stacklevel=2)
+    return ScanLog(source, frames, odo_t, odo_p, tally.skipped, tally.bad, params)
 
 
 def _frames(

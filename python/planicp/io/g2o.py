@@ -17,7 +17,6 @@ Bad lines are handled as in `read_carmen` (`errors="skip"` records and counts th
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -28,8 +27,8 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from ..se2 import between
 from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser
-from .scan_log import BadLine, ScanFrame, ScanLog
-from .text_source import TruncatedStream, read_lines
+from .scan_log import ScanFrame, ScanLog
+from .line_records import LineTally, records
 
 
 @dataclass(eq=False)
@@ -62,10 +61,7 @@ def read_g2o_graph(path: str | Path, *, errors: Literal["skip", "raise"] = "skip
 
 
 def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
-    if errors not in ("skip", "raise"):
-        raise ValueError(f"errors must be 'skip' or 'raise', got {errors!r}")
-    skipped: dict[str, int] = {}
-    bad: list[BadLine] = []
+    tally = LineTally(source, errors)
     ids: list[int] = []
     poses: list[Pose] = []
     edges: list[tuple[int, int]] = []
@@ -74,65 +70,48 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
     frames: list[ScanFrame] = []
     scanned: set[int] = set()
 
-    def reject(line: int, kind: str, reason: str) -> None:
-        if errors == "raise":
-            raise ValueError(f"{source}, line {line}: bad {kind} line: {reason}")
-        bad.append(BadLine(line, kind, reason))
-        skipped[f"{kind} (malformed)"] = skipped.get(f"{kind} (malformed)", 0) + 1
-
-    try:
-        for line, text in read_lines(source):
-            fields = text.split()
-            if not fields or fields[0].startswith("#"):
-                continue
-            kind = fields[0]
-            try:
-                if kind == "VERTEX_SE2":
-                    _expect_fields(fields, 5, "VERTEX_SE2 id x y theta")
-                    vid = _count(fields, 1, "vertex id")
-                    x, y, yaw = _finite(fields, 2, 3, "the vertex pose")
-                    ids.append(vid)
-                    poses.append((x, y, yaw))
-                elif kind == "EDGE_SE2":
-                    _expect_fields(fields, 12, "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33")
-                    edges.append((_count(fields, 1, "vertex id i"), _count(fields, 2, "vertex id j")))
-                    meas.append(_finite(fields, 3, 3, "the measurement"))
-                    info.append(_finite(fields, 6, 6, "the information matrix"))
-                elif kind == "ROBOTLASER1":
-                    if not ids:
-                        raise _BadLine("a ROBOTLASER1 line needs a VERTEX_SE2 before it")
-                    if ids[-1] in scanned:
-                        raise _BadLine(f"vertex {ids[-1]} already has a scan")
-                    rec = _parse_robotlaser(fields, line)
-                    ranges = rec.ranges.copy()
-                    with np.errstate(invalid="ignore"):
-                        ranges[ranges >= (rec.max_range or math.inf)] = np.inf
-                        ranges[ranges <= 0.0] = np.nan
-                    frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
-                                            rec.max_range or math.inf, laser_pose=between(rec.robot_world,
-                                                                                          rec.laser_world),
-                                            odometry=poses[-1]))
-                    scanned.add(ids[-1])
-                else:
-                    skipped[kind] = skipped.get(kind, 0) + 1
-            except _BadLine as exc:
-                reject(line, kind, str(exc))
-    except TruncatedStream as exc:
-        if errors == "raise":
-            raise
-        bad.append(BadLine(exc.line + 1, "(compressed stream)", str(exc)))
-        skipped["(compressed stream ends early)"] = 1
+    for line, kind, fields in records(tally):
+        try:
+            if kind == "VERTEX_SE2":
+                _expect_fields(fields, 5, "VERTEX_SE2 id x y theta")
+                vid = _count(fields, 1, "vertex id")
+                x, y, yaw = _finite(fields, 2, 3, "the vertex pose")
+                ids.append(vid)
+                poses.append((x, y, yaw))
+            elif kind == "EDGE_SE2":
+                _expect_fields(fields, 12, "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33")
+                edges.append((_count(fields, 1, "vertex id i"), _count(fields, 2, "vertex id j")))
+                meas.append(_finite(fields, 3, 3, "the measurement"))
+                info.append(_finite(fields, 6, 6, "the information matrix"))
+            elif kind == "ROBOTLASER1":
+                if not ids:
+                    raise _BadLine("a ROBOTLASER1 line needs a VERTEX_SE2 before it")
+                if ids[-1] in scanned:
+                    raise _BadLine(f"vertex {ids[-1]} already has a scan")
+                rec = _parse_robotlaser(fields, line)
+                ranges = rec.ranges.copy()
+                with np.errstate(invalid="ignore"):
+                    ranges[ranges >= (rec.max_range or math.inf)] = np.inf
+                    ranges[ranges <= 0.0] = np.nan
+                frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
+                                        rec.max_range or math.inf, laser_pose=between(rec.robot_world,
+                                                                                      rec.laser_world),
+                                        odometry=poses[-1]))
+                scanned.add(ids[-1])
+            else:
+                tally.skip(kind)
+        except _BadLine as exc:
+            tally.reject(line, kind, str(exc))
     if not ids:
-        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {skipped or 'nothing'})")
-    if bad:
-        warnings.warn(f"{source}: skipped {len(bad)} malformed line(s); first at line {bad[0].line} "
-                      f"({bad[0].kind}): {bad[0].reason}", stacklevel=3)
+        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {tally.skipped or 'nothing'})")
+    tally.warn(stacklevel=3)
     info_m = np.zeros((len(info), 3, 3))
     for k, (i11, i12, i13, i22, i23, i33) in enumerate(info):
         info_m[k] = [[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]]
     graph = G2oGraph(np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 3),
                      np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(meas, dtype=np.float64).reshape(-1, 3),
                      info_m)
-    log = ScanLog(source, frames, np.array([f.time for f in frames], dtype=np.float64),
-                  np.array([f.odometry for f in frames], dtype=np.float64).reshape(-1, 3), skipped, bad, {})
+    odometry = np.array([f.odometry for f in frames], dtype=np.float64).reshape(-1, 3)
+    log = ScanLog(source, frames, np.array([f.time for f in frames], dtype=np.float64), odometry, tally.skipped,
+                  tally.bad, {})
     return log, graph

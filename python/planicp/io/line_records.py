@@ -1,0 +1,60 @@
+"""The records of a line-based text log, and the tally of what a reader could not use."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .scan_log import BadLine
+from .text_source import TruncatedStream, read_lines
+
+
+@dataclass
+class LineTally:
+    """What a reader skipped: record kinds it does not read (counted) and malformed lines (counted
+    and kept with their line numbers), or, with `errors="raise"`, the first malformed line as an error."""
+
+    source: Path
+    errors: str
+    skipped: dict[str, int] = field(default_factory=dict)
+    bad: list[BadLine] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        if self.errors not in ("skip", "raise"):
+            raise ValueError(f"errors must be 'skip' or 'raise', got {self.errors!r}")
+
+    def skip(self, kind: str, count: int = 1) -> None:
+        """Counts `count` records of `kind` left out."""
+        self.skipped[kind] = self.skipped.get(kind, 0) + count
+
+    def reject(self, line: int, kind: str, reason: str) -> None:
+        """A malformed line: recorded and counted, or raised with `errors="raise"`."""
+        if self.errors == "raise":
+            raise ValueError(f"{self.source}, line {line}: bad {kind} line: {reason}")
+        self.bad.append(BadLine(line, kind, reason))
+        self.skip(f"{kind} (malformed)")
+
+    def warn(self, stacklevel: int) -> None:
+        """One warning naming the first malformed line, when there was any."""
+        if self.bad:
+            first = self.bad[0]
+            warnings.warn(f"{self.source}: skipped {len(self.bad)} malformed line(s); first at line {first.line} "
+                          f"({first.kind}): {first.reason}", stacklevel=stacklevel + 1)
+
+
+def records(tally: LineTally) -> Iterator[tuple[int, str, list[str]]]:
+    """(1-based line number, record kind, whitespace-split fields) of every line of `tally.source`
+    that is not empty or a `#` comment. A compressed stream that ends early ends the records (the
+    lines before the break are kept and the break is tallied), or raises with `errors="raise"`."""
+    try:
+        for line, text in read_lines(tally.source):
+            fields = text.split()
+            if fields and not fields[0].startswith("#"):
+                yield line, fields[0], fields
+    except TruncatedStream as exc:
+        if tally.errors == "raise":
+            raise
+        tally.bad.append(BadLine(exc.line + 1, "(compressed stream)", str(exc)))
+        tally.skipped["(compressed stream ends early)"] = 1
