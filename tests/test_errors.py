@@ -298,6 +298,8 @@ def test_localize_accepts_int_and_float32_like_float64(plan: PlanMap) -> None:
         ({"visibility_range": 0.0}, ValueError, "visibility_range must be a positive"),
         ({"visibility_range": -5.0}, ValueError, "visibility_range must be a positive"),
         ({"visibility_range": math.inf}, ValueError, "visibility_range must be a positive"),
+        ({"covariance_scale": 0.0}, ValueError, "covariance_scale must be a positive"),
+        ({"covariance_scale": math.nan}, ValueError, "covariance_scale must be a positive"),
         ({"visibility_range": "30"}, TypeError, "visibility_range must be a number"),
     ],
 )
@@ -373,6 +375,7 @@ def test_icp_config_dict_round_trip(cfg: IcpConfig) -> None:
         "use_visibility",
         "accelerate",
         "visibility_range",
+        "covariance_scale",
     }
     back = IcpConfig.from_dict(d)
     assert back == cfg

@@ -15,6 +15,7 @@ from __future__ import annotations
 from . import se2, synthetic, vector_plan
 from ._core import PlanicpError, PlanicpInternalError
 from ._core import __version__ as __version__
+from .degeneracy import Degeneracy, DegeneracyRule
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState, OccupancyGridMessage, OccupancyModel
 from .grid_agreement import GridAgreement, compare_grids
 from .icp_config import IcpConfig
@@ -22,12 +23,16 @@ from .icp_result import IcpResult
 from .laser_scan import scan_to_points
 from .localize import localize
 from .localizer import AcceptanceGate, Estimate, Localizer
+from .lost_detection import LostRule
+from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .plan_raster import PlanRaster, resolution_from_pixels
 from .ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",
+    "Degeneracy",
+    "DegeneracyRule",
     "EnhancedOccupancyGrid",
     "EogState",
     "GridAgreement",
@@ -37,6 +42,8 @@ __all__ = [
     "IcpConfig",
     "IcpResult",
     "Localizer",
+    "LostRule",
+    "MotionNoise",
     "PlanMap",
     "PlanRaster",
     "RosMap",

@@ -38,6 +38,12 @@ class IcpConfig:
             worse is undone at the next iteration.
         visibility_range: range of that ray casting; None: the scan's farthest point plus the
             largest stage distance.
+        covariance_scale: factor applied to the point-to-wall covariance `sigma^2 H^-1`, which
+            treats every residual as independent. Neighbouring beams see the same stretch of wall
+            and the plan is sampled on a lattice, so the raw covariance is optimistic: over 6,800
+            accepted estimates in simulation its normalised estimation error squared (NEES)
+            averaged 9.3 instead of 3. The default 3 brings the mean to 3.1, with 92 % of the
+            estimates inside the chi-square 95 % bound (see the README's robustness section).
     """
 
     max_correspondence_distance: float = 0.25
@@ -50,6 +56,7 @@ class IcpConfig:
     use_visibility: bool = True
     accelerate: bool = True
     visibility_range: float | None = None
+    covariance_scale: float = 3.0
     _native: _core.IcpSettings = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -76,6 +83,7 @@ class IcpConfig:
             raise TypeError(f"accelerate must be a bool, got {self.accelerate!r}")
         if self.visibility_range is not None:
             positive(self.visibility_range, "visibility_range", "metres")
+        positive(self.covariance_scale, "covariance_scale")
         native = _core.IcpSettings(
             float(self.max_correspondence_distance),
             int(self.max_iterations),

@@ -26,7 +26,11 @@ class IcpResult:
         inlier_ratio: `num_inliers` over all scan points.
         rmse: root mean square distance of the inliers to the plan, metres (NaN without inliers).
         covariance: 3x3 over (x, y, yaw) in the map frame (m^2, m rad, rad^2), from the
-            point-to-wall residuals; `inf` on the diagonal when the scan does not fix the pose.
+            point-to-wall residuals times `IcpConfig.covariance_scale`; `inf` on the diagonal
+            when the scan does not fix the pose.
+        constraint: 3x3 `H = sum J J^T` over the inliers with a wall normal, `J = (n_x, n_y,
+            n . perp(p - t))`: how many inliers' worth of wall normal constrain each direction
+            (x, y unitless, yaw terms in metres). `translation_constraint()` reads it.
         inlier_mask: (N,) bool over the input scan points.
         num_target_points: plan points the scan was matched against (the visible ones, or all).
     """
@@ -38,6 +42,7 @@ class IcpResult:
     inlier_ratio: float
     rmse: float
     covariance: NDArray[np.float64]
+    constraint: NDArray[np.float64]
     inlier_mask: NDArray[np.bool_]
     num_target_points: int
 
@@ -51,6 +56,23 @@ class IcpResult:
         """Standard deviations of (x, y, yaw) from the covariance: metres, metres, radians."""
         d = np.diag(self.covariance)
         return (math.sqrt(d[0]), math.sqrt(d[1]), math.sqrt(d[2]))
+
+    def translation_constraint(self) -> tuple[tuple[float, float], float, float]:
+        """How the walls of this fit constrain the position, with the heading estimated too:
+        `(weak_axis, weak, strong)`. `weak_axis` is the unit map-frame direction the inliers
+        constrain least; `weak` and `strong` count how many inliers' worth of wall normal point
+        along it and across it (the eigenvalues of the translation block of `constraint` after
+        the heading is marginalised out). In a long featureless corridor `weak_axis` is the
+        corridor's axis and `weak` is close to 0."""
+        h = np.asarray(self.constraint, dtype=np.float64)
+        block = h[:2, :2].copy()
+        if h[2, 2] > 0.0:
+            block -= np.outer(h[:2, 2], h[2, :2]) / h[2, 2]
+        values, vectors = np.linalg.eigh((block + block.T) / 2.0)
+        axis = vectors[:, 0]
+        if axis[0] < 0.0 or (axis[0] == 0.0 and axis[1] < 0.0):
+            axis = -axis
+        return (float(axis[0]), float(axis[1])), max(float(values[0]), 0.0), max(float(values[1]), 0.0)
 
     def __repr__(self) -> str:
         x, y, yaw = self.pose

@@ -50,7 +50,8 @@ def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig |
         num_inliers=raw.num_inliers,
         inlier_ratio=raw.inlier_ratio,
         rmse=raw.rmse,
-        covariance=raw.covariance,
+        covariance=raw.covariance * config.covariance_scale,
+        constraint=raw.constraint,
         inlier_mask=np.asarray(mask),
         num_target_points=raw.num_target_points,
     )

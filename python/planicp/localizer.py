@@ -12,9 +12,12 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
+from .degeneracy import Degeneracy, DegeneracyRule, fuse_along_weak_axis
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
+from .lost_detection import LostDetector, LostRule
+from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .se2 import between, compose, inverse, pose_to_matrix
 
@@ -82,6 +85,13 @@ class Estimate:
         predicted_pose: last pose plus the odometry motion since then: ICP's initial guess.
         odom_pose: the odometry pose (T_odom_base) this update received.
         reason: why the result was not accepted ("" when it was).
+        covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): ICP's when accepted, the
+            odometry prediction's otherwise, and along the weak axis of a degenerate fit.
+        degeneracy: the weak axis of an accepted fit that does not fix the position along it
+            (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
+            there allows), or None.
+        lost: the plan no longer explains the scans (see `LostRule`).
+        score: mean match score (inlier ratio) over the `LostRule` window.
     """
 
     pose: Pose
@@ -90,6 +100,10 @@ class Estimate:
     predicted_pose: Pose
     odom_pose: Pose
     reason: str
+    covariance: NDArray[np.float64]
+    degeneracy: Degeneracy | None
+    lost: bool
+    score: float
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
@@ -110,6 +124,11 @@ class Localizer:
     `AcceptanceGate`; otherwise the pose follows odometry and the estimate says why. A scan
     that is malformed raises and changes nothing; a scan with too few points is not aligned.
 
+    Along the weak axis of a degenerate fit (`DegeneracyRule`: a long corridor) the pose keeps the
+    odometry motion. A covariance is carried along: propagated through each motion with
+    `MotionNoise`, replaced by ICP's when a fit is accepted. `LostRule` decides when the scans no
+    longer match the plan (`Estimate.lost`).
+
     Thread-safe: updates are serialised by a lock.
     """
 
@@ -120,6 +139,10 @@ class Localizer:
         config: IcpConfig | None = None,
         *,
         gate: AcceptanceGate | None = None,
+        motion_noise: MotionNoise | None = None,
+        degeneracy: DegeneracyRule | None = None,
+        lost_rule: LostRule | None = None,
+        initial_covariance: Any = None,
     ) -> None:
         """
         Args:
@@ -127,6 +150,10 @@ class Localizer:
             initial_pose: (x, y, yaw) of the robot in the map at the first update.
             config: ICP settings (None: `IcpConfig()`).
             gate: acceptance rules (None: `AcceptanceGate()`).
+            motion_noise: odometry uncertainty for the covariance (None: `MotionNoise()`).
+            degeneracy: when a fit is degenerate (None: `DegeneracyRule()`).
+            lost_rule: when the localizer is lost (None: `LostRule()`).
+            initial_covariance: 3x3 covariance of `initial_pose` (None: 10 cm and 5 degrees).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -137,7 +164,11 @@ class Localizer:
         self.plan = plan
         self.config = config if config is not None else IcpConfig()
         self.gate = gate if gate is not None else AcceptanceGate()
+        self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
+        self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
+        self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         self._pose: Pose = as_pose(initial_pose, "initial_pose")
+        self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
         self._lock = threading.Lock()
 
@@ -146,12 +177,26 @@ class Localizer:
         """Current (x, y, yaw) of the robot in the map."""
         return self._pose
 
-    def reset(self, pose: Any) -> None:
-        """Sets the pose (e.g. from RViz's initial pose); the next update's odometry pairs with it."""
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Current 3x3 covariance of `pose` (m^2, m rad, rad^2)."""
+        return self._covariance.copy()
+
+    @property
+    def lost(self) -> bool:
+        """Whether the last updates say the plan no longer explains the scans."""
+        return self._detector.lost
+
+    def reset(self, pose: Any, covariance: Any = None) -> None:
+        """Sets the pose (e.g. from RViz's initial pose) and its covariance (None: 10 cm and 5
+        degrees); the next update's odometry pairs with it, and the lost state is cleared."""
         new_pose = as_pose(pose, "pose")
+        new_covariance = _covariance(covariance)
         with self._lock:
             self._pose = new_pose
+            self._covariance = new_covariance
             self._last_odom = None
+            self._detector.reset()
 
     def update(self, scan_xy: Any, odom_pose: Any) -> Estimate:
         """One tracking step.
@@ -168,6 +213,7 @@ class Localizer:
         with self._lock:
             motion = (0.0, 0.0, 0.0) if self._last_odom is None else between(self._last_odom, odom)
             predicted = compose(self._pose, motion)
+            predicted_covariance = self.motion_noise.propagate(self._covariance, self._pose, motion)
             result: IcpResult | None = None
             usable = -(-len(points) // self.config.subsample)
             if usable < _core.MIN_SCAN_POINTS:
@@ -175,8 +221,40 @@ class Localizer:
             else:
                 result = localize(points, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
+            degeneracy: Degeneracy | None = None
+            if result is not None and reason == "":
+                degeneracy = self.degeneracy.check(result)
+                if degeneracy is not None:
+                    pose, covariance = fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
+                elif np.isfinite(result.covariance).all():
+                    pose, covariance = result.pose, np.array(result.covariance, dtype=np.float64)
+                else:
+                    pose, covariance = result.pose, predicted_covariance
+            else:
+                pose, covariance = predicted, predicted_covariance
             accepted = result is not None and reason == ""
-            pose = result.pose if accepted and result is not None else predicted
+            lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
             self._pose = pose
+            self._covariance = covariance
             self._last_odom = odom
-            return Estimate(pose, accepted, result, predicted, odom, reason)
+            return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
+                            self._detector.score)
+
+
+DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))
+"""Standard deviations (m, m, rad) of a start or reset pose given without a covariance."""
+
+
+def _covariance(value: Any) -> NDArray[np.float64]:
+    """A validated 3x3 covariance (None: `DEFAULT_INITIAL_STD` squared on the diagonal)."""
+    if value is None:
+        return np.diag(np.square(DEFAULT_INITIAL_STD))
+    cov = np.asarray(value)
+    if cov.dtype.kind not in "fiu":
+        raise TypeError(f"covariance must hold real numbers, got dtype {cov.dtype}")
+    cov = cov.astype(np.float64)
+    if cov.shape != (3, 3):
+        raise ValueError(f"covariance must be 3x3 over (x, y, yaw), got shape {cov.shape}")
+    if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, atol=1e-12) or np.linalg.eigvalsh(cov).min() < 0:
+        raise ValueError(f"covariance must be finite, symmetric and positive semi-definite, got {cov.tolist()}")
+    return cov

@@ -4,7 +4,8 @@
 //! normal taken from the plan's local point structure), so that a direction the walls do not
 //! constrain (a long corridor) shows up as a large variance instead of being hidden by the
 //! point-to-point pairing. `cov = sigma^2 H^-1` with `H = sum J J^T`,
-//! `J = [n_x, n_y, n . perp(p - t)]` and `sigma^2` the residual variance along the normals.
+//! `J = [n_x, n_y, n . perp(p - t)]` and `sigma^2` the residual variance along the normals. `H`
+//! itself is returned too: it tells along which direction the walls fix the pose (degeneracy).
 
 use crate::point_map::PointMap;
 use crate::pose::Pose2;
@@ -51,17 +52,26 @@ pub fn estimate_normals(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2)
         .collect()
 }
 
-/// Covariance over (x, y, yaw) (m^2, m rad, rad^2) of `pose` given inlier pairs
-/// `(scan point already in the map frame, plan index)`.
-///
-/// Returns a matrix of `inf` on the diagonal (and 0 elsewhere) when fewer than four pairs have a
-/// normal or the information matrix is singular: the alignment then does not fix the pose.
+/// How well an alignment fixes the pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseUncertainty {
+    /// Covariance over (x, y, yaw) (m^2, m rad, rad^2): `sigma^2 H^-1`; `inf` on the diagonal (0
+    /// elsewhere) when fewer than four pairs have a normal or `H` is singular.
+    pub covariance: Matrix3<f64>,
+    /// `H = sum J J^T` over the inliers with a wall normal (x, y unitless; yaw terms in metres):
+    /// along a unit direction `u` of the plane, `u^T H[0..2, 0..2] u` counts how many inliers'
+    /// worth of wall normal point along `u`. Zero along a direction no wall faces.
+    pub constraint: Matrix3<f64>,
+}
+
+/// The [`PoseUncertainty`] of `pose` given inlier pairs `(scan point already in the map frame,
+/// plan index)`.
 pub fn pose_covariance(
     map: &PointMap,
     normals: &[[f64; 2]],
     pose: &Pose2,
     pairs: &[([f64; 2], u32)],
-) -> Matrix3<f64> {
+) -> PoseUncertainty {
     let mut h = Matrix3::<f64>::zeros();
     let mut sum_sq = 0.0;
     let mut m = 0usize;
@@ -78,7 +88,8 @@ pub fn pose_covariance(
         sum_sq += r * r;
         m += 1;
     }
-    let unknown = Matrix3::from_diagonal_element(f64::INFINITY);
+    let unknown =
+        PoseUncertainty { covariance: Matrix3::from_diagonal_element(f64::INFINITY), constraint: h };
     if m < 4 {
         return unknown;
     }
@@ -91,7 +102,7 @@ pub fn pose_covariance(
                 && inv[(2, 2)] > 0.0 =>
         {
             let c = inv * sigma2;
-            (c + c.transpose()) * 0.5
+            PoseUncertainty { covariance: (c + c.transpose()) * 0.5, constraint: h }
         }
         _ => unknown,
     }
@@ -129,8 +140,11 @@ mod tests {
                 ([pts[i][0], pts[i][1] + jitter], i as u32)
             })
             .collect();
-        let cov = pose_covariance(&map, &normals, &pose, &pairs);
+        let PoseUncertainty { covariance: cov, constraint } = pose_covariance(&map, &normals, &pose, &pairs);
         assert!(cov[(0, 0)].is_infinite() || cov[(0, 0)] > 1e3 * cov[(1, 1)], "{cov}");
+        // No wall normal points along x; every pair constrains y.
+        assert!(constraint[(0, 0)] < 1e-9, "{constraint}");
+        assert!((constraint[(1, 1)] - pairs.len() as f64).abs() < 1e-6, "{constraint}");
     }
 
     #[test]
@@ -152,7 +166,7 @@ mod tests {
                     ([p[0] + s, p[1] + s], i as u32)
                 })
                 .collect();
-            pose_covariance(&map, &normals, &pose, &pairs)
+            pose_covariance(&map, &normals, &pose, &pairs).covariance
         };
         let c1 = covariance_for(0.01);
         let c2 = covariance_for(0.02);

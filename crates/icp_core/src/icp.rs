@@ -143,6 +143,9 @@ pub struct IcpResult {
     pub rmse: f64,
     /// Covariance over (x, y, yaw); `inf` on the diagonal when the pose is not constrained.
     pub covariance: Matrix3<f64>,
+    /// The wall-normal constraint `H = sum J J^T` of the inliers (see
+    /// [`crate::covariance::PoseUncertainty::constraint`]).
+    pub constraint: Matrix3<f64>,
     /// Per input scan point: is it an inlier.
     pub inlier_mask: Vec<bool>,
     /// Plan points matched against (the visible ones, or all).
@@ -306,7 +309,7 @@ fn score(
     }
     let num_inliers = pairs.len();
     let rmse = if num_inliers > 0 { (sum_sq / num_inliers as f64).sqrt() } else { f64::NAN };
-    let covariance = pose_covariance(map, map.normals(), &pose, &inlier_pairs);
+    let uncertainty = pose_covariance(map, map.normals(), &pose, &inlier_pairs);
     IcpResult {
         pose,
         converged,
@@ -314,7 +317,8 @@ fn score(
         num_inliers,
         inlier_ratio: num_inliers as f64 / scan.len() as f64,
         rmse,
-        covariance,
+        covariance: uncertainty.covariance,
+        constraint: uncertainty.constraint,
         inlier_mask,
         num_target_points: target.len(),
     }

@@ -209,6 +209,12 @@ impl Alignment {
         let c = &self.inner.covariance;
         Array2::from_shape_fn((3, 3), |(i, j)| c[(i, j)]).into_pyarray(py)
     }
+    /// 3x3 wall-normal constraint H = sum J J^T of the inliers.
+    #[getter]
+    fn constraint<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let c = &self.inner.constraint;
+        Array2::from_shape_fn((3, 3), |(i, j)| c[(i, j)]).into_pyarray(py)
+    }
     /// (N,) bool: which scan points are inliers.
     #[getter]
     fn inlier_mask<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {

@@ -1,0 +1,69 @@
+"""Noticing that the localizer has lost track: the plan no longer explains the scans."""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+from ._validation import real_number, whole_number
+
+
+@dataclass(frozen=True)
+class LostRule:
+    """When the `Localizer` declares itself lost.
+
+    The match score of a scan is the share of its points within `max_correspondence_distance` of
+    the plan after alignment (the inlier ratio; 0 for a scan too small to align). The localizer is
+    lost when the mean score over the last `window` scans falls below `min_score`, or when
+    `max_rejections` scans in a row were rejected by the acceptance gate.
+
+    Attributes:
+        window: scans the score is averaged over (>= 1).
+        min_score: lowest acceptable mean score, in [0, 1].
+        max_rejections: rejections in a row that mean lost (>= 1).
+    """
+
+    window: int = 5
+    min_score: float = 0.35
+    max_rejections: int = 3
+
+    def __post_init__(self) -> None:
+        whole_number(self.window, "window", 1, 10_000)
+        score = real_number(self.min_score, "min_score")
+        if not 0.0 <= score <= 1.0:
+            raise ValueError(f"min_score must be in [0, 1], got {self.min_score!r}")
+        whole_number(self.max_rejections, "max_rejections", 1, 10_000)
+
+
+@dataclass
+class LostDetector:
+    """The running state `LostRule` is applied to."""
+
+    rule: LostRule = field(default_factory=LostRule)
+    scores: deque[float] = field(default_factory=deque)
+    rejections: int = 0
+
+    def update(self, score: float, accepted: bool) -> bool:
+        """Adds one scan's score (NaN counts as 0) and acceptance; returns whether lost."""
+        self.scores.append(0.0 if math.isnan(score) else score)
+        while len(self.scores) > self.rule.window:
+            self.scores.popleft()
+        self.rejections = 0 if accepted else self.rejections + 1
+        return self.lost
+
+    @property
+    def score(self) -> float:
+        """Mean score over the window so far (NaN before the first scan)."""
+        return sum(self.scores) / len(self.scores) if self.scores else math.nan
+
+    @property
+    def lost(self) -> bool:
+        """Whether the rule says lost now."""
+        full = len(self.scores) >= self.rule.window
+        return (full and self.score < self.rule.min_score) or self.rejections >= self.rule.max_rejections
+
+    def reset(self) -> None:
+        """Forgets the history (after a relocalization or a pose given by the user)."""
+        self.scores.clear()
+        self.rejections = 0
