@@ -1,0 +1,196 @@
+"""Tests of the localizer's robustness: covariance consistency (NEES), degeneracy in a corridor,
+lost detection, the covariance propagation, and their errors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+
+from planicp import (
+    DegeneracyRule,
+    IcpConfig,
+    Localizer,
+    LostRule,
+    MotionNoise,
+    PlanMap,
+    PlanRaster,
+    localize,
+)
+from planicp.default_plan import load_default_plan
+from planicp.lost_detection import LostDetector
+from planicp.sim.experiment import ExperimentConfig, LidarModel, Recording, run_experiment
+from planicp.sim.world import Furnishing
+
+CHI2_3_95 = 7.8147
+
+
+def _corridor(length: float = 100.0, width: float = 2.0, res: float = 0.05) -> PlanMap:
+    """A closed corridor with 0.2 m walls: interior x 0..length, y 0..width."""
+    cols, rows = int(round((length + 0.4) / res)), int(round((width + 0.4) / res))
+    walls = np.zeros((rows, cols), dtype=bool)
+    walls[:4, :] = walls[-4:, :] = walls[:, :4] = walls[:, -4:] = True
+    return PlanMap.from_raster(PlanRaster(walls, res, (-0.2, -0.2, 0.0)))
+
+
+def _track(plan: PlanMap, recording: Recording, **options: object) -> tuple[NDArray[np.float64], list[object]]:
+    localizer = Localizer(plan, tuple(recording.truth[0]), **options)  # type: ignore[arg-type]
+    estimates = [localizer.update(s, tuple(o)) for s, o in zip(recording.scans, recording.odometry_in_odom)]
+    return np.array([e.pose for e in estimates]), estimates  # type: ignore[attr-defined]
+
+
+def _rms(values: NDArray[np.float64]) -> float:
+    return float(np.sqrt(np.mean(values**2)))
+
+
+def _wrap(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    wrapped: NDArray[np.float64] = (a + math.pi) % (2 * math.pi) - math.pi
+    return wrapped
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_corridor_keeps_odometry_along_the_axis_and_corrects_the_rest(seed: int) -> None:
+    """A 100 m corridor seen by a 10 m LIDAR: nothing fixes the position along it except near its
+    ends. Good odometry (1 % noise, no drift); the heading and the across-corridor position are
+    corrected, the along-corridor error stays that of odometry (without the degeneracy handling
+    ICP slides by centimetres to decimetres)."""
+    plan = _corridor()
+    config = ExperimentConfig(duration_s=60.0, seed=seed, lidar=LidarModel(range_max=10.0),
+                              furnishing=Furnishing(0, 0, 0, 0), error_generator=None)
+    recording, _ = run_experiment(plan, config)
+    odometry = recording.odometry - recording.truth
+    planicp = recording.estimate - recording.truth
+    along_odometry, along_planicp = _rms(odometry[:, 0]), _rms(planicp[:, 0])
+    assert along_planicp <= 1.5 * along_odometry + 0.001, (along_planicp, along_odometry)
+    across_planicp, across_odometry = _rms(planicp[:, 1]), _rms(odometry[:, 1])
+    heading_planicp, heading_odometry = _rms(_wrap(planicp[:, 2])), _rms(_wrap(odometry[:, 2]))
+    assert across_planicp < 0.002 and across_planicp < across_odometry / 3, (across_planicp, across_odometry)
+    assert heading_planicp < math.radians(0.02) and heading_planicp < heading_odometry / 2, (
+        heading_planicp, heading_odometry)
+    poses, estimates = _track(plan, recording)
+    flagged = [e for e in estimates if e.degeneracy is not None]  # type: ignore[attr-defined]
+    assert len(flagged) > 0.5 * len(estimates)
+    for e in flagged:
+        assert abs(e.degeneracy.axis[0]) > 0.99  # type: ignore[attr-defined]
+    sliding, _ = _track(plan, recording, degeneracy=DegeneracyRule(min_constraint=0.0))
+    assert _rms(sliding[:, 0] - recording.truth[:, 0]) > 3 * along_planicp
+
+
+def test_covariance_matches_the_error_spread() -> None:
+    """NEES of the accepted estimates on the shipped plan: mean near 3 and most below the
+    chi-square 95 % bound; the raw, unscaled covariance is clearly overconfident."""
+    plan = load_default_plan()
+    nees: dict[float, list[float]] = {1.0: [], 3.0: []}
+    for seed in (0, 1):
+        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=40.0, seed=seed))
+        for scale in nees:
+            _, estimates = _track(plan, recording, config=IcpConfig(covariance_scale=scale))
+            for k, e in enumerate(estimates):
+                if e.accepted:  # type: ignore[attr-defined]
+                    err = np.array(e.pose) - recording.truth[k]  # type: ignore[attr-defined]
+                    err[2] = _wrap(err[2])
+                    nees[scale].append(float(err @ np.linalg.solve(e.covariance, err)))  # type: ignore[attr-defined]
+    calibrated, raw = np.array(nees[3.0]), np.array(nees[1.0])
+    assert len(calibrated) > 700
+    assert 1.5 < calibrated.mean() < 5.0
+    assert np.mean(calibrated < CHI2_3_95) > 0.85
+    assert raw.mean() > 2 * calibrated.mean() and np.mean(raw < CHI2_3_95) < 0.8
+
+
+def test_kidnapped_robot_is_reported_lost() -> None:
+    """Carried to another room without telling the localizer: the next scans do not fit the
+    predicted place, and `lost` is raised within 5 scans (recovery is tested with relocalization)."""
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=20.0, seed=3))
+    localizer = Localizer(plan, tuple(recording.truth[0]))
+    for scan, odom in zip(recording.scans[:50], recording.odometry_in_odom[:50]):
+        assert not localizer.update(scan, tuple(odom)).lost
+    # Scans from 10 s later (elsewhere), odometry saying the robot stood still.
+    odom = tuple(recording.odometry_in_odom[49])
+    lost_at = None
+    for k, scan in enumerate(recording.scans[150:160]):
+        estimate = localizer.update(scan, odom)
+        if estimate.lost:
+            lost_at = k
+            break
+    assert lost_at is not None and lost_at < 5
+    localizer.reset(tuple(recording.truth[150]))
+    assert not localizer.lost
+
+
+def test_lost_detector_rules() -> None:
+    detector = LostDetector(LostRule(window=3, min_score=0.5, max_rejections=2))
+    assert not detector.update(0.9, True) and not detector.update(0.1, True)  # window not full yet
+    assert detector.update(0.1, True)  # mean 0.37 < 0.5
+    assert detector.score == pytest.approx((0.9 + 0.1 + 0.1) / 3)
+    detector.reset()
+    assert not detector.update(0.9, False)
+    assert detector.update(0.9, False)  # two rejections in a row
+    assert not detector.update(0.9, True) and math.isfinite(detector.score)
+    assert detector.update(float("nan"), True) is False  # NaN counts as 0: mean (0.9 + 0.9 + 0) / 3 = 0.6
+    for bad, message in (({"window": 0}, "window must be at least 1"), ({"min_score": 1.5}, "min_score must be in"),
+                         ({"max_rejections": 0}, "max_rejections must be at least 1")):
+        with pytest.raises(ValueError, match=message):
+            LostRule(**bad)  # type: ignore[arg-type]
+
+
+def test_motion_noise_propagation() -> None:
+    still = MotionNoise(0.0, 0.0, 0.0, 0.0, 0.0)
+    p0 = np.diag([0.01, 0.02, 0.001])
+    np.testing.assert_allclose(still.propagate(p0, (1.0, 2.0, 0.3), (0.0, 0.0, 0.0)), p0)
+    # Driving 10 m straight ahead (+x) with an uncertain heading spreads the position sideways (+y):
+    # var_y grows by 10^2 * var_yaw, and x and y do not correlate with each other.
+    p1 = still.propagate(np.diag([0.0, 0.0, 1e-4]), (0.0, 0.0, 0.0), (10.0, 0.0, 0.0))
+    assert p1[1, 1] == pytest.approx(100 * 1e-4) and p1[0, 0] == pytest.approx(0.0, abs=1e-15)
+    assert p1[1, 2] == pytest.approx(10 * 1e-4)
+    # The motion's own noise, rotated into the map: facing +y, forward noise is y noise.
+    noisy = MotionNoise(0.1, 0.0, 0.0, 0.0, 0.0)
+    p2 = noisy.propagate(np.zeros((3, 3)), (0.0, 0.0, math.pi / 2), (2.0, 0.0, 0.0))
+    assert p2[0, 0] == pytest.approx(0.04) and p2[1, 1] == pytest.approx(0.04) and p2[2, 2] == 0.0
+    with pytest.raises(ValueError, match="translation_fraction must be a finite number >= 0"):
+        MotionNoise(translation_fraction=-0.1)
+
+
+def test_translation_constraint_and_degeneracy_rule() -> None:
+    corridor = _corridor(length=60.0)
+    x = np.linspace(-8.0, 8.0, 400)
+    scan = np.concatenate([np.column_stack([x, np.full_like(x, 1.0)]), np.column_stack([x, np.full_like(x, -1.0)])])
+    result = localize(scan, corridor, (30.0, 1.0, 0.0))
+    axis, weak, strong = result.translation_constraint()
+    assert abs(axis[0]) > 0.999 and weak < 1.0 and strong > 100
+    degeneracy = DegeneracyRule().check(result)
+    assert degeneracy is not None and degeneracy.weak == weak
+    assert DegeneracyRule(min_constraint=0.0).check(result) is None
+    # Near the corridor's end its end wall constrains the axis too.
+    t = np.linspace(-0.9, 0.9, 100)
+    along = np.linspace(-1.0, 7.0, 300)
+    end = np.concatenate([np.column_stack([along, np.full_like(along, 1.0)]),
+                          np.column_stack([along, np.full_like(along, -1.0)]), np.column_stack([np.full_like(t, -1.0), t])])
+    near_end = localize(end, corridor, (1.0, 1.0, 0.0))
+    assert near_end.translation_constraint()[1] > 50
+    assert DegeneracyRule().check(near_end) is None
+    with pytest.raises(ValueError, match="min_constraint"):
+        DegeneracyRule(min_constraint=-1.0)
+
+
+def test_localizer_covariance_and_reset_validation() -> None:
+    plan = _corridor(length=10.0)
+    localizer = Localizer(plan, (5.0, 1.0, 0.0))
+    np.testing.assert_allclose(np.sqrt(np.diag(localizer.covariance)), [0.1, 0.1, math.radians(5.0)])
+    localizer.reset((4.0, 1.0, 0.0), np.diag([0.04, 0.04, 0.01]))
+    np.testing.assert_allclose(localizer.covariance, np.diag([0.04, 0.04, 0.01]))
+    bad_inputs: list[tuple[object, type[Exception], str]] = [
+        (np.eye(2), ValueError, "must be 3x3"),
+        (np.diag([1.0, -1.0, 1.0]), ValueError, "positive semi-definite"),
+        (np.full((3, 3), np.nan), ValueError, "must be finite"),
+        (np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), ValueError, "symmetric"),
+        ([["a"] * 3] * 3, TypeError, "real numbers"),
+    ]
+    for bad, error, message in bad_inputs:
+        with pytest.raises(error, match=message):
+            localizer.reset((4.0, 1.0, 0.0), bad)
+        with pytest.raises(error, match=message):
+            Localizer(plan, (5.0, 1.0, 0.0), initial_covariance=bad)
+    np.testing.assert_allclose(localizer.covariance, np.diag([0.04, 0.04, 0.01]))  # unchanged by the failures
