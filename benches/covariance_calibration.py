@@ -30,7 +30,7 @@ def nees_of_run(plan: PlanMap, seed: int, duration: float, scales: list[float]) 
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=duration, seed=seed))
     out: dict[float, list[float]] = {}
     for scale in scales:
-        localizer = Localizer(plan, tuple(recording.truth[0]), IcpConfig(covariance_scale=scale))
+        localizer = Localizer(plan, tuple(recording.truth[0]), IcpConfig.for_tracking(covariance_scale=scale))
         values = []
         for k, (scan, odom) in enumerate(zip(recording.scans, recording.odometry_in_odom)):
             estimate = localizer.update(scan, tuple(odom))

@@ -28,6 +28,7 @@ VARIANTS: dict[str, dict[str, object]] = {
     "single stage (1.0)": {"correspondence_schedule": (1.0,)},
     "no acceleration": {"accelerate": False},
     "trim_ratio 0.9": {"trim_ratio": 0.9},
+    "auto_trim": {"auto_trim": True},
     "subsample 2": {"subsample": 2},
     "fixed 30 iterations": {"translation_tolerance": 0.0, "rotation_tolerance": 0.0},
 }

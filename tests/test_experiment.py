@@ -99,7 +99,7 @@ def test_default_demo_writes_figures_metrics_and_report(tmp_path: Path, capsys: 
     metrics = json.loads((out / "metrics.json").read_text())
     default = metrics["runs"]["planicp (default)"]
     assert metrics["scans"] == 3001 and set(metrics["runs"]) == {
-        "planicp (default)", "without outlier rejection", "with trimming (trim_ratio 0.8)"}
+        "planicp (default)", "without outlier rejection", "without automatic trimming"}
     # The enhanced occupancy grid from planicp's poses agrees with the ground-truth grid; the one
     # from odometry does not.
     grid = metrics["occupancy_grid"]

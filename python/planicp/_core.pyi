@@ -63,6 +63,7 @@ class IcpSettings:
         use_visibility: bool,
         accelerate: bool,
         visibility_range: float | None = None,
+        auto_trim: bool = False,
     ) -> IcpSettings: ...
 
 @final

@@ -100,6 +100,34 @@ pub fn trim(pairs: &mut Vec<Pair>, ratio: f64, min_keep: usize) {
     pairs.truncate(keep);
 }
 
+/// Pairs farther than this many robust standard deviations of the pair distances are dropped by
+/// [`trim_auto`].
+pub const AUTO_TRIM_SIGMAS: f64 = 3.0;
+/// Smallest share of the in-range pairs [`trim_auto`] keeps in the last stage of the schedule.
+pub const AUTO_TRIM_MIN_SHARE: f64 = 0.2;
+/// Smallest share of the in-range pairs [`trim_auto`] keeps in the earlier, coarser stages.
+pub const AUTO_TRIM_COARSE_SHARE: f64 = 0.6;
+
+/// Keeps the pairs whose distance is within [`AUTO_TRIM_SIGMAS`] robust standard deviations of
+/// the typical pair distance: `sigma = 1.4826 * median distance` (the median absolute deviation
+/// of a zero-centred distance). Pairs on the walls dominate the median as long as they are most
+/// of the in-range pairs, so a crowd of people or furniture near the walls, whose distances to
+/// the plan are larger, is cut; clean scans lose only their extreme tail. At most a `max_ratio`
+/// share and at least a `min_share` of the pairs (and `min_keep`) are kept.
+pub fn trim_auto(pairs: &mut Vec<Pair>, max_ratio: f64, min_share: f64, min_keep: usize) {
+    let n = pairs.len();
+    if n <= min_keep {
+        return;
+    }
+    pairs.sort_unstable_by(|a, b| a.sq_dist.total_cmp(&b.sq_dist));
+    let most = ((n as f64 * max_ratio).ceil() as usize).clamp(min_keep, n);
+    let least = ((n as f64 * min_share).ceil() as usize).clamp(min_keep, most);
+    let median = pairs[n / 2].sq_dist.sqrt();
+    let limit = AUTO_TRIM_SIGMAS * 1.4826 * median;
+    let within = pairs.partition_point(|p| p.sq_dist <= limit * limit);
+    pairs.truncate(within.clamp(least, most));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,6 +158,31 @@ mod tests {
         assert_eq!(idx, 50);
         assert!((d2 - 25.0).abs() < 1e-9);
         assert!(TargetSet::subset(&map, vec![]).is_none());
+    }
+
+    #[test]
+    fn auto_trim_keeps_clean_pairs_and_drops_a_crowd() {
+        let pair = |source: u32, d: f64| Pair { source, target: 0, sq_dist: d * d };
+        // 100 points, all paired within 1 cm: nothing is dropped.
+        let mut clean: Vec<Pair> = (0..100).map(|i| pair(i, 0.0001 * i as f64)).collect();
+        trim_auto(&mut clean, 1.0, AUTO_TRIM_MIN_SHARE, 3);
+        assert_eq!(clean.len(), 100);
+        // 60 inliers within 1 cm and 40 crowd points 10-20 cm away: the crowd goes.
+        let mut crowded: Vec<Pair> = (0..60).map(|i| pair(i, 0.0001 * i as f64)).collect();
+        crowded.extend((60..100).map(|i| pair(i, 0.1 + 0.0025 * (i - 60) as f64)));
+        trim_auto(&mut crowded, 1.0, AUTO_TRIM_MIN_SHARE, 3);
+        assert_eq!(crowded.len(), 60);
+        assert!(crowded.iter().all(|p| p.sq_dist < 1e-4));
+        // The bounds: at most max_ratio, at least the minimum share.
+        let mut capped: Vec<Pair> = (0..100).map(|i| pair(i, 0.0001 * i as f64)).collect();
+        trim_auto(&mut capped, 0.5, AUTO_TRIM_MIN_SHARE, 3);
+        assert_eq!(capped.len(), 50);
+        let mut spread: Vec<Pair> = (0..100).map(|i| pair(i, 0.01 * 1.1f64.powi(i as i32))).collect();
+        trim_auto(&mut spread, 1.0, AUTO_TRIM_MIN_SHARE, 3);
+        assert!(spread.len() >= 20);
+        let mut coarse: Vec<Pair> = (0..100).map(|i| pair(i, 0.01 * 1.1f64.powi(i as i32))).collect();
+        trim_auto(&mut coarse, 1.0, AUTO_TRIM_COARSE_SHARE, 3);
+        assert!(coarse.len() >= 60);
     }
 
     #[test]

@@ -9,7 +9,9 @@
 
 use crate::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
 use crate::candidate_cache::CandidateCache;
-use crate::correspondence::{find_pairs, trim, Pair, TargetSet};
+use crate::correspondence::{
+    find_pairs, trim, trim_auto, Pair, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
+};
 use crate::covariance::pose_covariance;
 use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::point_map::PointMap;
@@ -44,8 +46,12 @@ pub struct IcpConfig {
     pub max_correspondence_distance: f64,
     /// Most iterations over all stages.
     pub max_iterations: usize,
-    /// Share (0, 1] of the in-range pairs, the closest ones, used by each update.
+    /// Share (0, 1] of the in-range pairs, the closest ones, used by each update (with
+    /// `auto_trim`: the most that may be kept).
     pub trim_ratio: f64,
+    /// Drop pairs beyond three robust standard deviations of the pair distances at every
+    /// iteration ([`crate::correspondence::trim_auto`]); `trim_ratio` caps what is kept.
+    pub auto_trim: bool,
     /// A stage stops when a step moves less than this (and rotates less than `rotation_tolerance`).
     pub translation_tolerance: f64,
     /// See `translation_tolerance`. Both zero: every iteration runs.
@@ -69,6 +75,7 @@ impl Default for IcpConfig {
             max_correspondence_distance: 0.25,
             max_iterations: 30,
             trim_ratio: 1.0,
+            auto_trim: false,
             translation_tolerance: 1e-4,
             rotation_tolerance: 1e-4,
             subsample: 1,
@@ -232,7 +239,14 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
                 }
             }
             let cost = truncated_cost(&pairs, used.len(), distance);
-            trim(&mut pairs, config.trim_ratio, MIN_PAIRS);
+            if config.auto_trim {
+                // Before the last stage the fit may still be far off and the inliers' residuals
+                // large: keep at least AUTO_TRIM_COARSE_SHARE of the pairs there.
+                let least = if stage + 1 == stages { AUTO_TRIM_MIN_SHARE } else { AUTO_TRIM_COARSE_SHARE };
+                trim_auto(&mut pairs, config.trim_ratio, least, MIN_PAIRS);
+            } else {
+                trim(&mut pairs, config.trim_ratio, MIN_PAIRS);
+            }
             let mut acc = RigidAccumulator::default();
             let mut centroid = [0.0, 0.0];
             for p in &pairs {

@@ -135,7 +135,7 @@ impl IcpSettings {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
                         rotation_tolerance, subsample, correspondence_schedule, use_visibility,
-                        accelerate, visibility_range=None))]
+                        accelerate, visibility_range=None, auto_trim=false))]
     fn new(
         max_correspondence_distance: f64,
         max_iterations: usize,
@@ -147,11 +147,13 @@ impl IcpSettings {
         use_visibility: bool,
         accelerate: bool,
         visibility_range: Option<f64>,
+        auto_trim: bool,
     ) -> PyResult<Self> {
         let inner = IcpConfig {
             max_correspondence_distance,
             max_iterations,
             trim_ratio,
+            auto_trim,
             translation_tolerance,
             rotation_tolerance,
             subsample,

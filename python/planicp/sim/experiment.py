@@ -97,7 +97,7 @@ class ExperimentConfig:
     odometry_noise: OdometryNoise = field(default_factory=OdometryNoise)
     error_generator: ErrorGenerator | None = field(default_factory=ErrorGenerator)
     limits: DiffDriveLimits = field(default_factory=DiffDriveLimits)
-    icp: IcpConfig = field(default_factory=IcpConfig)
+    icp: IcpConfig = field(default_factory=IcpConfig.for_tracking)
     gate: AcceptanceGate = field(default_factory=AcceptanceGate)
 
     def __post_init__(self) -> None:
