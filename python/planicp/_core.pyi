@@ -177,6 +177,7 @@ class GlobalMatcher:
         max_angular_step: float,
         max_candidates: int,
         min_score: float,
+        relative_score: float,
         nms_distance: float,
         nms_angle: float,
         max_scan_points: int,

@@ -45,6 +45,8 @@ class RelocalizationConfig:
         search_candidates: distinct hypotheses the search hands to ICP (more than are returned,
             since refined hypotheses may merge).
         min_score: hypotheses explaining less than this share of the scan are dropped (0..1).
+        relative_score: hypotheses scoring below this share of the best hypothesis's score are
+            dropped too: they are no rivals, and pruning them early keeps large plans fast.
         nms_distance, nms_angle: two poses closer than both are one candidate.
         max_scan_points: the scan is thinned to one point per cell, then to at most this many.
         max_nodes: budget of scored search nodes; beyond it the search stops and the result says
@@ -61,9 +63,10 @@ class RelocalizationConfig:
     max_angular_step: float = math.radians(2.0)
     search_candidates: int = 8
     min_score: float = 0.2
+    relative_score: float = 0.8
     nms_distance: float = 1.0
     nms_angle: float = math.radians(20.0)
-    max_scan_points: int = 400
+    max_scan_points: int = 200
     max_nodes: int = 4_000_000
     ambiguity_margin: float = 0.05
     icp: IcpConfig = field(default_factory=IcpConfig)
@@ -79,6 +82,9 @@ class RelocalizationConfig:
         score = real_number(self.min_score, "min_score")
         if not 0.0 <= score < 1.0:
             raise ValueError(f"min_score must be in [0, 1), got {self.min_score!r}")
+        relative = real_number(self.relative_score, "relative_score")
+        if not 0.0 <= relative <= 1.0:
+            raise ValueError(f"relative_score must be in [0, 1], got {self.relative_score!r}")
         positive(self.nms_distance, "nms_distance", "metres")
         positive(self.nms_angle, "nms_angle", "radians")
         whole_number(self.max_scan_points, "max_scan_points", 10, 1 << 24)
@@ -91,7 +97,7 @@ class RelocalizationConfig:
 
     def _matcher_key(self) -> tuple[Any, ...]:
         return (self.resolution, self.sigma, self.levels, self.angular_step, self.max_angular_step,
-                self.search_candidates, self.min_score, self.nms_distance, self.nms_angle,
+                self.search_candidates, self.min_score, self.relative_score, self.nms_distance, self.nms_angle,
                 self.max_scan_points, self.max_nodes)
 
 
@@ -282,7 +288,7 @@ def _matcher(plan: PlanMap, config: RelocalizationConfig) -> _core.GlobalMatcher
     matcher = _core.GlobalMatcher(
         plan._native, float(c.resolution), float(c.sigma), int(c.levels),
         None if c.angular_step is None else float(c.angular_step), float(c.max_angular_step),
-        int(c.search_candidates), float(c.min_score), float(c.nms_distance), float(c.nms_angle),
+        int(c.search_candidates), float(c.min_score), float(c.relative_score), float(c.nms_distance), float(c.nms_angle),
         int(c.max_scan_points), int(c.max_nodes),
     )
     with _MATCHERS_LOCK:

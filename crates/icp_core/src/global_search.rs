@@ -8,11 +8,14 @@
 //! 3. For each rotation, translations on the cell lattice of the window are searched by branch
 //!    and bound over the [`LikelihoodPyramid`]: a node covering a `2^h x 2^h` block of
 //!    translations is bounded by the mean of the level-`h` values under the scan's cells, which no
-//!    translation in the block can beat; nodes are expanded best first, depth first, and pruned
-//!    when their bound cannot enter the list of the best candidates.
+//!    translation in the block can beat. All rotations share one priority queue: the node with
+//!    the highest bound is expanded next (best first, so leaves come out best first), and nodes
+//!    whose bound cannot enter the list of the best candidates are dropped. The queue holds at
+//!    most `max_nodes` nodes (20 bytes each).
 //! 4. The best `max_candidates` leaves that are distinct (farther apart than `nms_distance` metres
 //!    or `nms_angle` radians) are kept (non-maximum suppression), with their score: the mean
-//!    likelihood of the scan's points, i.e. the share of them the plan explains (0..1).
+//!    likelihood of the scan's points, i.e. the share of them the plan explains (0..1). Leaves
+//!    below `relative_score` times the best score are no rivals and are pruned too.
 //!
 //! The result is a set of hypotheses on a `resolution` lattice; [`crate::relocalization`] refines
 //! them with ICP and ranks them.
@@ -21,6 +24,8 @@ use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
 use crate::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
 use std::f64::consts::PI;
 
 /// Fewest scan points (after the voxel thinning) a global search accepts.
@@ -46,6 +51,9 @@ pub struct GlobalSearchConfig {
     pub max_candidates: usize,
     /// Candidates scoring below this (share of scan points explained, 0..1) are not returned.
     pub min_score: f64,
+    /// Candidates scoring below this share of the best candidate's score are not returned either:
+    /// they are no rivals of the best, and pruning them early is what keeps large plans fast.
+    pub relative_score: f64,
     /// Two poses closer than this in position and `nms_angle` in heading are the same candidate.
     pub nms_distance: f64,
     /// See `nms_distance`.
@@ -66,9 +74,10 @@ impl Default for GlobalSearchConfig {
             max_angular_step: 2f64.to_radians(),
             max_candidates: 8,
             min_score: 0.2,
+            relative_score: 0.8,
             nms_distance: 1.0,
             nms_angle: 20f64.to_radians(),
-            max_scan_points: 400,
+            max_scan_points: 200,
             max_nodes: 4_000_000,
         }
     }
@@ -99,6 +108,9 @@ impl GlobalSearchConfig {
         }
         if !(self.min_score.is_finite() && (0.0..1.0).contains(&self.min_score)) {
             return Err(invalid("min_score", self.min_score, "must be in [0, 1)"));
+        }
+        if !(self.relative_score.is_finite() && (0.0..=1.0).contains(&self.relative_score)) {
+            return Err(invalid("relative_score", self.relative_score, "must be in [0, 1]"));
         }
         positive_finite("nms_distance", self.nms_distance)?;
         positive_finite("nms_angle", self.nms_angle)?;
@@ -186,8 +198,30 @@ struct Node {
     rotation: u32,
     ix: i32,
     iy: i32,
+    level: u8,
     score: f32,
 }
+
+/// Queue order: higher bound first; among equal bounds the finer node first (reaches leaves).
+impl Ord for Node {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.score.total_cmp(&other.score).then(other.level.cmp(&self.level))
+    }
+}
+
+impl PartialOrd for Node {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for Node {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Node {}
 
 /// The scan's cells at one rotation, for the window's centre translation.
 struct RotatedScan {
@@ -200,6 +234,7 @@ struct BestList {
     entries: Vec<Candidate>,
     capacity: usize,
     floor: f64,
+    relative: f64,
     nms_distance: f64,
     nms_angle: f64,
 }
@@ -207,11 +242,14 @@ struct BestList {
 impl BestList {
     /// A node must score above this to matter.
     fn threshold(&self) -> f64 {
-        if self.entries.len() < self.capacity {
-            self.floor
-        } else {
-            self.entries.last().map_or(self.floor, |e| e.score)
+        let Some(best) = self.entries.first() else {
+            return self.floor;
+        };
+        let mut t = self.floor.max(self.relative * best.score);
+        if self.entries.len() >= self.capacity {
+            t = t.max(self.entries.last().map_or(0.0, |e| e.score));
         }
+        t
     }
 
     fn same_place(&self, a: &Pose2, b: &Pose2) -> bool {
@@ -238,6 +276,8 @@ impl BestList {
         }
         self.entries.sort_by(|a, b| b.score.total_cmp(&a.score));
         self.entries.truncate(self.capacity);
+        let cut = self.relative * self.entries[0].score;
+        self.entries.retain(|e| e.score >= cut);
     }
 }
 
@@ -379,6 +419,7 @@ impl GlobalMatcher {
                 entries: Vec::new(),
                 capacity: self.config.max_candidates,
                 floor: self.config.min_score,
+                relative: self.config.relative_score,
                 nms_distance: self.config.nms_distance,
                 nms_angle: self.config.nms_angle,
             },
@@ -399,8 +440,7 @@ impl GlobalMatcher {
                 ix += block;
             }
         }
-        roots.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
-        search.branch(&roots, top);
+        search.branch(roots);
         Ok(SearchOutcome {
             candidates: search.best.entries,
             rotations: rotated.len(),
@@ -451,16 +491,19 @@ impl Search<'_> {
         let cells = &self.rotated[rotation as usize].cells;
         let (dx, dy) = (ix as i64, iy as i64);
         let sum: f32 = cells.iter().map(|c| self.pyramid.get(level, c[0] + dx, c[1] + dy)).sum();
-        Node { rotation, ix, iy, score: sum * self.inv_n }
+        Node { rotation, ix, iy, level: level as u8, score: sum * self.inv_n }
     }
 
-    /// Depth-first, best-first expansion of `nodes` (sorted best first) at `level`.
-    fn branch(&mut self, nodes: &[Node], level: usize) {
-        for n in nodes {
-            if (n.score as f64) <= self.best.threshold() {
+    /// Best-first expansion from `roots`: the node with the highest bound is expanded next, so
+    /// leaves come out best first and only nodes whose bound beats the threshold are expanded.
+    fn branch(&mut self, roots: Vec<Node>) {
+        let mut queue: BinaryHeap<Node> = roots.into();
+        while let Some(n) = queue.pop() {
+            let threshold = self.best.threshold();
+            if (n.score as f64) <= threshold {
                 return;
             }
-            if level == 0 {
+            if n.level == 0 {
                 let yaw = self.rotated[n.rotation as usize].yaw;
                 let pose = Pose2::new(
                     self.center[0] + n.ix as f64 * self.res,
@@ -474,18 +517,16 @@ impl Search<'_> {
                 self.complete = false;
                 return;
             }
-            let half = 1i32 << (level - 1);
-            let mut children = Vec::with_capacity(4);
+            let level = n.level as usize - 1;
+            let half = 1i32 << level;
             for (ox, oy) in [(0, 0), (half, 0), (0, half), (half, half)] {
                 let (ix, iy) = (n.ix + ox, n.iy + oy);
                 if ix <= self.limits[0] && iy <= self.limits[1] {
-                    children.push(self.node(n.rotation, ix, iy, level - 1));
+                    let child = self.node(n.rotation, ix, iy, level);
+                    if child.score as f64 > threshold {
+                        queue.push(child);
+                    }
                 }
-            }
-            children.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
-            self.branch(&children, level - 1);
-            if !self.complete {
-                return;
             }
         }
     }
@@ -689,6 +730,7 @@ pub(crate) mod tests {
             GlobalSearchConfig { angular_step: Some(-0.1), ..cfg.clone() },
             GlobalSearchConfig { max_candidates: 0, ..cfg.clone() },
             GlobalSearchConfig { min_score: 1.0, ..cfg.clone() },
+            GlobalSearchConfig { relative_score: 1.5, ..cfg.clone() },
             GlobalSearchConfig { nms_distance: 0.0, ..cfg.clone() },
             GlobalSearchConfig { max_scan_points: 3, ..cfg.clone() },
             GlobalSearchConfig { max_nodes: 0, ..cfg.clone() },

@@ -39,7 +39,7 @@ impl GlobalMatcher {
     #[new]
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (map, resolution, sigma, levels, angular_step, max_angular_step, max_candidates,
-                        min_score, nms_distance, nms_angle, max_scan_points, max_nodes))]
+                        min_score, relative_score, nms_distance, nms_angle, max_scan_points, max_nodes))]
     fn new(
         py: Python<'_>,
         map: &PyPointMap,
@@ -50,6 +50,7 @@ impl GlobalMatcher {
         max_angular_step: f64,
         max_candidates: usize,
         min_score: f64,
+        relative_score: f64,
         nms_distance: f64,
         nms_angle: f64,
         max_scan_points: usize,
@@ -63,6 +64,7 @@ impl GlobalMatcher {
             max_angular_step,
             max_candidates,
             min_score,
+            relative_score,
             nms_distance,
             nms_angle,
             max_scan_points,
