@@ -311,7 +311,7 @@ impl GlobalMatcher {
         if scan.is_empty() {
             return 0.0;
         }
-        let sum: f64 = scan.iter().map(|p| self.pyramid.value_at(pose.transform_point(*p)) as f64).sum();
+        let sum: f64 = scan.iter().map(|p| self.pyramid.value_at(pose.transform_point(*p))).sum();
         sum / scan.len() as f64
     }
 
@@ -410,7 +410,7 @@ impl GlobalMatcher {
         let mut search = Search {
             pyramid: &self.pyramid,
             rotated: &rotated,
-            inv_n: 1.0 / points.len() as f32,
+            inv_n: 1.0 / (255.0 * points.len() as f32),
             limits: [wx, wy],
             nodes: 0,
             max_nodes: self.config.max_nodes,
@@ -490,8 +490,8 @@ impl Search<'_> {
         self.nodes += 1;
         let cells = &self.rotated[rotation as usize].cells;
         let (dx, dy) = (ix as i64, iy as i64);
-        let sum: f32 = cells.iter().map(|c| self.pyramid.get(level, c[0] + dx, c[1] + dy)).sum();
-        Node { rotation, ix, iy, level: level as u8, score: sum * self.inv_n }
+        let sum: u32 = cells.iter().map(|c| self.pyramid.get(level, c[0] + dx, c[1] + dy) as u32).sum();
+        Node { rotation, ix, iy, level: level as u8, score: sum as f32 * self.inv_n }
     }
 
     /// Best-first expansion from `roots`: the node with the highest bound is expanded next, so
@@ -624,15 +624,15 @@ pub(crate) mod tests {
                 for iy in -6..=6 {
                     let pose =
                         Pose2::new(3.3 + ix as f64 * 0.1, 4.8 + iy as f64 * 0.1, 0.25 + k as f64 * step);
-                    let s: f32 = points
+                    let s: u32 = points
                         .iter()
                         .map(|p| {
                             let q = Pose2::new(3.3, 4.8, pose.yaw).transform_point(*p);
                             let c = matcher.pyramid.cell_of(q);
-                            matcher.pyramid.get(0, c[0] + ix, c[1] + iy)
+                            matcher.pyramid.get(0, c[0] + ix, c[1] + iy) as u32
                         })
                         .sum();
-                    top = top.max((s / points.len() as f32) as f64);
+                    top = top.max((s as f32 / (255.0 * points.len() as f32)) as f64);
                 }
             }
         }

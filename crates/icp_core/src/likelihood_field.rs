@@ -7,13 +7,17 @@
 //! `[col, col + 2^h) x [row, row + 2^h)`: the bound that branch and bound needs (Olson 2009;
 //! Hess et al. 2016, Cartographer's `PrecomputationGrid2D`).
 //!
+//! Values are stored as bytes (`round(255 * likelihood)`, as Cartographer does), so that the
+//! pyramid of a large plan stays in the processor's caches; the levels bound the stored bytes
+//! exactly.
+//!
 //! Cell `(col, row)` covers `x in [origin_x + col*res, origin_x + (col+1)*res)` and likewise `y`
 //! with `row`. The raster spans the plan's bounding box plus `3 sigma + res`, padded on every side
 //! by the largest block size, so every value outside the stored cells is exactly 0.
 
 use crate::error::{invalid, IcpError, Result};
 
-/// Most cells all levels of a pyramid may hold together (4 bytes each: 256 MiB).
+/// Most cells all levels of a pyramid may hold together (one byte each: 64 MiB).
 pub const MAX_PYRAMID_CELLS: usize = 64 * 1024 * 1024;
 
 /// Most pyramid levels (blocks up to `2^(MAX_LEVELS-1)` cells wide).
@@ -27,8 +31,8 @@ pub struct LikelihoodPyramid {
     origin: [f64; 2],
     cols: usize,
     rows: usize,
-    /// `levels[h][row * cols + col]`.
-    levels: Vec<Vec<f32>>,
+    /// `levels[h][row * cols + col]`: likelihood times 255.
+    levels: Vec<Vec<u8>>,
 }
 
 impl LikelihoodPyramid {
@@ -78,8 +82,10 @@ impl LikelihoodPyramid {
         let d2 = squared_distance_transform(&wall, cols, rows);
         let cutoff2 = (3.0 * sigma / resolution).powi(2);
         let scale = -(resolution * resolution) / (2.0 * sigma * sigma);
-        let base: Vec<f32> =
-            d2.iter().map(|&d| if d <= cutoff2 { (d * scale).exp() as f32 } else { 0.0 }).collect();
+        let base: Vec<u8> = d2
+            .iter()
+            .map(|&d| if d <= cutoff2 { (255.0 * (d * scale).exp()).round() as u8 } else { 0 })
+            .collect();
         let mut pyramid = Self { resolution, sigma, origin, cols, rows, levels: vec![base] };
         for h in 1..levels {
             let next = pyramid.max_pool(h);
@@ -89,12 +95,12 @@ impl LikelihoodPyramid {
     }
 
     /// Level `h` from level `h - 1`: the max over `[c, c + 2^h)` is the max of two halves.
-    fn max_pool(&self, h: usize) -> Vec<f32> {
+    fn max_pool(&self, h: usize) -> Vec<u8> {
         let prev = &self.levels[h - 1];
         let s = 1usize << (h - 1);
         let (cols, rows) = (self.cols, self.rows);
-        let at = |c: usize, r: usize| if c < cols && r < rows { prev[r * cols + c] } else { 0.0 };
-        let mut out = vec![0.0f32; cols * rows];
+        let at = |c: usize, r: usize| if c < cols && r < rows { prev[r * cols + c] } else { 0 };
+        let mut out = vec![0u8; cols * rows];
         for r in 0..rows {
             for c in 0..cols {
                 out[r * cols + c] = at(c, r).max(at(c + s, r)).max(at(c, r + s)).max(at(c + s, r + s));
@@ -128,11 +134,12 @@ impl LikelihoodPyramid {
         self.levels.len()
     }
 
-    /// Value of level `h` at cell `(col, row)`; 0 outside the raster (exact: the field is 0 there).
+    /// Value of level `h` at cell `(col, row)` times 255; 0 outside the raster (exact: the field
+    /// is 0 there).
     #[inline]
-    pub fn get(&self, h: usize, col: i64, row: i64) -> f32 {
+    pub fn get(&self, h: usize, col: i64, row: i64) -> u8 {
         if col < 0 || row < 0 || col >= self.cols as i64 || row >= self.rows as i64 {
-            return 0.0;
+            return 0;
         }
         self.levels[h][row as usize * self.cols + col as usize]
     }
@@ -146,10 +153,10 @@ impl LikelihoodPyramid {
         ]
     }
 
-    /// The level-0 likelihood at map-frame point `p`.
-    pub fn value_at(&self, p: [f64; 2]) -> f32 {
+    /// The level-0 likelihood (0..1) at map-frame point `p`.
+    pub fn value_at(&self, p: [f64; 2]) -> f64 {
         let [c, r] = self.cell_of(p);
-        self.get(0, c, r)
+        self.get(0, c, r) as f64 / 255.0
     }
 }
 
@@ -263,7 +270,7 @@ mod tests {
             let w = 1i64 << h;
             for r in (0..rows as i64).step_by(3) {
                 for c in (0..cols as i64).step_by(3) {
-                    let mut m = 0.0f32;
+                    let mut m = 0u8;
                     for dr in 0..w {
                         for dc in 0..w {
                             m = m.max(pyr.get(0, c + dc, r + dr));
@@ -276,7 +283,7 @@ mod tests {
         // On a wall the likelihood is 1, far away 0.
         assert_eq!(pyr.value_at([0.0, 0.0]), 1.0);
         assert_eq!(pyr.value_at([5.0, 5.0]), 0.0);
-        assert_eq!(pyr.get(0, -1, 0), 0.0);
+        assert_eq!(pyr.get(0, -1, 0), 0);
     }
 
     #[test]
