@@ -89,6 +89,14 @@ fn benches(c: &mut Criterion) {
         found.candidates.first()
     );
 
+    // The office's rooms are alike: the result should say so rather than pick one with confidence.
+    let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
+    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking).unwrap();
+    for c in &out.candidates {
+        eprintln!("candidate {:?} inlier ratio {:.3}", c.pose, c.score);
+    }
+    eprintln!("ambiguity {:.3}, ambiguous {}", out.ambiguity, out.ambiguous);
+
     let mut g = c.benchmark_group("global_search_office_40x25");
     g.sample_size(10).measurement_time(Duration::from_secs(10));
     g.bench_function("build_pyramid", |b| {
@@ -99,7 +107,6 @@ fn benches(c: &mut Criterion) {
     g.bench_function("search_window_1m_20deg", |b| {
         b.iter(|| matcher.search(black_box(&scan), Some(&window)).unwrap())
     });
-    let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
     g.bench_function("relocalize_whole_plan", |b| {
         b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking).unwrap())
     });
