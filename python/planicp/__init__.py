@@ -6,6 +6,8 @@ Quick start::
     plan = planicp.PlanMap.from_points(wall_xy)                  # (N, 2) metres, map frame
     result = planicp.localize(scan_xy, plan, (x, y, yaw))        # scan in the robot frame
     print(result.pose, result.inlier_ratio, result.covariance)
+    found = planicp.relocalize(scan_xy, plan)                     # no guess: ranked candidates
+    print(found.best, found.ambiguous)
 
 Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_map_base.
 """
@@ -27,10 +29,12 @@ from .lost_detection import LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .plan_raster import PlanRaster, resolution_from_pixels
+from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchRegion, relocalize
 from .ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",
+    "Candidate",
     "Degeneracy",
     "DegeneracyRule",
     "EnhancedOccupancyGrid",
@@ -49,10 +53,14 @@ __all__ = [
     "RosMap",
     "PlanicpError",
     "PlanicpInternalError",
+    "Relocalization",
+    "RelocalizationConfig",
+    "SearchRegion",
     "__version__",
     "compare_grids",
     "localize",
     "read_ros_map",
+    "relocalize",
     "resolution_from_pixels",
     "scan_to_points",
     "se2",

@@ -8,15 +8,19 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "MIN_SCAN_POINTS",
     "Alignment",
+    "GlobalMatcher",
     "IcpSettings",
     "LogOddsGrid",
     "OccupancyGrid",
     "PlanicpError",
     "PlanicpInternalError",
     "PointMap",
+    "Relocalization",
+    "RelocalizationCandidate",
     "__version__",
     "_panic_for_tests",
     "align",
+    "relocalize",
 ]
 
 __version__: str
@@ -161,3 +165,76 @@ def align(
     settings: IcpSettings,
 ) -> Alignment: ...
 def _panic_for_tests() -> None: ...
+
+@final
+class GlobalMatcher:
+    """The likelihood pyramid of a plan with the global search settings."""
+
+    def __new__(
+        cls,
+        map: PointMap,
+        resolution: float,
+        sigma: float,
+        levels: int,
+        angular_step: float | None,
+        max_angular_step: float,
+        max_candidates: int,
+        min_score: float,
+        relative_score: float,
+        nms_distance: float,
+        nms_angle: float,
+        max_scan_points: int,
+        max_nodes: int,
+    ) -> GlobalMatcher: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def levels(self) -> int: ...
+    def score_at(self, scan: NDArray[np.float64], pose: tuple[float, float, float]) -> float: ...
+
+@final
+class RelocalizationCandidate:
+    """One refined hypothesis of `relocalize`."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]: ...
+    @property
+    def score(self) -> float: ...
+    @property
+    def search_score(self) -> float: ...
+    @property
+    def search_pose(self) -> tuple[float, float, float]: ...
+    @property
+    def alignment(self) -> Alignment: ...
+
+@final
+class Relocalization:
+    """The raw outcome of `relocalize`."""
+
+    @property
+    def candidates(self) -> list[RelocalizationCandidate]: ...
+    @property
+    def ambiguity(self) -> float: ...
+    @property
+    def ambiguous(self) -> bool: ...
+    @property
+    def rotations(self) -> int: ...
+    @property
+    def angular_step(self) -> float: ...
+    @property
+    def nodes(self) -> int: ...
+    @property
+    def complete(self) -> bool: ...
+    @property
+    def scan_points(self) -> int: ...
+
+def relocalize(
+    matcher: GlobalMatcher,
+    scan: NDArray[np.float64],
+    window: tuple[float, float, float, float, float] | None,
+    settings: IcpSettings,
+    max_candidates: int,
+    ambiguity_margin: float,
+) -> Relocalization: ...

@@ -91,7 +91,6 @@ def _finite_covariance(result: IcpResult) -> NDArray[np.float64]:
     if np.isfinite(cov).all():
         return cov
     sigma2 = result.rmse**2 if math.isfinite(result.rmse) and result.rmse > 0.0 else 1e-4
-    information = np.asarray(result.constraint, dtype=np.float64) / sigma2
-    information = information + np.eye(3) / UNCONSTRAINED_VARIANCE
+    information = np.asarray(result.constraint, dtype=np.float64) / sigma2 + np.eye(3) / UNCONSTRAINED_VARIANCE
     inverse: NDArray[np.float64] = np.linalg.inv(information)
     return (inverse + inverse.T) / 2.0

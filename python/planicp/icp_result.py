@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from . import _core
 from ._validation import Pose
 from .se2 import pose_to_matrix
 
@@ -45,6 +46,25 @@ class IcpResult:
     constraint: NDArray[np.float64]
     inlier_mask: NDArray[np.bool_]
     num_target_points: int
+
+    @classmethod
+    def from_alignment(cls, raw: _core.Alignment, covariance_scale: float) -> IcpResult:
+        """The result of a native alignment, its covariance scaled by `covariance_scale`
+        (`IcpConfig.covariance_scale`)."""
+        mask = raw.inlier_mask
+        mask.setflags(write=False)
+        return cls(
+            pose=raw.pose,
+            converged=raw.converged,
+            iterations=raw.iterations,
+            num_inliers=raw.num_inliers,
+            inlier_ratio=raw.inlier_ratio,
+            rmse=raw.rmse,
+            covariance=raw.covariance * covariance_scale,
+            constraint=raw.constraint,
+            inlier_mask=np.asarray(mask),
+            num_target_points=raw.num_target_points,
+        )
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802 (frame-explicit name)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
 
 from . import _core
 from ._validation import as_pose, as_points
@@ -41,20 +40,7 @@ def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig |
     points = as_points(scan_xy, "scan_xy")
     pose = as_pose(initial_pose, "initial_pose")
     raw = _core.align(plan._native, points, pose, config._native)
-    mask = raw.inlier_mask
-    mask.setflags(write=False)
-    return IcpResult(
-        pose=raw.pose,
-        converged=raw.converged,
-        iterations=raw.iterations,
-        num_inliers=raw.num_inliers,
-        inlier_ratio=raw.inlier_ratio,
-        rmse=raw.rmse,
-        covariance=raw.covariance * config.covariance_scale,
-        constraint=raw.constraint,
-        inlier_mask=np.asarray(mask),
-        num_target_points=raw.num_target_points,
-    )
+    return IcpResult.from_alignment(raw, config.covariance_scale)
 
 
 _DEFAULT: IcpConfig | None = None

@@ -18,6 +18,9 @@
 //! - [`termination`]: when an ICP stage stops.
 //! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
 //! - [`icp`]: the trimmed, coarse-to-fine ICP loop and its configuration and result.
+//! - [`likelihood_field`]: the plan as a likelihood raster with max-pooled levels.
+//! - [`global_search`]: correlative branch-and-bound search for a pose with no initial guess.
+//! - [`relocalization`]: global search candidates refined by ICP, ranked, with their ambiguity.
 //! - [`covariance`]: the pose covariance of a finished alignment.
 //! - [`error`]: every way the core can refuse its input.
 
@@ -28,11 +31,14 @@ pub mod cell_traversal;
 pub mod correspondence;
 pub mod covariance;
 pub mod error;
+pub mod global_search;
 pub mod icp;
+pub mod likelihood_field;
 pub mod log_odds_grid;
 pub mod point_map;
 pub mod pose;
 pub mod ray_casting;
+pub mod relocalization;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;

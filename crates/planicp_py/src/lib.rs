@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
 
+mod global_search;
 mod log_odds_grid;
 
 create_exception!(
@@ -67,8 +68,8 @@ fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyAr
 
 /// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster.
 #[pyclass(frozen, module = "planicp._core", name = "PointMap")]
-struct PyPointMap {
-    inner: Arc<PointMap>,
+pub(crate) struct PyPointMap {
+    pub(crate) inner: Arc<PointMap>,
 }
 
 #[pymethods]
@@ -125,8 +126,8 @@ impl PyPointMap {
 
 /// Validated ICP settings (see `planicp.IcpConfig` for their meaning).
 #[pyclass(frozen, module = "planicp._core")]
-struct IcpSettings {
-    inner: IcpConfig,
+pub(crate) struct IcpSettings {
+    pub(crate) inner: IcpConfig,
 }
 
 #[pymethods]
@@ -169,8 +170,8 @@ impl IcpSettings {
 
 /// The raw outcome of `align`; `planicp.IcpResult` wraps it.
 #[pyclass(frozen, module = "planicp._core")]
-struct Alignment {
-    inner: IcpResult,
+pub(crate) struct Alignment {
+    pub(crate) inner: IcpResult,
 }
 
 #[pymethods]
@@ -258,6 +259,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Alignment>()?;
     m.add_class::<OccupancyGrid>()?;
     m.add_class::<log_odds_grid::LogOddsGrid>()?;
+    m.add_class::<global_search::GlobalMatcher>()?;
+    m.add_class::<global_search::Relocalization>()?;
+    m.add_class::<global_search::RelocalizationCandidate>()?;
+    m.add_function(wrap_pyfunction!(global_search::relocalize, m)?)?;
     m.add_function(wrap_pyfunction!(align, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())

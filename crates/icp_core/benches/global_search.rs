@@ -1,0 +1,117 @@
+//! Criterion benches of global relocalization: building the likelihood pyramid, the
+//! branch-and-bound search over the whole plan, and the whole relocalization (search plus ICP
+//! refinement of every candidate).
+//!
+//! The test case is the office floor of `alignment.rs` (40 x 25 m, rooms along a corridor, 0.2 m
+//! thick walls with both faces sampled every 5 cm) and a 1081-point scan from inside a room with
+//! 1.5 cm noise. Run `cargo bench --bench global_search`; compare numbers within one run only.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use icp_core::global_search::{GlobalMatcher, GlobalSearchConfig, SearchWindow};
+use icp_core::relocalization::{relocalize, RankingConfig};
+use icp_core::{IcpConfig, PointMap, Pose2};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+use std::time::Duration;
+
+/// Both faces of an axis-aligned wall from `a` to `b` (thickness 0.2 m), points every 5 cm.
+fn wall(points: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
+    let horizontal = (a[1] - b[1]).abs() < 1e-9;
+    let len = if horizontal { (b[0] - a[0]).abs() } else { (b[1] - a[1]).abs() };
+    let n = (len / 0.05).round() as usize;
+    for i in 0..=n {
+        let t = i as f64 / n as f64;
+        let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        if horizontal {
+            points.push([p[0], p[1] - 0.1]);
+            points.push([p[0], p[1] + 0.1]);
+        } else {
+            points.push([p[0] - 0.1, p[1]]);
+            points.push([p[0] + 0.1, p[1]]);
+        }
+    }
+}
+
+/// A 40 x 25 m office: outer walls, a corridor at y 11..13.5, eight rooms with 1 m doors.
+fn office() -> Vec<[f64; 2]> {
+    let mut pts = Vec::new();
+    wall(&mut pts, [0.0, 0.0], [40.0, 0.0]);
+    wall(&mut pts, [0.0, 25.0], [40.0, 25.0]);
+    wall(&mut pts, [0.0, 0.0], [0.0, 25.0]);
+    wall(&mut pts, [40.0, 0.0], [40.0, 25.0]);
+    for (y, far) in [(11.0, 0.0), (13.5, 25.0)] {
+        let mut x = 0.0;
+        for k in 0..4 {
+            let x1 = 10.0 * (k + 1) as f64;
+            wall(&mut pts, [x, y], [x + 4.0, y]);
+            wall(&mut pts, [x + 5.0, y], [x1, y]);
+            if k < 3 {
+                wall(&mut pts, [x1, y], [x1, far]);
+            }
+            x = x1;
+        }
+    }
+    pts
+}
+
+/// A noisy 1081-point scan from `pose` (robot frame): plan points visible from the pose, jittered
+/// along and across the wall.
+fn scan(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
+    let vis = map.visible_from(pose, 30.0).unwrap();
+    let inv = pose.inverse();
+    (0..1081)
+        .map(|_| {
+            let i = vis[rng.random_range(0..vis.len())] as usize;
+            let q = map.points()[i];
+            let n = map.normals()[i];
+            let along = rng.random_range(-0.025..0.025);
+            let across = rng.random_range(-0.015..0.015);
+            inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
+        })
+        .collect()
+}
+
+fn benches(c: &mut Criterion) {
+    let map = PointMap::new(office(), None).unwrap();
+    // In a room, looking towards its door: the corridor and the room tell the place apart.
+    let truth = Pose2::new(6.0, 5.0, 1.2);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let scan = scan(&map, truth, &mut rng);
+    let config = GlobalSearchConfig::default();
+    let matcher = GlobalMatcher::new(&map, config.clone()).unwrap();
+    let found = matcher.search(&scan, None).unwrap();
+    eprintln!(
+        "whole-plan search: {} rotations, {} nodes, complete {}, best {:?}",
+        found.rotations,
+        found.nodes,
+        found.complete,
+        found.candidates.first()
+    );
+
+    // The office's rooms are alike: the result should say so rather than pick one with confidence.
+    let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
+    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking).unwrap();
+    for c in &out.candidates {
+        eprintln!("candidate {:?} inlier ratio {:.3}", c.pose, c.score);
+    }
+    eprintln!("ambiguity {:.3}, ambiguous {}", out.ambiguity, out.ambiguous);
+
+    let mut g = c.benchmark_group("global_search_office_40x25");
+    g.sample_size(10).measurement_time(Duration::from_secs(10));
+    g.bench_function("build_pyramid", |b| {
+        b.iter(|| GlobalMatcher::new(black_box(&map), config.clone()).unwrap())
+    });
+    g.bench_function("search_whole_plan", |b| b.iter(|| matcher.search(black_box(&scan), None).unwrap()));
+    let window = SearchWindow { center: Pose2::new(6.5, 4.6, 1.4), half_width: 1.0, half_angle: 0.35 };
+    g.bench_function("search_window_1m_20deg", |b| {
+        b.iter(|| matcher.search(black_box(&scan), Some(&window)).unwrap())
+    });
+    g.bench_function("relocalize_whole_plan", |b| {
+        b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(global_search, benches);
+criterion_main!(global_search);

@@ -1,0 +1,750 @@
+//! Global scan matching with no initial guess: a correlative search with branch and bound.
+//!
+//! The fast correlative scan matcher of Olson (2009), as in Cartographer's
+//! `FastCorrelativeScanMatcher2D` (Hess et al. 2016):
+//! 1. The scan is thinned on a voxel grid of the search resolution (at most `max_scan_points`).
+//! 2. Rotations are swept at a step that moves the far scan points by about one cell
+//!    (`acos(1 - res^2 / (2 r^2))`, `r` the 95th percentile of the scan's ranges).
+//! 3. For each rotation, translations on the cell lattice of the window are searched by branch
+//!    and bound over the [`LikelihoodPyramid`]: a node covering a `2^h x 2^h` block of
+//!    translations is bounded by the mean of the level-`h` values under the scan's cells, which no
+//!    translation in the block can beat. All rotations share one priority queue: the node with
+//!    the highest bound is expanded next (best first, so leaves come out best first), and nodes
+//!    whose bound cannot enter the list of the best candidates are dropped. The queue holds at
+//!    most `max_nodes` nodes (20 bytes each).
+//! 4. The best `max_candidates` leaves that are distinct (farther apart than `nms_distance` metres
+//!    or `nms_angle` radians) are kept (non-maximum suppression), with their score: the mean
+//!    likelihood of the scan's points, i.e. the share of them the plan explains (0..1). Leaves
+//!    below `relative_score` times the best score are no rivals and are pruned too.
+//!
+//! The result is a set of hypotheses on a `resolution` lattice; [`crate::relocalization`] refines
+//! them with ICP and ranks them.
+
+use crate::error::{check_finite, invalid, IcpError, Result};
+use crate::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
+use crate::point_map::PointMap;
+use crate::pose::{wrap_angle, Pose2};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::f64::consts::PI;
+
+/// Fewest scan points (after the voxel thinning) a global search accepts.
+pub const MIN_SEARCH_POINTS: usize = 10;
+
+/// Most rotations one search may sweep.
+pub const MAX_ROTATIONS: usize = 20_000;
+
+/// Settings of the global search. Distances in metres, angles in radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GlobalSearchConfig {
+    /// Cell size of the likelihood field and of the translation lattice.
+    pub resolution: f64,
+    /// Width of the likelihood Gaussian around each wall.
+    pub sigma: f64,
+    /// Pyramid levels; the coarsest block is `2^(levels-1)` cells wide.
+    pub levels: usize,
+    /// Rotation step; `None`: from the resolution and the scan's extent (see the module docs).
+    pub angular_step: Option<f64>,
+    /// Largest automatic rotation step.
+    pub max_angular_step: f64,
+    /// Most candidates returned.
+    pub max_candidates: usize,
+    /// Candidates scoring below this (share of scan points explained, 0..1) are not returned.
+    pub min_score: f64,
+    /// Candidates scoring below this share of the best candidate's score are not returned either:
+    /// they are no rivals of the best, and pruning them early is what keeps large plans fast.
+    pub relative_score: f64,
+    /// Two poses closer than this in position and `nms_angle` in heading are the same candidate.
+    pub nms_distance: f64,
+    /// See `nms_distance`.
+    pub nms_angle: f64,
+    /// The scan is thinned to at most this many points.
+    pub max_scan_points: usize,
+    /// Budget of scored search nodes; the search stops there and says it is incomplete.
+    pub max_nodes: u64,
+}
+
+impl Default for GlobalSearchConfig {
+    fn default() -> Self {
+        Self {
+            resolution: 0.1,
+            sigma: 0.1,
+            levels: 7,
+            angular_step: None,
+            max_angular_step: 2f64.to_radians(),
+            max_candidates: 8,
+            min_score: 0.2,
+            relative_score: 0.8,
+            nms_distance: 1.0,
+            nms_angle: 20f64.to_radians(),
+            max_scan_points: 200,
+            max_nodes: 4_000_000,
+        }
+    }
+}
+
+fn positive_finite(name: &'static str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(name, v, "must be a positive finite number"))
+    }
+}
+
+impl GlobalSearchConfig {
+    /// Checks every value; the error names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        positive_finite("resolution", self.resolution)?;
+        positive_finite("sigma", self.sigma)?;
+        if !(1..=MAX_LEVELS).contains(&self.levels) {
+            return Err(invalid("levels", self.levels, "must be between 1 and 12"));
+        }
+        if let Some(step) = self.angular_step {
+            positive_finite("angular_step", step)?;
+        }
+        positive_finite("max_angular_step", self.max_angular_step)?;
+        if self.max_candidates == 0 {
+            return Err(invalid("max_candidates", 0, "must be at least 1"));
+        }
+        if !(self.min_score.is_finite() && (0.0..1.0).contains(&self.min_score)) {
+            return Err(invalid("min_score", self.min_score, "must be in [0, 1)"));
+        }
+        if !(self.relative_score.is_finite() && (0.0..=1.0).contains(&self.relative_score)) {
+            return Err(invalid("relative_score", self.relative_score, "must be in [0, 1]"));
+        }
+        positive_finite("nms_distance", self.nms_distance)?;
+        positive_finite("nms_angle", self.nms_angle)?;
+        if self.max_scan_points < MIN_SEARCH_POINTS {
+            return Err(invalid("max_scan_points", self.max_scan_points, "must be at least 10"));
+        }
+        if self.max_nodes == 0 {
+            return Err(invalid("max_nodes", 0, "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Where to search: positions within `half_width` metres (a square) of `center` and headings
+/// within `half_angle` radians of its yaw (`>= pi`: every heading).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SearchWindow {
+    /// Centre of the window, `T_map_base`.
+    pub center: Pose2,
+    /// Half the side of the square of positions, metres.
+    pub half_width: f64,
+    /// Half the range of headings, radians.
+    pub half_angle: f64,
+}
+
+impl SearchWindow {
+    /// Checks the window.
+    pub fn validate(&self) -> Result<()> {
+        if !self.center.is_finite() {
+            return Err(invalid("window center", format!("{:?}", self.center), "must be finite"));
+        }
+        check_finite("window center", &[[self.center.x, self.center.y]])?;
+        if !(self.half_width.is_finite() && self.half_width >= 0.0) {
+            return Err(invalid("window half_width", self.half_width, "must be a finite number >= 0 metres"));
+        }
+        if !(self.half_angle.is_finite() && self.half_angle >= 0.0) {
+            return Err(invalid(
+                "window half_angle",
+                self.half_angle,
+                "must be a finite number >= 0 radians",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One hypothesis of the search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// `T_map_base` on the search lattice.
+    pub pose: Pose2,
+    /// Mean likelihood of the thinned scan's points at `pose`, 0..1.
+    pub score: f64,
+}
+
+/// What a search found and what it cost.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchOutcome {
+    /// Distinct candidates, best first.
+    pub candidates: Vec<Candidate>,
+    /// Rotations swept.
+    pub rotations: usize,
+    /// Rotation step used, radians.
+    pub angular_step: f64,
+    /// Search nodes scored.
+    pub nodes: u64,
+    /// False when `max_nodes` stopped the search before it proved its candidates the best.
+    pub complete: bool,
+    /// Scan points used after thinning.
+    pub scan_points: usize,
+}
+
+/// The likelihood pyramid of a plan with the search settings; built once, searched many times.
+#[derive(Debug, Clone)]
+pub struct GlobalMatcher {
+    pyramid: LikelihoodPyramid,
+    config: GlobalSearchConfig,
+    /// Plan bounding box: lower and upper corners.
+    bounds: [[f64; 2]; 2],
+}
+
+/// A search node: a `2^level` block of translations from `(ix, iy)` at one rotation.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    rotation: u32,
+    ix: i32,
+    iy: i32,
+    level: u8,
+    score: f32,
+}
+
+/// Queue order: higher bound first; among equal bounds the finer node first (reaches leaves).
+impl Ord for Node {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.score.total_cmp(&other.score).then(other.level.cmp(&self.level))
+    }
+}
+
+impl PartialOrd for Node {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for Node {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Node {}
+
+/// The scan's cells at one rotation, for the window's centre translation.
+struct RotatedScan {
+    yaw: f64,
+    cells: Vec<[i64; 2]>,
+}
+
+/// The best distinct leaves so far.
+struct BestList {
+    entries: Vec<Candidate>,
+    capacity: usize,
+    floor: f64,
+    relative: f64,
+    nms_distance: f64,
+    nms_angle: f64,
+}
+
+impl BestList {
+    /// A node must score above this to matter.
+    fn threshold(&self) -> f64 {
+        let Some(best) = self.entries.first() else {
+            return self.floor;
+        };
+        let mut t = self.floor.max(self.relative * best.score);
+        if self.entries.len() >= self.capacity {
+            t = t.max(self.entries.last().map_or(0.0, |e| e.score));
+        }
+        t
+    }
+
+    fn same_place(&self, a: &Pose2, b: &Pose2) -> bool {
+        (a.x - b.x).hypot(a.y - b.y) < self.nms_distance && wrap_angle(a.yaw - b.yaw).abs() < self.nms_angle
+    }
+
+    fn insert(&mut self, c: Candidate) {
+        if let Some(i) = self.entries.iter().position(|e| self.same_place(&e.pose, &c.pose)) {
+            if c.score <= self.entries[i].score {
+                return;
+            }
+            self.entries[i] = c;
+            // The better pose may now also cover other, weaker entries.
+            let keep: Vec<Candidate> = self
+                .entries
+                .iter()
+                .enumerate()
+                .filter(|&(j, e)| j == i || !self.same_place(&e.pose, &c.pose))
+                .map(|(_, e)| *e)
+                .collect();
+            self.entries = keep;
+        } else {
+            self.entries.push(c);
+        }
+        self.entries.sort_by(|a, b| b.score.total_cmp(&a.score));
+        self.entries.truncate(self.capacity);
+        let cut = self.relative * self.entries[0].score;
+        self.entries.retain(|e| e.score >= cut);
+    }
+}
+
+impl GlobalMatcher {
+    /// Builds the likelihood pyramid of `map`'s wall points.
+    pub fn new(map: &PointMap, config: GlobalSearchConfig) -> Result<Self> {
+        config.validate()?;
+        let pyramid = LikelihoodPyramid::new(map.points(), config.resolution, config.sigma, config.levels)?;
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in map.points() {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        Ok(Self { pyramid, config, bounds: [lo, hi] })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &GlobalSearchConfig {
+        &self.config
+    }
+
+    /// The likelihood pyramid.
+    pub fn pyramid(&self) -> &LikelihoodPyramid {
+        &self.pyramid
+    }
+
+    /// Mean likelihood (level 0) of the scan's points (robot frame) at `pose`, 0..1.
+    pub fn score_at(&self, scan: &[[f64; 2]], pose: Pose2) -> f64 {
+        if scan.is_empty() {
+            return 0.0;
+        }
+        let sum: f64 = scan.iter().map(|p| self.pyramid.value_at(pose.transform_point(*p))).sum();
+        sum / scan.len() as f64
+    }
+
+    /// Thins `scan` (robot frame, metres) to one point per cell, then to at most
+    /// `max_scan_points` by an even stride.
+    pub fn thin_scan(&self, scan: &[[f64; 2]]) -> Result<Vec<[f64; 2]>> {
+        if scan.is_empty() {
+            return Err(IcpError::Empty { what: "scan" });
+        }
+        check_finite("scan", scan)?;
+        let res = self.config.resolution;
+        let mut keyed: Vec<((i64, i64), usize)> = scan
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (((p[0] / res).floor() as i64, (p[1] / res).floor() as i64), i))
+            .collect();
+        keyed.sort_unstable();
+        keyed.dedup_by_key(|k| k.0);
+        let mut kept: Vec<usize> = keyed.into_iter().map(|(_, i)| i).collect();
+        kept.sort_unstable();
+        if kept.len() < MIN_SEARCH_POINTS {
+            return Err(IcpError::TooFewPoints {
+                what: "scan (one point per search cell)",
+                got: kept.len(),
+                need: MIN_SEARCH_POINTS,
+            });
+        }
+        let stride = kept.len().div_ceil(self.config.max_scan_points);
+        Ok(kept.into_iter().step_by(stride).map(|i| scan[i]).collect())
+    }
+
+    /// The rotation step for `points`: far points move by about one cell per step.
+    fn angular_step(&self, points: &[[f64; 2]]) -> f64 {
+        if let Some(step) = self.config.angular_step {
+            return step.min(PI);
+        }
+        let mut ranges: Vec<f64> = points.iter().map(|p| p[0].hypot(p[1])).collect();
+        let k = (ranges.len() * 95 / 100).min(ranges.len() - 1);
+        let (_, r, _) = ranges.select_nth_unstable_by(k, f64::total_cmp);
+        let r = r.max(self.config.resolution);
+        let res = self.config.resolution;
+        let step = (1.0 - res * res / (2.0 * r * r)).clamp(-1.0, 1.0).acos();
+        step.min(self.config.max_angular_step)
+    }
+
+    /// Searches the whole plan (`window` `None`) or a window for the poses that best explain
+    /// `scan` (points in the robot frame, metres).
+    pub fn search(&self, scan: &[[f64; 2]], window: Option<&SearchWindow>) -> Result<SearchOutcome> {
+        if let Some(w) = window {
+            w.validate()?;
+        }
+        let points = self.thin_scan(scan)?;
+        let res = self.config.resolution;
+        let step = self.angular_step(&points);
+        let (center, half_cells, yaws) = match window {
+            None => {
+                let [lo, hi] = self.bounds;
+                let center = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
+                let half = [((hi[0] - lo[0]) / 2.0 / res).ceil(), ((hi[1] - lo[1]) / 2.0 / res).ceil()];
+                (center, half, full_circle(step))
+            }
+            Some(w) => {
+                let half = (w.half_width / res).ceil();
+                let yaws = if w.half_angle >= PI {
+                    full_circle(step)
+                } else {
+                    let m = (w.half_angle / step).ceil() as i64;
+                    let n = (2 * m + 1) as usize;
+                    if n > MAX_ROTATIONS {
+                        return Err(rotations_error(n));
+                    }
+                    let d = if m > 0 { w.half_angle / m as f64 } else { 0.0 };
+                    Ok((-m..=m).map(|k| w.center.yaw + k as f64 * d).collect())
+                };
+                ([w.center.x, w.center.y], [half, half], yaws)
+            }
+        };
+        let yaws = yaws?;
+        // The lattice must fit in i32 offsets and in the node budget's meaning.
+        if !(half_cells[0] < 1e8 && half_cells[1] < 1e8) {
+            return Err(invalid(
+                "window half_width",
+                half_cells[0].max(half_cells[1]) * res,
+                "is too large for the search lattice; search a smaller window",
+            ));
+        }
+        let (wx, wy) = (half_cells[0] as i32, half_cells[1] as i32);
+        let rotated: Vec<RotatedScan> = yaws
+            .iter()
+            .map(|&yaw| {
+                let pose = Pose2::new(center[0], center[1], yaw);
+                let cells = points.iter().map(|p| self.pyramid.cell_of(pose.transform_point(*p))).collect();
+                RotatedScan { yaw, cells }
+            })
+            .collect();
+        let mut search = Search {
+            pyramid: &self.pyramid,
+            rotated: &rotated,
+            inv_n: 1.0 / (255.0 * points.len() as f32),
+            limits: [wx, wy],
+            nodes: 0,
+            max_nodes: self.config.max_nodes,
+            complete: true,
+            best: BestList {
+                entries: Vec::new(),
+                capacity: self.config.max_candidates,
+                floor: self.config.min_score,
+                relative: self.config.relative_score,
+                nms_distance: self.config.nms_distance,
+                nms_angle: self.config.nms_angle,
+            },
+            center,
+            res,
+        };
+        let top = self.config.levels - 1;
+        let block = 1i32 << top;
+        let mut roots = Vec::new();
+        for r in 0..rotated.len() {
+            let mut ix = -wx;
+            while ix <= wx {
+                let mut iy = -wy;
+                while iy <= wy {
+                    roots.push(search.node(r as u32, ix, iy, top));
+                    iy += block;
+                }
+                ix += block;
+            }
+        }
+        search.branch(roots);
+        Ok(SearchOutcome {
+            candidates: search.best.entries,
+            rotations: rotated.len(),
+            angular_step: step,
+            nodes: search.nodes,
+            complete: search.complete,
+            scan_points: points.len(),
+        })
+    }
+}
+
+fn rotations_error(n: usize) -> IcpError {
+    invalid(
+        "angular_step",
+        format!("{n} rotations"),
+        "would sweep more than 20000 rotations; give a larger step",
+    )
+}
+
+/// Headings `k * step'` around the circle, `step'` the largest divisor of 2 pi not above `step`.
+fn full_circle(step: f64) -> Result<Vec<f64>> {
+    let n = (2.0 * PI / step).ceil().max(1.0);
+    if n > MAX_ROTATIONS as f64 {
+        return Err(rotations_error(n as usize));
+    }
+    let n = n as usize;
+    Ok((0..n).map(|k| wrap_angle(k as f64 * 2.0 * PI / n as f64)).collect())
+}
+
+/// State of one branch-and-bound run.
+struct Search<'a> {
+    pyramid: &'a LikelihoodPyramid,
+    rotated: &'a [RotatedScan],
+    inv_n: f32,
+    limits: [i32; 2],
+    nodes: u64,
+    max_nodes: u64,
+    complete: bool,
+    best: BestList,
+    center: [f64; 2],
+    res: f64,
+}
+
+impl Search<'_> {
+    /// Scores the node at `level`: the mean of the level's values under the scan's cells.
+    fn node(&mut self, rotation: u32, ix: i32, iy: i32, level: usize) -> Node {
+        self.nodes += 1;
+        let cells = &self.rotated[rotation as usize].cells;
+        let (dx, dy) = (ix as i64, iy as i64);
+        let sum: u32 = cells.iter().map(|c| self.pyramid.get(level, c[0] + dx, c[1] + dy) as u32).sum();
+        Node { rotation, ix, iy, level: level as u8, score: sum as f32 * self.inv_n }
+    }
+
+    /// Best-first expansion from `roots`: the node with the highest bound is expanded next, so
+    /// leaves come out best first and only nodes whose bound beats the threshold are expanded.
+    fn branch(&mut self, roots: Vec<Node>) {
+        let mut queue: BinaryHeap<Node> = roots.into();
+        while let Some(n) = queue.pop() {
+            let threshold = self.best.threshold();
+            if (n.score as f64) <= threshold {
+                return;
+            }
+            if n.level == 0 {
+                let yaw = self.rotated[n.rotation as usize].yaw;
+                let pose = Pose2::new(
+                    self.center[0] + n.ix as f64 * self.res,
+                    self.center[1] + n.iy as f64 * self.res,
+                    yaw,
+                );
+                self.best.insert(Candidate { pose, score: n.score as f64 });
+                continue;
+            }
+            if self.nodes >= self.max_nodes {
+                self.complete = false;
+                return;
+            }
+            let level = n.level as usize - 1;
+            let half = 1i32 << level;
+            for (ox, oy) in [(0, 0), (half, 0), (0, half), (half, half)] {
+                let (ix, iy) = (n.ix + ox, n.iy + oy);
+                if ix <= self.limits[0] && iy <= self.limits[1] {
+                    let child = self.node(n.rotation, ix, iy, level);
+                    if child.score as f64 > threshold {
+                        queue.push(child);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Points every 5 cm along the segment `a`-`b`.
+    pub(crate) fn segment(pts: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let n = (len / 0.05).round().max(1.0) as usize;
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            pts.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    }
+
+    /// An asymmetric floor: a 12 x 8 m hall, an inner wall with a door, a pillar and a diagonal.
+    pub(crate) fn asymmetric_floor() -> Vec<[f64; 2]> {
+        let mut p = Vec::new();
+        for (a, b) in [
+            ([0.0, 0.0], [12.0, 0.0]),
+            ([12.0, 0.0], [12.0, 8.0]),
+            ([12.0, 8.0], [0.0, 8.0]),
+            ([0.0, 8.0], [0.0, 0.0]),
+            ([5.0, 0.0], [5.0, 3.0]),
+            ([5.0, 4.2], [5.0, 8.0]),
+            ([8.0, 5.0], [8.6, 5.0]),
+            ([8.6, 5.0], [8.6, 5.6]),
+            ([8.6, 5.6], [8.0, 5.6]),
+            ([8.0, 5.6], [8.0, 5.0]),
+            ([0.0, 6.0], [2.0, 8.0]),
+            ([9.0, 0.0], [9.0, 2.0]),
+        ] {
+            segment(&mut p, a, b);
+        }
+        p
+    }
+
+    /// A 360-degree scan of `n` beams from `pose` (robot frame), ray cast against the segments of
+    /// the plan points' visibility: the visible plan points, resampled to beam directions.
+    pub(crate) fn scan_from(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng, noise: f64) -> Vec<[f64; 2]> {
+        let inv = pose.inverse();
+        map.visible_from(pose, 30.0)
+            .unwrap()
+            .iter()
+            .map(|&i| {
+                let p = inv.transform_point(map.points()[i as usize]);
+                [p[0] + rng.random_range(-noise..=noise), p[1] + rng.random_range(-noise..=noise)]
+            })
+            .collect()
+    }
+
+    fn close(a: &Pose2, b: &Pose2, metres: f64, radians: f64) -> bool {
+        (a.x - b.x).hypot(a.y - b.y) < metres && wrap_angle(a.yaw - b.yaw).abs() < radians
+    }
+
+    #[test]
+    fn finds_the_pose_from_no_guess() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for truth in [Pose2::new(2.5, 2.0, 0.7), Pose2::new(9.5, 6.5, -2.4), Pose2::new(7.0, 3.0, 3.0)] {
+            let scan = scan_from(&map, truth, &mut rng, 0.01);
+            let out = matcher.search(&scan, None).unwrap();
+            assert!(out.complete);
+            let best = out.candidates[0];
+            assert!(close(&best.pose, &truth, 0.15, 0.04), "{truth:?}: best {best:?}");
+            assert!(best.score > 0.8, "{best:?}");
+            assert!(out.candidates.windows(2).all(|w| w[0].score >= w[1].score));
+        }
+    }
+
+    #[test]
+    fn branch_and_bound_equals_exhaustive_search() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let cfg = GlobalSearchConfig { max_candidates: 1, ..GlobalSearchConfig::default() };
+        let matcher = GlobalMatcher::new(&map, cfg).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        let truth = Pose2::new(3.0, 5.0, 0.2);
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let window = SearchWindow { center: Pose2::new(3.3, 4.8, 0.25), half_width: 0.6, half_angle: 0.1 };
+        let out = matcher.search(&scan, Some(&window)).unwrap();
+        let best = out.candidates[0];
+        // Exhaustive: every lattice translation at every swept rotation.
+        let points = matcher.thin_scan(&scan).unwrap();
+        let (m, step) = ((0.1 / out.angular_step).ceil() as i64, 0.1 / (0.1 / out.angular_step).ceil());
+        let mut top = 0.0f64;
+        for k in -m..=m {
+            for ix in -6..=6 {
+                for iy in -6..=6 {
+                    let pose =
+                        Pose2::new(3.3 + ix as f64 * 0.1, 4.8 + iy as f64 * 0.1, 0.25 + k as f64 * step);
+                    let s: u32 = points
+                        .iter()
+                        .map(|p| {
+                            let q = Pose2::new(3.3, 4.8, pose.yaw).transform_point(*p);
+                            let c = matcher.pyramid.cell_of(q);
+                            matcher.pyramid.get(0, c[0] + ix, c[1] + iy) as u32
+                        })
+                        .sum();
+                    top = top.max((s as f32 / (255.0 * points.len() as f32)) as f64);
+                }
+            }
+        }
+        assert!((best.score - top).abs() < 1e-5, "bnb {} vs exhaustive {top}", best.score);
+    }
+
+    #[test]
+    fn a_symmetric_room_gives_several_candidates() {
+        let mut pts = Vec::new();
+        for (a, b) in [([0.0, 0.0], [10.0, 0.0]), ([10.0, 0.0], [10.0, 6.0]), ([10.0, 6.0], [0.0, 6.0])] {
+            segment(&mut pts, a, b);
+        }
+        segment(&mut pts, [0.0, 6.0], [0.0, 0.0]);
+        let map = PointMap::new(pts, None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let truth = Pose2::new(3.0, 2.0, 0.4);
+        let scan = scan_from(&map, truth, &mut rng, 0.005);
+        let out = matcher.search(&scan, None).unwrap();
+        assert!(out.candidates.len() >= 2, "{:?}", out.candidates);
+        let mirrored = Pose2::new(7.0, 4.0, 0.4 + PI);
+        let (a, b) = (out.candidates[0], out.candidates[1]);
+        assert!(
+            (close(&a.pose, &truth, 0.15, 0.04) && close(&b.pose, &mirrored, 0.15, 0.04))
+                || (close(&b.pose, &truth, 0.15, 0.04) && close(&a.pose, &mirrored, 0.15, 0.04)),
+            "{a:?} {b:?}"
+        );
+        assert!((a.score - b.score).abs() < 0.05, "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn a_window_restricts_the_search() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(14);
+        let truth = Pose2::new(10.0, 3.5, 1.0);
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let window = SearchWindow { center: Pose2::new(10.4, 3.2, 1.2), half_width: 1.0, half_angle: 0.4 };
+        let out = matcher.search(&scan, Some(&window)).unwrap();
+        let full = matcher.search(&scan, None).unwrap();
+        assert!(out.nodes < full.nodes / 5, "window {} vs whole plan {} nodes", out.nodes, full.nodes);
+        assert!(close(&out.candidates[0].pose, &truth, 0.15, 0.04), "{:?}", out.candidates[0]);
+        for c in &out.candidates {
+            assert!((c.pose.x - 10.4).abs() <= 1.05 && (c.pose.y - 3.2).abs() <= 1.05, "{c:?}");
+            assert!(wrap_angle(c.pose.yaw - 1.2).abs() <= 0.4 + 1e-9, "{c:?}");
+        }
+        // A window that excludes the truth finds nothing as good.
+        let away = SearchWindow { center: Pose2::new(2.0, 2.0, -2.0), half_width: 0.5, half_angle: 0.1 };
+        let out = matcher.search(&scan, Some(&away)).unwrap();
+        assert!(out.candidates.iter().all(|c| c.score < full.candidates[0].score - 0.2));
+    }
+
+    #[test]
+    fn the_node_budget_makes_the_search_incomplete() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let cfg = GlobalSearchConfig { max_nodes: 1, ..GlobalSearchConfig::default() };
+        let matcher = GlobalMatcher::new(&map, cfg).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(15);
+        let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
+        let out = matcher.search(&scan, None).unwrap();
+        assert!(!out.complete);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let good: Vec<[f64; 2]> =
+            (0..50).map(|i| [(i as f64 * 0.3).cos() * 3.0, (i as f64 * 0.3).sin()]).collect();
+        assert_eq!(matcher.search(&[], None).unwrap_err(), IcpError::Empty { what: "scan" });
+        let mut nan = good.clone();
+        nan[7][1] = f64::NAN;
+        assert_eq!(matcher.search(&nan, None).unwrap_err(), IcpError::NonFinite { what: "scan", row: 7 });
+        assert!(matches!(
+            matcher.search(&[[1.0, 0.0], [1.0, 0.01], [0.0, 2.0]], None),
+            Err(IcpError::TooFewPoints { need: MIN_SEARCH_POINTS, .. })
+        ));
+        for w in [
+            SearchWindow { center: Pose2::new(f64::NAN, 0.0, 0.0), half_width: 1.0, half_angle: 0.1 },
+            SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: -1.0, half_angle: 0.1 },
+            SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1.0, half_angle: f64::INFINITY },
+            SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1e12, half_angle: 0.1 },
+        ] {
+            assert!(
+                matches!(matcher.search(&good, Some(&w)), Err(IcpError::InvalidParameter { .. })),
+                "{w:?}"
+            );
+        }
+        let cfg = GlobalSearchConfig::default();
+        for bad in [
+            GlobalSearchConfig { resolution: 0.0, ..cfg.clone() },
+            GlobalSearchConfig { sigma: f64::NAN, ..cfg.clone() },
+            GlobalSearchConfig { levels: 0, ..cfg.clone() },
+            GlobalSearchConfig { levels: 13, ..cfg.clone() },
+            GlobalSearchConfig { angular_step: Some(-0.1), ..cfg.clone() },
+            GlobalSearchConfig { max_candidates: 0, ..cfg.clone() },
+            GlobalSearchConfig { min_score: 1.0, ..cfg.clone() },
+            GlobalSearchConfig { relative_score: 1.5, ..cfg.clone() },
+            GlobalSearchConfig { nms_distance: 0.0, ..cfg.clone() },
+            GlobalSearchConfig { max_scan_points: 3, ..cfg.clone() },
+            GlobalSearchConfig { max_nodes: 0, ..cfg.clone() },
+        ] {
+            assert!(
+                matches!(GlobalMatcher::new(&map, bad.clone()), Err(IcpError::InvalidParameter { .. })),
+                "{bad:?}"
+            );
+        }
+        let tiny = GlobalSearchConfig { angular_step: Some(1e-6), ..cfg };
+        let m = GlobalMatcher::new(&map, tiny).unwrap();
+        assert!(matches!(
+            m.search(&good, None),
+            Err(IcpError::InvalidParameter { name: "angular_step", .. })
+        ));
+    }
+}

@@ -1,0 +1,189 @@
+//! `planicp._core.GlobalMatcher` and `relocalize`: global relocalization on the plan
+//! (`icp_core::global_search`, `icp_core::relocalization`). `planicp.relocalize` wraps them.
+
+use crate::{guarded, points_from, Alignment, IcpSettings, PyPointMap};
+use icp_core::global_search::{GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchWindow};
+use icp_core::relocalization::{relocalize as core_relocalize, RankingConfig};
+use icp_core::{PointMap, Pose2};
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+use std::sync::Arc;
+
+/// (x, y, yaw) of a pose.
+type PoseTuple = (f64, f64, f64);
+
+fn tuple(p: Pose2) -> PoseTuple {
+    (p.x, p.y, p.yaw)
+}
+
+/// A search window as (x, y, yaw, half_width, half_angle): metres and radians.
+fn window_from(w: Option<(f64, f64, f64, f64, f64)>) -> Option<SearchWindow> {
+    // The yaw as given; the core checks finiteness (Pose2::new would turn NaN into NaN anyway).
+    w.map(|(x, y, yaw, half_width, half_angle)| SearchWindow {
+        center: Pose2 { x, y, yaw },
+        half_width,
+        half_angle,
+    })
+}
+
+/// The likelihood pyramid of a plan with the global search settings (see
+/// `planicp.RelocalizationConfig` for their meaning); built once, searched many times.
+#[pyclass(frozen, module = "planicp._core")]
+pub struct GlobalMatcher {
+    map: Arc<PointMap>,
+    inner: Arc<CoreMatcher>,
+}
+
+#[pymethods]
+impl GlobalMatcher {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (map, resolution, sigma, levels, angular_step, max_angular_step, max_candidates,
+                        min_score, relative_score, nms_distance, nms_angle, max_scan_points, max_nodes))]
+    fn new(
+        py: Python<'_>,
+        map: &PyPointMap,
+        resolution: f64,
+        sigma: f64,
+        levels: usize,
+        angular_step: Option<f64>,
+        max_angular_step: f64,
+        max_candidates: usize,
+        min_score: f64,
+        relative_score: f64,
+        nms_distance: f64,
+        nms_angle: f64,
+        max_scan_points: usize,
+        max_nodes: u64,
+    ) -> PyResult<Self> {
+        let config = GlobalSearchConfig {
+            resolution,
+            sigma,
+            levels,
+            angular_step,
+            max_angular_step,
+            max_candidates,
+            min_score,
+            relative_score,
+            nms_distance,
+            nms_angle,
+            max_scan_points,
+            max_nodes,
+        };
+        let map = Arc::clone(&map.inner);
+        let inner = py.detach(|| guarded(|| CoreMatcher::new(&map, config)))?;
+        Ok(Self { map, inner: Arc::new(inner) })
+    }
+
+    /// (cols, rows) of the likelihood raster.
+    #[getter]
+    fn shape(&self) -> (usize, usize) {
+        self.inner.pyramid().shape()
+    }
+
+    /// Metres per cell of the likelihood raster and the translation lattice.
+    #[getter]
+    fn resolution(&self) -> f64 {
+        self.inner.config().resolution
+    }
+
+    /// Pyramid levels.
+    #[getter]
+    fn levels(&self) -> usize {
+        self.inner.pyramid().num_levels()
+    }
+
+    /// Mean likelihood (0..1) of scan points (N, 2, robot frame) at pose (x, y, yaw).
+    fn score_at(&self, scan: PyReadonlyArray2<'_, f64>, pose: PoseTuple) -> PyResult<f64> {
+        let pts = points_from("scan points", &scan)?;
+        guarded(|| {
+            icp_core::error::check_finite("scan", &pts)?;
+            Ok(self.inner.score_at(&pts, Pose2::new(pose.0, pose.1, pose.2)))
+        })
+    }
+}
+
+/// One refined hypothesis of `relocalize`.
+#[pyclass(frozen, module = "planicp._core")]
+pub struct RelocalizationCandidate {
+    #[pyo3(get)]
+    pose: PoseTuple,
+    #[pyo3(get)]
+    score: f64,
+    #[pyo3(get)]
+    search_score: f64,
+    #[pyo3(get)]
+    search_pose: PoseTuple,
+    #[pyo3(get)]
+    alignment: Py<Alignment>,
+}
+
+/// The raw outcome of `relocalize`; `planicp.Relocalization` wraps it.
+#[pyclass(frozen, module = "planicp._core")]
+pub struct Relocalization {
+    #[pyo3(get)]
+    candidates: Vec<Py<RelocalizationCandidate>>,
+    #[pyo3(get)]
+    ambiguity: f64,
+    #[pyo3(get)]
+    ambiguous: bool,
+    #[pyo3(get)]
+    rotations: usize,
+    #[pyo3(get)]
+    angular_step: f64,
+    #[pyo3(get)]
+    nodes: u64,
+    #[pyo3(get)]
+    complete: bool,
+    #[pyo3(get)]
+    scan_points: usize,
+}
+
+/// Global relocalization of scan points (N, 2, robot frame, metres) on the matcher's plan: over
+/// the whole plan, or within `window` (x, y, yaw, half_width, half_angle). Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (matcher, scan, window, settings, max_candidates, ambiguity_margin))]
+pub fn relocalize(
+    py: Python<'_>,
+    matcher: &GlobalMatcher,
+    scan: PyReadonlyArray2<'_, f64>,
+    window: Option<(f64, f64, f64, f64, f64)>,
+    settings: &IcpSettings,
+    max_candidates: usize,
+    ambiguity_margin: f64,
+) -> PyResult<Relocalization> {
+    let pts = points_from("scan points", &scan)?;
+    let (map, core) = (Arc::clone(&matcher.map), Arc::clone(&matcher.inner));
+    let icp = settings.inner.clone();
+    let ranking = RankingConfig { max_candidates, ambiguity_margin };
+    let window = window_from(window);
+    let out =
+        py.detach(|| guarded(|| core_relocalize(&map, &core, &pts, window.as_ref(), &icp, &ranking)))?;
+    let candidates = out
+        .candidates
+        .into_iter()
+        .map(|c| {
+            let alignment = Py::new(py, Alignment { inner: c.alignment })?;
+            Py::new(
+                py,
+                RelocalizationCandidate {
+                    pose: tuple(c.pose),
+                    score: c.score,
+                    search_score: c.search_score,
+                    search_pose: tuple(c.search_pose),
+                    alignment,
+                },
+            )
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok(Relocalization {
+        candidates,
+        ambiguity: out.ambiguity,
+        ambiguous: out.ambiguous,
+        rotations: out.search.rotations,
+        angular_step: out.search.angular_step,
+        nodes: out.search.nodes,
+        complete: out.search.complete,
+        scan_points: out.search.scan_points,
+    })
+}

@@ -1,0 +1,296 @@
+"""Global relocalization: where is the robot on the plan, with no initial guess?
+
+A correlative scan matcher with branch and bound (Olson 2009; Cartographer's
+`FastCorrelativeScanMatcher2D`) searches every heading and every position of the plan (or of a
+region) for the poses that best explain the scan against a likelihood field of the walls; the best
+distinct hypotheses are refined by ICP and ranked by their inlier ratio. A symmetric building gives
+several candidates that explain the scan equally well: they are all returned, ranked, and the result
+says it is `ambiguous` instead of pretending certainty.
+
+Frames follow REP-103/105: the scan is in the robot (base) frame, poses are T_map_base; metres,
+radians, yaw counter-clockwise.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
+from .icp_config import IcpConfig
+from .icp_result import IcpResult
+from .plan_map import PlanMap
+
+
+@dataclass(frozen=True)
+class RelocalizationConfig:
+    """How `relocalize` searches. Distances in metres, angles in radians.
+
+    Attributes:
+        resolution: cell size of the likelihood field and step of the position lattice. The
+            search only has to land within ICP's reach (a few cells), so 0.1 m is enough.
+        sigma: width of the Gaussian likelihood around each wall (`exp(-d^2 / (2 sigma^2))`).
+        levels: levels of the max-pooled pyramid of branch and bound; the coarsest block is
+            `2^(levels-1)` cells wide (6.4 m at the defaults).
+        angular_step: heading step; None: the step that moves the scan's far points (95th
+            percentile of the ranges) by one cell, at most `max_angular_step`.
+        max_angular_step: largest automatic heading step.
+        search_candidates: distinct hypotheses the search hands to ICP (more than are returned,
+            since refined hypotheses may merge).
+        min_score: hypotheses explaining less than this share of the scan are dropped (0..1).
+        relative_score: hypotheses scoring below this share of the best hypothesis's score are
+            dropped too: they are no rivals, and pruning them early keeps large plans fast.
+        nms_distance, nms_angle: two poses closer than both are one candidate.
+        max_scan_points: the scan is thinned to one point per cell, then to at most this many.
+        max_nodes: budget of scored search nodes; beyond it the search stops and the result says
+            `complete=False`.
+        ambiguity_margin: a runner-up whose inlier ratio is within this share of the best's makes
+            the result ambiguous.
+        icp: settings of the ICP refinement of each hypothesis.
+    """
+
+    resolution: float = 0.1
+    sigma: float = 0.1
+    levels: int = 7
+    angular_step: float | None = None
+    max_angular_step: float = math.radians(2.0)
+    search_candidates: int = 8
+    min_score: float = 0.2
+    relative_score: float = 0.8
+    nms_distance: float = 1.0
+    nms_angle: float = math.radians(20.0)
+    max_scan_points: int = 200
+    max_nodes: int = 4_000_000
+    ambiguity_margin: float = 0.05
+    icp: IcpConfig = field(default_factory=IcpConfig)
+
+    def __post_init__(self) -> None:
+        positive(self.resolution, "resolution", "metres")
+        positive(self.sigma, "sigma", "metres")
+        whole_number(self.levels, "levels", 1, 12)
+        if self.angular_step is not None:
+            positive(self.angular_step, "angular_step", "radians")
+        positive(self.max_angular_step, "max_angular_step", "radians")
+        whole_number(self.search_candidates, "search_candidates", 1, 1000)
+        score = real_number(self.min_score, "min_score")
+        if not 0.0 <= score < 1.0:
+            raise ValueError(f"min_score must be in [0, 1), got {self.min_score!r}")
+        relative = real_number(self.relative_score, "relative_score")
+        if not 0.0 <= relative <= 1.0:
+            raise ValueError(f"relative_score must be in [0, 1], got {self.relative_score!r}")
+        positive(self.nms_distance, "nms_distance", "metres")
+        positive(self.nms_angle, "nms_angle", "radians")
+        whole_number(self.max_scan_points, "max_scan_points", 10, 1 << 24)
+        whole_number(self.max_nodes, "max_nodes", 1, 2**62)
+        margin = real_number(self.ambiguity_margin, "ambiguity_margin")
+        if not 0.0 <= margin < 1.0:
+            raise ValueError(f"ambiguity_margin must be in [0, 1), got {self.ambiguity_margin!r}")
+        if not isinstance(self.icp, IcpConfig):
+            raise TypeError(f"icp must be a planicp.IcpConfig, got {type(self.icp).__name__}")
+
+    def _matcher_key(self) -> tuple[Any, ...]:
+        return (self.resolution, self.sigma, self.levels, self.angular_step, self.max_angular_step,
+                self.search_candidates, self.min_score, self.relative_score, self.nms_distance, self.nms_angle,
+                self.max_scan_points, self.max_nodes)
+
+
+@dataclass(frozen=True)
+class SearchRegion:
+    """A part of the plan to search: positions within `radius` metres (a square of side
+    2 `radius`) of `center`'s (x, y), headings within `yaw_tolerance` radians of its yaw
+    (pi or more: any heading). `center` is a T_map_base pose (x, y, yaw)."""
+
+    center: Pose
+    radius: float = 2.0
+    yaw_tolerance: float = math.pi
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", as_pose(self.center, "region center"))
+        r = real_number(self.radius, "region radius")
+        if not (math.isfinite(r) and r >= 0.0):
+            raise ValueError(f"region radius must be a finite number >= 0 metres, got {self.radius!r}")
+        t = real_number(self.yaw_tolerance, "region yaw_tolerance")
+        if not (math.isfinite(t) and t >= 0.0):
+            raise ValueError(f"region yaw_tolerance must be a finite number >= 0 radians, got {self.yaw_tolerance!r}")
+
+
+@dataclass(frozen=True, repr=False)
+class Candidate:
+    """One place on the plan that explains the scan.
+
+    Attributes:
+        pose: (x, y, yaw) of the robot in the map after ICP (T_map_base): metres, radians.
+        score: the ranking score, the ICP inlier ratio (share of ALL scan points within
+            `max_correspondence_distance` of a visible wall at `pose`), 0..1.
+        inlier_ratio: the same as `score`, by its ICP name.
+        rmse: root mean square distance of the inliers to the plan, metres.
+        search_score: the global search's score of the lattice pose it came from: mean likelihood
+            of the thinned scan's points, 0..1.
+        search_pose: that lattice pose, before ICP.
+        result: the ICP alignment from `search_pose` (covariance, inlier mask, ...).
+    """
+
+    pose: Pose
+    score: float
+    inlier_ratio: float
+    rmse: float
+    search_score: float
+    search_pose: Pose
+    result: IcpResult
+
+    def __repr__(self) -> str:
+        x, y, yaw = self.pose
+        return (f"Candidate(pose=(x={x:.3f} m, y={y:.3f} m, yaw={math.degrees(yaw):.2f} deg), "
+                f"score={self.score:.3f}, rmse={self.rmse * 100:.2f} cm, search_score={self.search_score:.3f})")
+
+
+@dataclass(frozen=True, repr=False)
+class Relocalization:
+    """Outcome of `relocalize`.
+
+    Attributes:
+        candidates: distinct places that explain the scan, best first (empty when nothing
+            explains at least `min_score` of it).
+        ambiguity: the runner-up's score over the best's, 0..1 (0 with fewer than two
+            candidates); near 1, the scan alone cannot tell the places apart.
+        ambiguous: `ambiguity >= 1 - ambiguity_margin`: trust `best` only with other evidence
+            (odometry, a previous pose, more scans).
+        complete: False when the search stopped on its node budget before proving its candidates
+            the best on the lattice.
+        rotations: headings swept; angular_step: their spacing, radians.
+        nodes: search nodes scored; scan_points: scan points used by the search after thinning.
+        seconds: wall-clock time of the call.
+    """
+
+    candidates: tuple[Candidate, ...]
+    ambiguity: float
+    ambiguous: bool
+    complete: bool
+    rotations: int
+    angular_step: float
+    nodes: int
+    scan_points: int
+    seconds: float
+
+    @property
+    def best(self) -> Candidate | None:
+        """The top-ranked candidate, or None when there is none."""
+        return self.candidates[0] if self.candidates else None
+
+    def __repr__(self) -> str:
+        best = self.best
+        where = "none" if best is None else repr(best)
+        return (f"Relocalization(best={where}, candidates={len(self.candidates)}, "
+                f"ambiguity={self.ambiguity:.3f}, ambiguous={self.ambiguous}, complete={self.complete}, "
+                f"{self.seconds * 1000:.0f} ms)")
+
+
+def relocalize(
+    scan_xy: Any,
+    plan: PlanMap,
+    *,
+    region: SearchRegion | None = None,
+    config: RelocalizationConfig | None = None,
+    max_candidates: int = 5,
+) -> Relocalization:
+    """Finds the robot on the plan from one scan, with no initial guess.
+
+    Args:
+        scan_xy: (N, 2) scan points in the robot (base) frame, metres; see `scan_to_points`.
+            A scan covering a wide angle (a 270- or 360-degree LIDAR) is what makes a place unique.
+        plan: the plan to search.
+        region: search only there (e.g. around the last known pose); None: the whole plan, every
+            heading.
+        config: search settings; None uses `RelocalizationConfig()`.
+        max_candidates: most candidates returned (>= 1).
+
+    Returns:
+        The candidates, ranked, with their ambiguity. The likelihood pyramid of a plan is built on
+        the first call and reused for the next calls with the same plan and settings.
+
+    Raises:
+        TypeError: an argument of the wrong type.
+        ValueError: a malformed scan (shape, NaN/inf, fewer than 10 distinct points), region or
+            setting.
+
+    The GIL is released while the search runs.
+    """
+    start = time.perf_counter()
+    if not isinstance(plan, PlanMap):
+        raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
+    if config is None:
+        config = _default_config()
+    elif not isinstance(config, RelocalizationConfig):
+        raise TypeError(f"config must be a planicp.RelocalizationConfig, got {type(config).__name__}")
+    if region is not None and not isinstance(region, SearchRegion):
+        raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
+    count = whole_number(max_candidates, "max_candidates", 1, 1000)
+    points = as_points(scan_xy, "scan_xy")
+    window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
+    raw = _core.relocalize(_matcher(plan, config), points, window, config.icp._native, count,
+                           float(config.ambiguity_margin))
+    candidates = tuple(_candidate(c, config.icp.covariance_scale) for c in raw.candidates)
+    return Relocalization(
+        candidates=candidates,
+        ambiguity=raw.ambiguity,
+        ambiguous=raw.ambiguous,
+        complete=raw.complete,
+        rotations=raw.rotations,
+        angular_step=raw.angular_step,
+        nodes=raw.nodes,
+        scan_points=raw.scan_points,
+        seconds=time.perf_counter() - start,
+    )
+
+
+def _candidate(raw: _core.RelocalizationCandidate, covariance_scale: float) -> Candidate:
+    a = raw.alignment
+    result = IcpResult.from_alignment(a, covariance_scale)
+    return Candidate(pose=raw.pose, score=raw.score, inlier_ratio=a.inlier_ratio, rmse=a.rmse,
+                     search_score=raw.search_score, search_pose=raw.search_pose, result=result)
+
+
+_CACHE_SIZE = 2
+"""Matchers kept (each holds its plan alive): the last plans and settings used."""
+
+_MATCHERS: OrderedDict[tuple[Any, ...], tuple[_core.PointMap, _core.GlobalMatcher]] = OrderedDict()
+_MATCHERS_LOCK = threading.Lock()
+
+
+def _matcher(plan: PlanMap, config: RelocalizationConfig) -> _core.GlobalMatcher:
+    """The cached matcher of (plan, settings); the entry holds the native plan, so its id stays valid."""
+    key = (id(plan._native), config._matcher_key())
+    with _MATCHERS_LOCK:
+        hit = _MATCHERS.get(key)
+        if hit is not None and hit[0] is plan._native:
+            _MATCHERS.move_to_end(key)
+            return hit[1]
+    c = config
+    matcher = _core.GlobalMatcher(
+        plan._native, float(c.resolution), float(c.sigma), int(c.levels),
+        None if c.angular_step is None else float(c.angular_step), float(c.max_angular_step),
+        int(c.search_candidates), float(c.min_score), float(c.relative_score), float(c.nms_distance), float(c.nms_angle),
+        int(c.max_scan_points), int(c.max_nodes),
+    )
+    with _MATCHERS_LOCK:
+        _MATCHERS[key] = (plan._native, matcher)
+        while len(_MATCHERS) > _CACHE_SIZE:
+            _MATCHERS.popitem(last=False)
+    return matcher
+
+
+_DEFAULT: RelocalizationConfig | None = None
+
+
+def _default_config() -> RelocalizationConfig:
+    global _DEFAULT
+    if _DEFAULT is None:
+        _DEFAULT = RelocalizationConfig()
+    return _DEFAULT
