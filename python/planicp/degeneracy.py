@@ -92,5 +92,6 @@ def _finite_covariance(result: IcpResult) -> NDArray[np.float64]:
         return cov
     sigma2 = result.rmse**2 if math.isfinite(result.rmse) and result.rmse > 0.0 else 1e-4
     information = np.asarray(result.constraint, dtype=np.float64) / sigma2 + np.eye(3) / UNCONSTRAINED_VARIANCE
-    inverse: NDArray[np.float64] = np.linalg.inv(information)
-    return (inverse + inverse.T) / 2.0
+    inverse = np.asarray(np.linalg.inv(information), dtype=np.float64)
+    symmetric: NDArray[np.float64] = (inverse + inverse.T) / 2.0
+    return symmetric
