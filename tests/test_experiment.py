@@ -63,7 +63,7 @@ def test_real_layout_house_expo() -> None:
 def test_without_outlier_rejection_is_worse_and_replay_is_deterministic() -> None:
     plan = load_default_plan()
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=20.0, seed=4))
-    again = replay(plan, recording, IcpConfig())
+    again = replay(plan, recording, IcpConfig.for_tracking())
     np.testing.assert_array_equal(again.estimate, recording.estimate)
     naive = replay(plan, recording, IcpConfig(max_correspondence_distance=50.0, use_visibility=False,
                                               correspondence_schedule=(1.0,)))

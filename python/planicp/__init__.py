@@ -24,10 +24,12 @@ from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .laser_scan import scan_to_points
 from .localize import localize
-from .localizer import AcceptanceGate, Estimate, Localizer
+from .acceptance_gate import AcceptanceGate
+from .localizer import Estimate, Localizer
 from .lost_detection import LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
+from .recovery import RecoveryConfig
 from .plan_raster import PlanRaster, resolution_from_pixels
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchRegion, relocalize
 from .ros_map import RosMap, read_ros_map
@@ -53,6 +55,7 @@ __all__ = [
     "RosMap",
     "PlanicpError",
     "PlanicpInternalError",
+    "RecoveryConfig",
     "Relocalization",
     "RelocalizationConfig",
     "SearchRegion",

@@ -11,7 +11,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _core
-from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
+from ._validation import Pose, as_pose, as_points
+from .acceptance_gate import AcceptanceGate
 from .degeneracy import Degeneracy, DegeneracyRule, fuse_along_weak_axis
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
@@ -19,59 +20,9 @@ from .localize import localize
 from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
+from .recovery import Hypothesis, Recovery, RecoveryConfig
+from .relocalize import Relocalization, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix
-
-
-@dataclass(frozen=True)
-class AcceptanceGate:
-    """When the `Localizer` trusts an ICP result instead of odometry.
-
-    Attributes:
-        require_convergence: reject results whose ICP ran out of iterations. Off by default: a
-            result still creeping by more than the tolerances after `max_iterations` is almost
-            always closer than the odometry prediction (on the Intel log with synthetic drift,
-            requiring convergence rejected 74 % of the scans and lost track); the inlier and jump
-            checks judge the fit instead.
-        min_inliers: fewest scan points within `max_correspondence_distance` of the plan.
-        min_inlier_ratio: smallest share of scan points that are inliers.
-        max_translation_jump: largest correction (metres) of the odometry prediction.
-        max_rotation_jump: largest correction (radians) of the odometry prediction.
-    """
-
-    require_convergence: bool = False
-    min_inliers: int = 30
-    min_inlier_ratio: float = 0.25
-    max_translation_jump: float = 0.5
-    max_rotation_jump: float = math.radians(10.0)
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.require_convergence, bool):
-            raise TypeError(f"require_convergence must be a bool, got {self.require_convergence!r}")
-        whole_number(self.min_inliers, "min_inliers", 0)
-        ratio = real_number(self.min_inlier_ratio, "min_inlier_ratio")
-        if not 0.0 <= ratio <= 1.0:
-            raise ValueError(f"min_inlier_ratio must be in [0, 1], got {ratio!r}")
-        positive(self.max_translation_jump, "max_translation_jump", "metres")
-        positive(self.max_rotation_jump, "max_rotation_jump", "radians")
-
-    def rejection(self, result: IcpResult, predicted: Pose) -> str:
-        """Why `result` is not trusted, or "" when it is."""
-        if self.require_convergence and not result.converged:
-            return f"ICP did not converge in {result.iterations} iterations"
-        if result.num_inliers < self.min_inliers:
-            return f"only {result.num_inliers} inliers (need {self.min_inliers})"
-        if result.inlier_ratio < self.min_inlier_ratio:
-            return f"inlier ratio {result.inlier_ratio:.2f} below {self.min_inlier_ratio:.2f}"
-        dx, dy, dyaw = between(predicted, result.pose)
-        jump = math.hypot(dx, dy)
-        if jump > self.max_translation_jump:
-            return f"correction of {jump:.3f} m exceeds {self.max_translation_jump:.3f} m"
-        if abs(dyaw) > self.max_rotation_jump:
-            return (
-                f"correction of {math.degrees(abs(dyaw)):.2f} deg exceeds "
-                f"{math.degrees(self.max_rotation_jump):.2f} deg"
-            )
-        return ""
 
 
 @dataclass(frozen=True)
@@ -90,8 +41,12 @@ class Estimate:
         degeneracy: the weak axis of an accepted fit that does not fix the position along it
             (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
             there allows), or None.
-        lost: the plan no longer explains the scans (see `LostRule`).
+        lost: the plan no longer explains the scans (see `LostRule`); while lost, the
+            `Recovery` searches the plan for the robot.
         score: mean match score (inlier ratio) over the `LostRule` window.
+        relocalized: this update adopted a pose found by the recovery (`pose` is it).
+        hypotheses: places the recovery is following while lost (more than one: the building is
+            symmetric there and the localizer does not pretend to know which).
     """
 
     pose: Pose
@@ -104,6 +59,8 @@ class Estimate:
     degeneracy: Degeneracy | None
     lost: bool
     score: float
+    relocalized: bool = False
+    hypotheses: tuple[Pose, ...] = ()
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
@@ -127,7 +84,8 @@ class Localizer:
     Along the weak axis of a degenerate fit (`DegeneracyRule`: a long corridor) the pose keeps the
     odometry motion. A covariance is carried along: propagated through each motion with
     `MotionNoise`, replaced by ICP's when a fit is accepted. `LostRule` decides when the scans no
-    longer match the plan (`Estimate.lost`).
+    longer match the plan (`Estimate.lost`); while lost, a `Recovery` searches the whole plan and
+    confirms a place over several scans before the pose jumps there (`Estimate.relocalized`).
 
     Thread-safe: updates are serialised by a lock.
     """
@@ -143,6 +101,7 @@ class Localizer:
         degeneracy: DegeneracyRule | None = None,
         lost_rule: LostRule | None = None,
         initial_covariance: Any = None,
+        recovery: RecoveryConfig | None = None,
     ) -> None:
         """
         Args:
@@ -154,6 +113,7 @@ class Localizer:
             degeneracy: when a fit is degenerate (None: `DegeneracyRule()`).
             lost_rule: when the localizer is lost (None: `LostRule()`).
             initial_covariance: 3x3 covariance of `initial_pose` (None: 10 cm and 5 degrees).
+            recovery: how to find the robot again when lost (None: `RecoveryConfig()`).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -167,6 +127,7 @@ class Localizer:
         self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
+        self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self.config, self.gate)
         self._pose: Pose = as_pose(initial_pose, "initial_pose")
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
@@ -197,6 +158,31 @@ class Localizer:
             self._covariance = new_covariance
             self._last_odom = None
             self._detector.reset()
+            self._recovery.clear()
+
+    def relocalize(self, scan_xy: Any) -> Relocalization:
+        """Searches the whole plan for the robot from one scan (base-frame points, metres), now.
+
+        When the best place is unambiguous and explains at least the recovery's
+        `min_inlier_ratio` of the scan, the pose and covariance jump there and the lost state is
+        cleared. Otherwise the localizer becomes lost and follows the candidates with the next
+        scans until one is confirmed (`Estimate.relocalized`). Returns the search's result.
+        """
+        points = as_points(scan_xy, "scan_xy")
+        config = self._recovery.config
+        with self._lock:
+            found = relocalize(points, self.plan, config=config.search, max_candidates=config.max_hypotheses)
+            best = found.best
+            self._recovery.clear()
+            if best is not None and not found.ambiguous and best.inlier_ratio >= config.min_inlier_ratio:
+                self._pose = best.pose
+                self._covariance = _finite_or(best.result.covariance, self._covariance)
+                self._detector.reset()
+            else:
+                self._recovery.hypotheses = [Hypothesis(c.pose, c.result, 1, c.inlier_ratio) for c in found.candidates
+                                             if c.inlier_ratio >= config.min_inlier_ratio]
+                self._detector.declare_lost()
+            return found
 
     def update(self, scan_xy: Any, odom_pose: Any) -> Estimate:
         """One tracking step.
@@ -226,19 +212,28 @@ class Localizer:
                 degeneracy = self.degeneracy.check(result)
                 if degeneracy is not None:
                     pose, covariance = fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
-                elif np.isfinite(result.covariance).all():
-                    pose, covariance = result.pose, np.array(result.covariance, dtype=np.float64)
                 else:
-                    pose, covariance = result.pose, predicted_covariance
+                    pose, covariance = result.pose, _finite_or(result.covariance, predicted_covariance)
             else:
                 pose, covariance = predicted, predicted_covariance
             accepted = result is not None and reason == ""
             lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
+            relocalized = False
+            if lost and usable >= _core.MIN_SCAN_POINTS:
+                found = self._recovery.step(points, motion, predicted)
+                if found is not None:
+                    pose, result, accepted, relocalized, lost = found.pose, found.result, True, True, False
+                    covariance = _finite_or(found.result.covariance, predicted_covariance)
+                    reason = ""
+                    self._detector.reset()
+            elif not lost:
+                self._recovery.clear()
             self._pose = pose
             self._covariance = covariance
             self._last_odom = odom
+            hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
-                            self._detector.score)
+                            self._detector.score, relocalized, hypotheses)
 
 
 DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))
@@ -258,3 +253,9 @@ def _covariance(value: Any) -> NDArray[np.float64]:
     if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, atol=1e-12) or np.linalg.eigvalsh(cov).min() < 0:
         raise ValueError(f"covariance must be finite, symmetric and positive semi-definite, got {cov.tolist()}")
     return cov
+
+
+def _finite_or(covariance: NDArray[np.float64], fallback: NDArray[np.float64]) -> NDArray[np.float64]:
+    """`covariance` as float64 when it is finite, else `fallback`."""
+    cov = np.asarray(covariance, dtype=np.float64)
+    return cov.copy() if np.isfinite(cov).all() else fallback

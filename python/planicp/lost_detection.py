@@ -63,6 +63,10 @@ class LostDetector:
         full = len(self.scores) >= self.rule.window
         return (full and self.score < self.rule.min_score) or self.rejections >= self.rule.max_rejections
 
+    def declare_lost(self) -> None:
+        """Lost from now until the next `reset` (the robot was reported moved or unknown)."""
+        self.rejections = max(self.rejections, self.rule.max_rejections)
+
     def reset(self) -> None:
         """Forgets the history (after a relocalization or a pose given by the user)."""
         self.scores.clear()

@@ -27,7 +27,8 @@ from ..enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
-from ..localizer import AcceptanceGate, Localizer
+from ..acceptance_gate import AcceptanceGate
+from ..localizer import Localizer
 from ..plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .diff_drive import DiffDriveLimits

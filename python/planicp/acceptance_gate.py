@@ -1,0 +1,62 @@
+"""When the `Localizer` trusts an ICP result instead of the odometry prediction."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ._validation import Pose, positive, real_number, whole_number
+from .icp_result import IcpResult
+from .se2 import between
+
+
+@dataclass(frozen=True)
+class AcceptanceGate:
+    """When the `Localizer` trusts an ICP result instead of odometry.
+
+    Attributes:
+        require_convergence: reject results whose ICP ran out of iterations. Off by default: a
+            result still creeping by more than the tolerances after `max_iterations` is almost
+            always closer than the odometry prediction (on the Intel log with synthetic drift,
+            requiring convergence rejected 74 % of the scans and lost track); the inlier and jump
+            checks judge the fit instead.
+        min_inliers: fewest scan points within `max_correspondence_distance` of the plan.
+        min_inlier_ratio: smallest share of scan points that are inliers.
+        max_translation_jump: largest correction (metres) of the odometry prediction.
+        max_rotation_jump: largest correction (radians) of the odometry prediction.
+    """
+
+    require_convergence: bool = False
+    min_inliers: int = 30
+    min_inlier_ratio: float = 0.25
+    max_translation_jump: float = 0.5
+    max_rotation_jump: float = math.radians(10.0)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.require_convergence, bool):
+            raise TypeError(f"require_convergence must be a bool, got {self.require_convergence!r}")
+        whole_number(self.min_inliers, "min_inliers", 0)
+        ratio = real_number(self.min_inlier_ratio, "min_inlier_ratio")
+        if not 0.0 <= ratio <= 1.0:
+            raise ValueError(f"min_inlier_ratio must be in [0, 1], got {ratio!r}")
+        positive(self.max_translation_jump, "max_translation_jump", "metres")
+        positive(self.max_rotation_jump, "max_rotation_jump", "radians")
+
+    def rejection(self, result: IcpResult, predicted: Pose) -> str:
+        """Why `result` is not trusted, or "" when it is."""
+        if self.require_convergence and not result.converged:
+            return f"ICP did not converge in {result.iterations} iterations"
+        if result.num_inliers < self.min_inliers:
+            return f"only {result.num_inliers} inliers (need {self.min_inliers})"
+        if result.inlier_ratio < self.min_inlier_ratio:
+            return f"inlier ratio {result.inlier_ratio:.2f} below {self.min_inlier_ratio:.2f}"
+        dx, dy, dyaw = between(predicted, result.pose)
+        jump = math.hypot(dx, dy)
+        if jump > self.max_translation_jump:
+            return f"correction of {jump:.3f} m exceeds {self.max_translation_jump:.3f} m"
+        if abs(dyaw) > self.max_rotation_jump:
+            return (
+                f"correction of {math.degrees(abs(dyaw)):.2f} deg exceeds "
+                f"{math.degrees(self.max_rotation_jump):.2f} deg"
+            )
+        return ""
