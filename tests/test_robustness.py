@@ -253,3 +253,53 @@ def test_localizer_covariance_and_reset_validation() -> None:
         with pytest.raises(error, match=message):
             Localizer(plan, (5.0, 1.0, 0.0), initial_covariance=bad)
     np.testing.assert_allclose(localizer.covariance, np.diag([0.04, 0.04, 0.01]))  # unchanged by the failures
+
+
+def test_a_crowd_taking_half_of_the_returns() -> None:
+    """People standing 0.7-3 m around the robot block about half of the beams. Automatic trimming
+    (on for tracking) keeps the error at a centimetre; plain ICP is dragged by the crowd near the
+    walls. (The issue's bar, within 2x of the empty floor's error, is not reached: one scan in 300
+    still locks 16 cm off for a moment; see the README.)"""
+    from planicp import _core, scan_to_points
+
+    plan = load_default_plan()
+    config = ExperimentConfig(duration_s=30.0, seed=2, furnishing=Furnishing(0, 0, 0, 0))
+    recording, world = run_experiment(plan, config)
+    lidar, floor = config.lidar, world.floor
+    grid = _core.OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
+    free = ~floor.occupied()
+    rng = np.random.default_rng(0)
+
+    def crowd(pose: NDArray[np.float64], count: int) -> NDArray[np.float64]:
+        discs: list[tuple[float, float, float]] = []
+        while len(discs) < count:
+            r, a = rng.uniform(0.7, 3.0), rng.uniform(-math.pi, math.pi)
+            x, y = pose[0] + r * math.cos(a), pose[1] + r * math.sin(a)
+            col, row = int((x - floor.origin[0]) / floor.resolution), int((y - floor.origin[1]) / floor.resolution)
+            if 0 <= row < free.shape[0] and 0 <= col < free.shape[1] and free[row, col]:
+                discs.append((x, y, rng.uniform(0.18, 0.25)))
+        return np.array(discs)
+
+    scans: dict[str, list[NDArray[np.float64]]] = {"empty": [], "crowd": []}
+    blocked = []
+    for k, truth in enumerate(recording.truth):
+        sensor = compose(tuple(truth), lidar.mount)
+        args = (sensor, lidar.angle_min, lidar.angle_increment, lidar.beams, lidar.range_min, lidar.range_max)
+        clear = grid.cast(*args, lidar.range_sigma, 0.0, k)
+        crowded = grid.cast(*args, lidar.range_sigma, 0.0, k, crowd(truth, 25))
+        blocked.append(np.mean(crowded < clear - 0.05))
+        for name, ranges in (("empty", clear), ("crowd", crowded)):
+            scans[name].append(scan_to_points(ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min,
+                                              lidar.range_max, sensor_pose=lidar.mount))
+    assert 0.45 < np.mean(blocked) < 0.6
+
+    def rms_error(name: str, config: IcpConfig) -> float:
+        localizer = Localizer(plan, tuple(recording.truth[0]), config)
+        poses = np.array([localizer.update(s, tuple(o)).pose for s, o in zip(scans[name], recording.odometry_in_odom)])
+        return _rms(np.hypot(*(poses[:, :2] - recording.truth[:, :2]).T))
+
+    empty = rms_error("empty", IcpConfig.for_tracking())
+    crowded = rms_error("crowd", IcpConfig.for_tracking())
+    plain = rms_error("crowd", IcpConfig())
+    assert empty < 0.005 and crowded < 0.02, (empty, crowded)
+    assert plain > 3 * crowded, (plain, crowded)
