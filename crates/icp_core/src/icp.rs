@@ -468,7 +468,11 @@ mod tests {
         let initial = Pose2 { x: 1e6, y: 1e6, yaw: -1e9 };
         let res = align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], initial, &IcpConfig::default()).unwrap();
         assert_eq!(res.iterations, 0);
-        assert!(res.pose.yaw > -std::f64::consts::PI && res.pose.yaw <= std::f64::consts::PI, "{:?}", res.pose);
+        assert!(
+            res.pose.yaw > -std::f64::consts::PI && res.pose.yaw <= std::f64::consts::PI,
+            "{:?}",
+            res.pose
+        );
         assert_eq!(res.pose.yaw, crate::pose::wrap_angle(-1e9));
     }
 

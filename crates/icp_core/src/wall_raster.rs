@@ -143,7 +143,10 @@ mod tests {
         // the "every point lies inside its raster" expectation panicked.
         for bad in [f64::NAN, f64::INFINITY, 1e300] {
             let err = WallRaster::new(&[[0.0, 0.0], [1.0, bad]], 0.1).unwrap_err();
-            assert!(matches!(err, IcpError::NonFinite { row: 1, .. } | IcpError::OutOfRange { row: 1, .. }), "{err}");
+            assert!(
+                matches!(err, IcpError::NonFinite { row: 1, .. } | IcpError::OutOfRange { row: 1, .. }),
+                "{err}"
+            );
         }
     }
 
