@@ -602,3 +602,13 @@ def test_native_grid_negative_counts_are_planicp_errors(position: int) -> None:
     args[position] = -1
     with pytest.raises(planicp.PlanicpError, match="must be a non-negative integer"):
         _core.LogOddsGrid(*args)
+
+
+@pytest.mark.parametrize("reader", ["carmen", "g2o"])
+def test_a_broken_zip_log_is_a_value_error(reader: str, tmp_path: Path) -> None:
+    # Found by test_readers_on_garbled_text[g2o]: the zip signature alone escaped as zipfile.BadZipFile.
+    fn, _, suffix = READERS[reader]
+    path = tmp_path / f"log{suffix}"
+    path.write_bytes(b"PK\x03\x04")
+    with pytest.raises(ValueError, match="not one"):
+        fn(path)
