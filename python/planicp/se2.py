@@ -31,16 +31,28 @@ def matrix_to_pose(matrix: NDArray[np.float64]) -> Pose:
     return (float(matrix[0, 2]), float(matrix[1, 2]), math.atan2(matrix[1, 0], matrix[0, 0]))
 
 
+def _triple(pose: Pose, name: str) -> Pose:
+    """`pose` unpacked; TypeError (not IndexError) for anything that is not three values."""
+    try:
+        x, y, yaw = pose
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be an (x, y, yaw) triple, got {pose!r:.80}") from None
+    return x, y, yaw
+
+
 def compose(a: Pose, b: Pose) -> Pose:
     """``a * b``: apply `b`, then `a` (T_A_C = T_A_B * T_B_C)."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap_angle(a[2] + b[2]))
+    ax, ay, ayaw = _triple(a, "a")
+    bx, by, byaw = _triple(b, "b")
+    c, s = math.cos(ayaw), math.sin(ayaw)
+    return (ax + c * bx - s * by, ay + s * bx + c * by, wrap_angle(ayaw + byaw))
 
 
 def inverse(a: Pose) -> Pose:
     """The inverse transform (T_B_A from T_A_B)."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return (-(c * a[0] + s * a[1]), s * a[0] - c * a[1], wrap_angle(-a[2]))
+    x, y, yaw = _triple(a, "a")
+    c, s = math.cos(yaw), math.sin(yaw)
+    return (-(c * x + s * y), s * x - c * y, wrap_angle(-yaw))
 
 
 def between(a: Pose, b: Pose) -> Pose:
@@ -50,7 +62,8 @@ def between(a: Pose, b: Pose) -> Pose:
 
 def transform_points(pose: Pose, points: NDArray[np.float64]) -> NDArray[np.float64]:
     """(N, 2) points mapped by `pose`."""
-    c, s = math.cos(pose[2]), math.sin(pose[2])
+    x, y, yaw = _triple(pose, "pose")
+    c, s = math.cos(yaw), math.sin(yaw)
     rot = np.array([[c, -s], [s, c]])
-    moved: NDArray[np.float64] = points @ rot.T + np.array(pose[:2])
+    moved: NDArray[np.float64] = points @ rot.T + np.array([x, y])
     return moved

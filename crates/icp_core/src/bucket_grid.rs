@@ -106,8 +106,9 @@ impl BucketGrid {
         debug_assert!(radius <= self.cell * (1.0 + 1e-12));
         let r2 = radius * radius;
         let (c, r) = self.coords(q);
-        let (c0, c1) = ((c - 1).max(0), (c + 1).min(self.cols as i64 - 1));
-        let (r0, r1) = ((r - 1).max(0), (r + 1).min(self.rows as i64 - 1));
+        // Saturating: a query far outside a grid of tiny cells has coordinates at the i64 limits.
+        let (c0, c1) = (c.saturating_sub(1).max(0), c.saturating_add(1).min(self.cols as i64 - 1));
+        let (r0, r1) = (r.saturating_sub(1).max(0), r.saturating_add(1).min(self.rows as i64 - 1));
         if c0 > c1 || r0 > r1 {
             return;
         }
@@ -130,6 +131,21 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn a_query_far_outside_a_grid_of_tiny_cells_finds_nothing() {
+        // Found by the core fuzz target `correspondences`: coincident points keep a tiny cell, so
+        // a query a metre away sits at cell i64::MIN/MAX and the neighbour range overflowed.
+        let grid = BucketGrid::new([([1.0, 1.0], 0u32), ([1.0, 1.0], 1)].into_iter(), 2e-300);
+        for q in [[0.0, 0.0], [2.0, 2.0], [-1e300, 1e300], [f64::NAN, 1.0]] {
+            let mut n = 0;
+            grid.for_each_within(q, 1e-300, |_, _, _| n += 1);
+            assert_eq!(n, 0, "{q:?}");
+        }
+        let mut n = 0;
+        grid.for_each_within([1.0, 1.0], 1e-300, |_, _, _| n += 1);
+        assert_eq!(n, 2);
+    }
 
     #[test]
     fn range_query_matches_brute_force() {

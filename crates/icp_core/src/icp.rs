@@ -203,7 +203,9 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     let scan_radius =
         (used.iter().map(|p| p[0] * p[0] + p[1] * p[1]).sum::<f64>() / used.len() as f64).sqrt();
     let stages = config.correspondence_schedule.len();
-    let mut pose = initial;
+    // Wrapped here: a Pose2 built from its public fields may carry any yaw, and a result whose
+    // iterations stop at once (too few pairs) returns it unchanged.
+    let mut pose = Pose2::new(initial.x, initial.y, initial.yaw);
     let mut iterations = 0usize;
     let mut converged = false;
     let mut moved = Vec::with_capacity(used.len());
@@ -474,6 +476,22 @@ mod tests {
         let res = align(&map, &scan, Pose2::new(5.05, 2.05, 0.12), &cfg).unwrap();
         assert_eq!(res.num_inliers, scan.len());
         assert!((res.pose.x - truth.x).abs() < 0.02 && (res.pose.y - truth.y).abs() < 0.02, "{:?}", res.pose);
+    }
+
+    #[test]
+    fn the_result_yaw_is_wrapped_even_when_no_iteration_runs() {
+        // Found by the core fuzz target `align`: an unwrapped initial yaw (-1e9 rad, set through
+        // the public fields) came back as the result's yaw when the scan found no pairs.
+        let map = PointMap::new(rooms(), None).unwrap();
+        let initial = Pose2 { x: 1e6, y: 1e6, yaw: -1e9 };
+        let res = align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], initial, &IcpConfig::default()).unwrap();
+        assert_eq!(res.iterations, 0);
+        assert!(
+            res.pose.yaw > -std::f64::consts::PI && res.pose.yaw <= std::f64::consts::PI,
+            "{:?}",
+            res.pose
+        );
+        assert_eq!(res.pose.yaw, crate::pose::wrap_angle(-1e9));
     }
 
     #[test]

@@ -161,9 +161,15 @@ pub fn estimate_raster_resolution(points: &[[f64; 2]], spacing: f64) -> f64 {
             hi[k] = hi[k].max(p[k]);
         }
     }
-    let area = (hi[0] - lo[0] + 2.0 * resolution) * (hi[1] - lo[1] + 2.0 * resolution);
+    let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+    let area = (w + 2.0 * resolution) * (h + 2.0 * resolution);
     if area / (resolution * resolution) > AUTO_RASTER_MAX_CELLS {
         resolution = (area / AUTO_RASTER_MAX_CELLS).sqrt() * 1.01;
+    }
+    // The raster has up to w / res + 3 cells across each side (margins and rounding), which the
+    // area misses on a thin plan (1e9 m long, a micrometre wide): coarsen until that fits too.
+    while (w / resolution + 3.0) * (h / resolution + 3.0) > AUTO_RASTER_MAX_CELLS {
+        resolution *= 1.25;
     }
     resolution
 }
@@ -222,6 +228,19 @@ mod tests {
             PointMap::with_normals(pts, Some(vec![[f64::NAN, 1.0]; 100]), None),
             Err(IcpError::NonFinite { what: "normals", row: 0 })
         ));
+    }
+
+    #[test]
+    fn a_thin_plan_a_billion_metres_long_gets_a_raster_that_fits() {
+        // Found by the core fuzz target `point_map`: points a nanometre apart along a line, plus
+        // one point 1e9 m away. The area-based estimate gave 6 mm cells (the plan's area is
+        // tiny), i.e. 1.6e11 columns of 3 rows, and the plan was refused although no resolution
+        // had been asked for.
+        let mut pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 1e-9, i as f64 * 1e-9]).collect();
+        pts.push([1e9, 0.0]);
+        let map = PointMap::new(pts, None).unwrap();
+        let (cols, rows) = map.raster().shape();
+        assert!((cols * rows) as f64 <= AUTO_RASTER_MAX_CELLS, "{cols} x {rows}");
     }
 
     #[test]

@@ -33,7 +33,8 @@ pub fn stage_end(stage: usize, stages: usize, max_iterations: usize) -> usize {
     if stage + 1 >= stages {
         max_iterations
     } else {
-        (stage + 1) * max_iterations / stages
+        // In u128: (stage + 1) * max_iterations overflows usize for budgets near usize::MAX.
+        ((stage as u128 + 1) * max_iterations as u128 / stages as u128) as usize
     }
 }
 
@@ -51,6 +52,15 @@ pub fn pair_fingerprint(pairs: &[Pair]) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn huge_budgets_do_not_overflow() {
+        // Found by the fuzz target `pose_and_budget`: (stage + 1) * max_iterations overflowed.
+        assert_eq!(stage_end(1, 3, usize::MAX), (2 * (usize::MAX as u128) / 3) as usize);
+        assert_eq!(stage_end(0, 3, usize::MAX), usize::MAX / 3);
+        assert_eq!(stage_end(2, 3, usize::MAX), usize::MAX);
+        assert_eq!(stage_end(usize::MAX - 2, usize::MAX, usize::MAX), usize::MAX - 1);
+    }
 
     #[test]
     fn zero_tolerances_never_stop_early() {

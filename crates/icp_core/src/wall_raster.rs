@@ -5,7 +5,7 @@
 //! Wall points spaced no more than one cell apart along a wall give an 8-connected chain of wall
 //! cells, which a cell-by-cell ray traversal cannot slip through.
 
-use crate::error::{invalid, IcpError, Result};
+use crate::error::{check_finite, invalid, IcpError, Result};
 
 /// Most cells a raster may have (one byte each plus the point index).
 pub const MAX_RASTER_CELLS: usize = 256 * 1024 * 1024;
@@ -25,6 +25,9 @@ pub struct WallRaster {
 
 impl WallRaster {
     /// Rasterises `points` at `resolution` metres per cell, with a one-cell free margin.
+    ///
+    /// Errors: a resolution that is not positive and finite, no points, a point that is not
+    /// finite or beyond [`crate::error::MAX_COORDINATE`], a raster over [`MAX_RASTER_CELLS`].
     pub fn new(points: &[[f64; 2]], resolution: f64) -> Result<Self> {
         if !(resolution.is_finite() && resolution > 0.0) {
             return Err(invalid(
@@ -36,6 +39,8 @@ impl WallRaster {
         if points.is_empty() {
             return Err(IcpError::Empty { what: "plan" });
         }
+        // A NaN would be skipped by the bounds and then fall outside the raster.
+        check_finite("plan", points)?;
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in points {
             for k in 0..2 {
@@ -131,6 +136,19 @@ impl WallRaster {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn non_finite_points_are_refused_not_a_panic() {
+        // Found by the core fuzz target `wall_raster`: a NaN coordinate escaped the bounds and
+        // the "every point lies inside its raster" expectation panicked.
+        for bad in [f64::NAN, f64::INFINITY, 1e300] {
+            let err = WallRaster::new(&[[0.0, 0.0], [1.0, bad]], 0.1).unwrap_err();
+            assert!(
+                matches!(err, IcpError::NonFinite { row: 1, .. } | IcpError::OutOfRange { row: 1, .. }),
+                "{err}"
+            );
+        }
+    }
 
     #[test]
     fn points_land_in_their_cells() {

@@ -139,17 +139,23 @@ impl IcpSettings {
                         accelerate, visibility_range=None, auto_trim=false))]
     fn new(
         max_correspondence_distance: f64,
-        max_iterations: usize,
+        max_iterations: &Bound<'_, PyAny>,
         trim_ratio: f64,
         translation_tolerance: f64,
         rotation_tolerance: f64,
-        subsample: usize,
+        subsample: &Bound<'_, PyAny>,
         correspondence_schedule: Vec<f64>,
         use_visibility: bool,
         accelerate: bool,
         visibility_range: Option<f64>,
         auto_trim: bool,
     ) -> PyResult<Self> {
+        // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
+        let count = |what: &str, v: &Bound<'_, PyAny>| {
+            unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
+        };
+        let max_iterations = count("max_iterations", max_iterations)?;
+        let subsample = count("subsample", subsample)?;
         let inner = IcpConfig {
             max_correspondence_distance,
             max_iterations,
@@ -278,7 +284,7 @@ struct OccupancyGrid {
 
 /// A non-negative integer below 2**64 (a Python int or anything with `__index__`, e.g. numpy
 /// integers): TypeError for a non-integer, PlanicpError out of range.
-fn unsigned_arg(what: &str, value: &Bound<'_, PyAny>) -> PyResult<u64> {
+pub(crate) fn unsigned_arg(what: &str, value: &Bound<'_, PyAny>) -> PyResult<u64> {
     let out_of_range =
         || PlanicpError::new_err(format!("{what} must be a non-negative integer below 2**64, got {value}"));
     let wide: i128 = value.extract().map_err(|_| {

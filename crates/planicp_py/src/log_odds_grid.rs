@@ -22,16 +22,22 @@ impl LogOddsGrid {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (rows, cols, resolution, origin, hit, miss, min, max, max_cells))]
     fn new(
-        rows: usize,
-        cols: usize,
+        rows: &Bound<'_, PyAny>,
+        cols: &Bound<'_, PyAny>,
         resolution: f64,
         origin: (f64, f64),
         hit: f32,
         miss: f32,
         min: f32,
         max: f32,
-        max_cells: usize,
+        max_cells: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
+        // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
+        let count = |what: &str, v: &Bound<'_, PyAny>| {
+            crate::unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
+        };
+        let (rows, cols, max_cells) =
+            (count("rows", rows)?, count("cols", cols)?, count("max_cells", max_cells)?);
         let model = OccupancyModel { hit, miss, min, max };
         let inner =
             guarded(|| CoreGrid::new(rows, cols, resolution, [origin.0, origin.1], model, max_cells))?;

@@ -30,6 +30,7 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
 
     Raises:
         FileNotFoundError: `path` does not exist.
+        ValueError: a file with a zip signature that is not a readable zip archive.
         TruncatedStream: a gzip stream ends early (after yielding every complete line before it).
     """
     if not path.is_file():
@@ -39,7 +40,11 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
     if magic.startswith(GZIP_MAGIC):
         yield from _lines_of(path, gzip.open(path, "rb"))
     elif magic == ZIP_MAGIC:
-        with zipfile.ZipFile(path) as archive:
+        try:
+            archive = zipfile.ZipFile(path)
+        except zipfile.BadZipFile as exc:
+            raise ValueError(f"{path}: starts like a zip archive but is not one ({exc})") from None
+        with archive:
             members = [n for n in archive.namelist() if not n.startswith("__MACOSX/") and not n.endswith("/")]
             if len(members) != 1:
                 raise ValueError(f"{path}: a zip log must hold exactly one file, found {members}")
