@@ -94,18 +94,47 @@ pub fn pose_covariance(
         return unknown;
     }
     let sigma2 = sum_sq / (m - 3) as f64;
-    match h.try_inverse() {
-        Some(inv)
-            if inv.iter().all(|v| v.is_finite())
-                && inv[(0, 0)] > 0.0
-                && inv[(1, 1)] > 0.0
-                && inv[(2, 2)] > 0.0 =>
-        {
+    match inverse_psd(&h) {
+        Some(inv) => {
             let c = inv * sigma2;
-            PoseUncertainty { covariance: (c + c.transpose()) * 0.5, constraint: h }
+            let c = (c + c.transpose()) * 0.5;
+            if c.iter().all(|v| v.is_finite()) {
+                PoseUncertainty { covariance: c, constraint: h }
+            } else {
+                unknown
+            }
         }
-        _ => unknown,
+        None => unknown,
     }
+}
+
+/// Smallest eigenvalue, relative to the largest, of the rescaled constraint that still counts as
+/// information; below it the direction is unconstrained.
+const MIN_RELATIVE_EIGENVALUE: f64 = 1e-12;
+
+/// The inverse of a symmetric positive semi-definite `h`, or None when a direction has (next to)
+/// no information. `h` mixes units (unitless x, y; metres and square metres for yaw terms, which
+/// reach 1e18 far from the origin), so it is first rescaled to a unit diagonal and inverted through
+/// its eigendecomposition: a plain inverse of a badly conditioned `h` came back finite but not
+/// positive semi-definite.
+fn inverse_psd(h: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let d = Vector3::new(h[(0, 0)], h[(1, 1)], h[(2, 2)]);
+    if !d.iter().all(|v| v.is_finite() && *v > 0.0) {
+        return None;
+    }
+    let scale = d.map(|v| 1.0 / v.sqrt());
+    let s = Matrix3::from_diagonal(&scale);
+    let rescaled = s * h * s;
+    let eigen = nalgebra::SymmetricEigen::new((rescaled + rescaled.transpose()) * 0.5);
+    let largest = eigen.eigenvalues.max();
+    if !(largest.is_finite() && largest > 0.0)
+        || eigen.eigenvalues.iter().any(|&l| !l.is_finite() || l <= largest * MIN_RELATIVE_EIGENVALUE)
+    {
+        return None;
+    }
+    let inverse_values = Matrix3::from_diagonal(&eigen.eigenvalues.map(|l| 1.0 / l));
+    let inv = s * (eigen.eigenvectors * inverse_values * eigen.eigenvectors.transpose()) * s;
+    Some(inv)
 }
 
 #[cfg(test)]
@@ -145,6 +174,32 @@ mod tests {
         // No wall normal points along x; every pair constrains y.
         assert!(constraint[(0, 0)] < 1e-9, "{constraint}");
         assert!((constraint[(1, 1)] - pairs.len() as f64).abs() < 1e-6, "{constraint}");
+    }
+
+    #[test]
+    fn far_from_the_origin_the_covariance_stays_positive_semi_definite() {
+        // Lever arms of 1e8 m make the yaw terms of H about 1e16 times the others: a plain inverse
+        // came back finite with a negative eigenvalue (found by the fuzz target).
+        let mut pts = Vec::new();
+        for i in 0..=100 {
+            let t = i as f64 * 0.05;
+            pts.extend([[1e8 + t, 0.0], [1e8 + t, 5.0], [1e8, t], [1e8 + 5.0, t]]);
+        }
+        let map = PointMap::new(pts.clone(), None).unwrap();
+        let normals = estimate_normals(map.points(), map.tree());
+        let pose = Pose2::new(0.0, 2.5, 0.0);
+        let pairs: Vec<([f64; 2], u32)> = pts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| ([p[0] + if i % 2 == 0 { 0.01 } else { -0.01 }, p[1]], i as u32))
+            .collect();
+        let cov = pose_covariance(&map, &normals, &pose, &pairs).covariance;
+        if cov.iter().all(|v| v.is_finite()) {
+            let eig = nalgebra::SymmetricEigen::new(cov).eigenvalues;
+            assert!(eig.iter().all(|&l| l >= -1e-9 * cov.abs().max()), "{eig}");
+        } else {
+            assert_eq!(cov, Matrix3::from_diagonal_element(f64::INFINITY));
+        }
     }
 
     #[test]

@@ -23,6 +23,10 @@ use crate::error::{check_finite, invalid, IcpError, Result, MAX_COORDINATE};
 /// Finest resolution accepted, metres per cell.
 pub const MIN_RESOLUTION: f64 = 1e-4;
 
+/// How far the grid's cells may reach, metres: points are limited to [`MAX_COORDINATE`], but the
+/// cell holding a point on that limit (or a return moved behind its surface) may end beyond it.
+const EXTENT_LIMIT: f64 = 2.0 * MAX_COORDINATE;
+
 /// Cells added beyond a scan's reach when the grid grows, at least (more on large grids: a
 /// quarter of the current side), so that a robot driving out of the grid does not regrow it on
 /// every scan.
@@ -355,8 +359,14 @@ impl LogOddsGrid {
         let new_cols = (new_last[0] - new_first[0] + 1) as u128;
         let new_rows = (new_last[1] - new_first[1] + 1) as u128;
         let cells = new_cols * new_rows;
-        if cells > self.max_cells as u128 {
-            // Without the padding the scan might still fit: retry with the exact reach.
+        let within = |c: i64| {
+            (self.anchor[0].abs().max(self.anchor[1].abs()) + c.unsigned_abs() as f64 * self.resolution)
+                <= MAX_COORDINATE
+        };
+        let padding_fits = (0..2).all(|a| within(new_first[a]) && within(new_last[a] + 1));
+        if cells > self.max_cells as u128 || !padding_fits {
+            // Without the padding (which may exceed the cell budget or the coordinate limit) the
+            // scan might still fit: retry with the exact reach.
             let exact_cols = (hi[0].max(last[0]) - lo[0].min(self.first[0]) + 1) as u128;
             let exact_rows = (hi[1].max(last[1]) - lo[1].min(self.first[1]) + 1) as u128;
             if exact_cols * exact_rows > self.max_cells as u128 {
@@ -377,7 +387,13 @@ impl LogOddsGrid {
             self.anchor[0] + new_first[0] as f64 * self.resolution,
             self.anchor[1] + new_first[1] as f64 * self.resolution,
         ];
-        check_finite("grown grid extent", &[near, far])?;
+        if !near.iter().chain(&far).all(|v| v.is_finite() && v.abs() <= EXTENT_LIMIT) {
+            return Err(invalid(
+                "grown grid extent",
+                format!("{near:?} to {far:?}"),
+                "must lie within +-2e9 m (points within +-1e9 m)",
+            ));
+        }
         let cols = (new_last[0] - new_first[0] + 1) as usize;
         let rows = (new_last[1] - new_first[1] + 1) as usize;
         let mut cells = vec![Cell::default(); rows * cols];
@@ -523,6 +539,15 @@ mod tests {
         // Growth that fits the budget only without padding is still done.
         g.integrate([0.15, 0.55], &[[1.45, 0.55]], &[], 30.0).unwrap();
         assert_eq!(g.shape(), (10, 15));
+    }
+
+    #[test]
+    fn a_return_on_the_coordinate_limit_is_integrated() {
+        // The cell behind a surface at -1e9 m starts beyond the limit (found by the fuzz target).
+        let mut g = LogOddsGrid::new(20, 20, RES, [-1e9, 0.0], OccupancyModel::default(), 1 << 20).unwrap();
+        g.integrate([-1e9 + 0.5, 1.05], &[[-1e9, 1.05]], &[], 30.0).unwrap();
+        assert_eq!(g.scans(), 1);
+        assert!(g.origin()[0] < -1e9);
     }
 
     #[test]

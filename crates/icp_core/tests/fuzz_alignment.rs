@@ -149,6 +149,9 @@ fn random_config(c: &mut Case) -> IcpConfig {
     if c.coin(p) {
         cfg.trim_ratio = c.special();
     }
+    if c.coin(0.3) {
+        cfg.auto_trim = true;
+    }
     if c.coin(0.2) {
         cfg.translation_tolerance = 0.0;
         cfg.rotation_tolerance = 0.0;
@@ -345,9 +348,11 @@ fn fuzz_covariance_and_normals() {
             })
             .collect();
         c.note(|| format!("pose {pose:?} pairs {pairs:?}"));
-        let cov = pose_covariance(&map, map.normals(), &pose, &pairs);
+        let uncertainty = pose_covariance(&map, map.normals(), &pose, &pairs);
         if pose.is_finite() {
-            check_covariance(&cov)?;
+            check_covariance(&uncertainty.covariance)?;
+            let h = uncertainty.constraint;
+            ensure!(!h.iter().any(|v| v.is_nan()), "NaN in constraint {h}");
         }
         Ok(())
     });
