@@ -528,14 +528,50 @@ def test_readers_on_garbled_text(reader: str) -> None:
     run()
 
 
+@FUZZ
+@given(st.data())
+def test_robustness_api(data: Any) -> None:
+    """DegeneracyRule, LostRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize and
+    Localizer.relocalize/covariance with random settings, scans and poses."""
+    number = st.one_of(values, anything, st.integers(-3, 100))
+    call(planicp.DegeneracyRule, data.draw(number))
+    call(planicp.LostRule, data.draw(number), data.draw(number), data.draw(number))
+    ok, noise = call(planicp.MotionNoise, *[data.draw(number) for _ in range(5)])
+    if ok:
+        ok, cov = call(noise.propagate, np.diag([0.01, 0.01, 0.001]), data.draw(poses), data.draw(poses))
+        if ok:
+            assert cov.shape == (3, 3) and not np.isnan(cov).any()
+    call(planicp.RecoveryConfig, min_inlier_ratio=data.draw(number), confirmations=data.draw(number),
+         margin=data.draw(number), local_radius=data.draw(number))
+    ok, region = call(planicp.SearchRegion, data.draw(poses), data.draw(number), data.draw(number))
+    plan = box_plan()
+    ok_found, found = call(planicp.relocalize, data.draw(scans()), plan, region=region if ok else None,
+                           max_candidates=data.draw(st.one_of(st.integers(-1, 6), anything)))
+    if ok_found:
+        for c in found.candidates:
+            check_pose(c.pose)
+            assert 0.0 <= c.inlier_ratio <= 1.0
+    ok, loc = call(Localizer, plan, data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)), None,
+                   initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)))
+    if ok:
+        before = loc.pose
+        ok, _ = call(loc.relocalize, data.draw(scans()))
+        if not ok:
+            assert loc.pose == before, "a refused relocalize must change nothing"
+        check_pose(loc.pose)
+        assert np.isfinite(loc.covariance).all()
+
+
 def test_every_public_name_is_fuzzed() -> None:
     """A new public name must be added to this file (or here, with a reason)."""
     covered = {"AcceptanceGate", "EnhancedOccupancyGrid", "IcpConfig", "IcpResult", "Localizer", "PlanMap",
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
-               "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels"}
+               "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
+               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
-    elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan"}
+    elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",
+                 "Candidate", "Relocalization", "RelocalizationConfig"}
     assert set(planicp.__all__) <= covered | elsewhere, set(planicp.__all__) - covered - elsewhere
 
 

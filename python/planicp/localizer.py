@@ -22,7 +22,7 @@ from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .relocalize import Relocalization, relocalize
-from .se2 import between, compose, inverse, pose_to_matrix
+from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -128,7 +128,7 @@ class Localizer:
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self.config, self.gate)
-        self._pose: Pose = as_pose(initial_pose, "initial_pose")
+        self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
         self._lock = threading.Lock()
@@ -151,7 +151,7 @@ class Localizer:
     def reset(self, pose: Any, covariance: Any = None) -> None:
         """Sets the pose (e.g. from RViz's initial pose) and its covariance (None: 10 cm and 5
         degrees); the next update's odometry pairs with it, and the lost state is cleared."""
-        new_pose = as_pose(pose, "pose")
+        new_pose = _wrapped(as_pose(pose, "pose"))
         new_covariance = _covariance(covariance)
         with self._lock:
             self._pose = new_pose
@@ -259,3 +259,8 @@ def _finite_or(covariance: NDArray[np.float64], fallback: NDArray[np.float64]) -
     """`covariance` as float64 when it is finite, else `fallback`."""
     cov = np.asarray(covariance, dtype=np.float64)
     return cov.copy() if np.isfinite(cov).all() else fallback
+
+
+def _wrapped(pose: Pose) -> Pose:
+    """`pose` with its yaw wrapped to (-pi, pi], as every pose the localizer reports."""
+    return (pose[0], pose[1], wrap_angle(pose[2]))
