@@ -188,7 +188,9 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
                 farthest + largest_factor * config.max_correspondence_distance
             }
         };
-        let visible = map.visible_from(initial, range)?;
+        // A huge correspondence distance can make the sum overflow; nothing lies beyond a few
+        // times the coordinate limit anyway (found by the fuzz target).
+        let visible = map.visible_from(initial, range.min(4.0 * crate::error::MAX_COORDINATE))?;
         if visible.len() >= MIN_PAIRS {
             TargetSet::subset(map, visible).unwrap_or(TargetSet::Full(map))
         } else {
