@@ -26,7 +26,9 @@ Trackers on each variant, all from the same start pose, the same scans (base fra
 odometry: odometry alone; planicp (`track_log` with the default `Localizer`); the ICP peers of
 `../shared/bench/peers.py` (imported by path) as trackers: initial guess = last pose composed with
 the odometry motion since the last scan, then one alignment to the plan's wall points (max
-correspondence distance 0.25 m, 30 iterations); and MRPT pf-localization (`benches/mrpt_pf.py`).
+correspondence distance 0.25 m, 30 iterations); and MRPT pf-localization (`benches/mrpt_pf.py`;
+3000 particles, run `--mrpt-runs` times since it seeds itself from the clock; its time per scan is
+the filter's own step time from `exec_times.txt`).
 Scored on the scans each variant keeps: translation ATE (RMS), worst error, share of scans over
 0.3 m ("lost"), time per scan. Not a test: pytest does not collect `benches/`.
 """
@@ -70,6 +72,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--max-iter", type=int, default=30)
     p.add_argument("--variants", default="baseline,gap,steps,gap+steps")
     p.add_argument("--no-mrpt", action="store_true")
+    p.add_argument("--mrpt-runs", type=int, default=3,
+                   help="pf-localization runs per variant (it seeds itself from the clock)")
     p.add_argument("--mrpt-dir", type=Path, help="keep MRPT's inputs and outputs here (default: temporary)")
     p.add_argument("--json", type=Path)
     return p.parse_args(argv)
@@ -288,15 +292,16 @@ def main(argv: list[str] | None = None) -> None:
             if mrpt_missing:
                 rows["MRPT pf-localization"] = {"error": mrpt_missing}
             else:
-                with tempfile.TemporaryDirectory() as tmp:
-                    work = (args.mrpt_dir or Path(tmp)) / name.replace("+", "_")
-                    try:
-                        pf = mrpt_pf.run(fs, plan, fs[0].reference, work)
-                        r = score(pf.estimate, fs, float(pf.step_seconds.sum()) if len(pf.step_seconds) else None)
-                        r["wall_seconds"] = pf.wall_seconds
-                        rows["MRPT pf-localization"] = r
-                    except (RuntimeError, subprocess.TimeoutExpired) as exc:
-                        rows["MRPT pf-localization"] = {"error": str(exc)}
+                for run in range(1, args.mrpt_runs + 1):
+                    label = f"MRPT pf-localization #{run}"
+                    with tempfile.TemporaryDirectory() as tmp:
+                        work = (args.mrpt_dir or Path(tmp)) / f"{name.replace('+', '_')}_{run}"
+                        try:
+                            pf = mrpt_pf.run(fs, plan, fs[0].reference, work)
+                            seconds = float(pf.step_seconds.sum()) if len(pf.step_seconds) else None
+                            rows[label] = {**score(pf.estimate, fs, seconds), "wall_seconds": pf.wall_seconds}
+                        except (RuntimeError, subprocess.TimeoutExpired) as exc:
+                            rows[label] = {"error": str(exc)}
         print_table(name, rows, len(fs))
         results[name] = {"scans": len(fs), "trackers": rows}
     if args.json:
