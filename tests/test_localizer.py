@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from planicp import AcceptanceGate, IcpConfig, Localizer, PlanMap, se2
+from planicp.recovery import RecoveryConfig
 from planicp import synthetic as syn
 
 DEG = math.pi / 180.0
@@ -171,11 +172,15 @@ def test_gate_rejects_a_wild_odometry_jump(plan: PlanMap, path: list[Pose], scan
     assert loc.pose == est.predicted_pose
 
 
+GATE_ONLY = RecoveryConfig(local_radius=0.0)
+"""No search around the prediction: the gate's verdict alone (what the gate tests pin down)."""
+
+
 def test_gate_rejects_a_correction_beyond_max_translation_jump(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
     gate = AcceptanceGate(max_translation_jump=0.1)
-    loc = Localizer(plan, path[0], gate=gate)
+    loc = Localizer(plan, path[0], gate=gate, recovery=GATE_ONLY)
     first = loc.update(scans[0], (0.0, 0.0, 0.0))
     assert first.accepted
     # odometry says 35 cm; the robot moved 10 cm: ICP pulls back by ~0.25 m > 0.1 m
@@ -198,7 +203,7 @@ def test_gate_rejects_a_correction_beyond_max_rotation_jump(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
     gate = AcceptanceGate(max_rotation_jump=1 * DEG)
-    loc = Localizer(plan, path[0], gate=gate)
+    loc = Localizer(plan, path[0], gate=gate, recovery=GATE_ONLY)
     first = loc.update(scans[0], (0.0, 0.0, 0.0))
     assert first.accepted
     claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 3 * DEG))
@@ -234,7 +239,7 @@ def test_gate_rejects_non_convergence_only_when_required(
 
 def test_rejection_then_recovery(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
     """After a rejected step the localizer keeps tracking from the prediction with the next scan."""
-    loc = Localizer(plan, path[0], gate=AcceptanceGate(max_translation_jump=0.1))
+    loc = Localizer(plan, path[0], gate=AcceptanceGate(max_translation_jump=0.1), recovery=GATE_ONLY)
     assert loc.update(scans[0], (0.0, 0.0, 0.0)).accepted
     odom1 = se2.compose(se2.between(path[0], path[1]), (0.15, 0.0, 0.0))  # 15 cm slip, rejected
     assert not loc.update(scans[1], odom1).accepted
@@ -271,3 +276,32 @@ def test_first_update_uses_no_motion(plan: PlanMap, path: list[Pose], scans: lis
     est = loc.update(scans[5], (100.0, -100.0, 3.0))
     assert est.predicted_pose == path[5]
     assert est.accepted
+
+
+def test_a_good_fit_beyond_the_gate_is_checked_by_a_search_and_taken(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A bad odometry step (15 deg, beyond the default 10 deg gate): ICP finds the truth, the gate
+    alone would reject it, the search around the prediction confirms it and the pose takes it at once."""
+    loc = Localizer(plan, path[0])
+    assert loc.update(scans[0], (0.0, 0.0, 0.0)).accepted
+    claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG))
+    est = loc.update(scans[1], claimed)
+    assert est.accepted and est.relocalized and est.reason == "", est.reason
+    assert error(path[1], est.pose)[0] < 0.05 and error(path[1], est.pose)[1] < 1 * DEG
+    gate_only = Localizer(plan, path[0], recovery=GATE_ONLY)
+    gate_only.update(scans[0], (0.0, 0.0, 0.0))
+    est = gate_only.update(scans[1], claimed)
+    assert not est.accepted and "deg exceeds 10.00 deg" in est.reason, est.reason
+
+
+def test_an_uncertain_prediction_is_searched_around(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A prediction 1 m off whose covariance says so (3 sigma = 1.2 m, as after odometry over a long
+    gap in the scans): the plan is searched around it instead of trusting ICP's nearest fit."""
+    off = se2.compose(path[0], (0.7, -0.7, 8 * DEG))
+    wide = np.diag([0.4**2, 0.4**2, (5 * DEG) ** 2])
+    est = Localizer(plan, off, initial_covariance=wide).update(scans[0], (0.0, 0.0, 0.0))
+    assert est.accepted and est.relocalized, est.reason
+    assert error(path[0], est.pose)[0] < 0.05 and error(path[0], est.pose)[1] < 1 * DEG

@@ -44,12 +44,20 @@ class AcceptanceGate:
 
     def rejection(self, result: IcpResult, predicted: Pose) -> str:
         """Why `result` is not trusted, or "" when it is."""
+        return self.fit_rejection(result) or self.jump_rejection(result, predicted)
+
+    def fit_rejection(self, result: IcpResult) -> str:
+        """Why the fit itself is not trusted (convergence, inliers), or "" when it is."""
         if self.require_convergence and not result.converged:
             return f"ICP did not converge in {result.iterations} iterations"
         if result.num_inliers < self.min_inliers:
             return f"only {result.num_inliers} inliers (need {self.min_inliers})"
         if result.inlier_ratio < self.min_inlier_ratio:
             return f"inlier ratio {result.inlier_ratio:.2f} below {self.min_inlier_ratio:.2f}"
+        return ""
+
+    def jump_rejection(self, result: IcpResult, predicted: Pose) -> str:
+        """Why the correction of `predicted` is too large to trust, or "" when it is not."""
         dx, dy, dyaw = between(predicted, result.pose)
         jump = math.hypot(dx, dy)
         if jump > self.max_translation_jump:

@@ -21,7 +21,7 @@ from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
-from .relocalize import Relocalization, relocalize
+from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
 
 
@@ -44,7 +44,8 @@ class Estimate:
         lost: the plan no longer explains the scans (see `LostRule`); while lost, the
             `Recovery` searches the plan for the robot.
         score: mean match score (inlier ratio) over the `LostRule` window.
-        relocalized: this update adopted a pose found by the recovery (`pose` is it).
+        relocalized: this update adopted a pose found by a search of the plan (`pose` is it): by
+            the recovery while lost, or around a prediction the acceptance gate cannot vouch for.
         hypotheses: places the recovery is following while lost (more than one: the building is
             symmetric there and the localizer does not pretend to know which).
     """
@@ -86,6 +87,16 @@ class Localizer:
     `MotionNoise`, replaced by ICP's when a fit is accepted. `LostRule` decides when the scans no
     longer match the plan (`Estimate.lost`); while lost, a `Recovery` searches the whole plan and
     confirms a place over several scans before the pose jumps there (`Estimate.relocalized`).
+
+    The gate's jump limits are the span ICP is trusted to correct from the prediction. Beyond it,
+    a fit is neither taken nor dismissed on ICP's word alone: when the gate rejects a good fit only
+    for the size of its correction (a bad odometry step), or when the prediction's own 3-sigma
+    position uncertainty exceeds the translation limit (odometry integrated over a long gap in the
+    scans: ICP's position basin is about its correspondence distance, while its heading converges
+    from well beyond the rotation limit, so position is what makes a prediction a poor start), the
+    plan is searched around the prediction (the recovery's `local_radius`, any heading) and an
+    unambiguous place that explains at least the recovery's `min_inlier_ratio` of the scan is
+    adopted at once, when it explains the scan better than the fit from the prediction.
 
     Thread-safe: updates are serialised by a lock.
     """
@@ -207,6 +218,12 @@ class Localizer:
             else:
                 result = localize(points, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
+            searched = False
+            if result is not None and not self._detector.lost and self._needs_search(result, reason,
+                                                                                      predicted_covariance):
+                found_near = self._search_near(points, predicted, result if reason == "" else None)
+                if found_near is not None:
+                    result, reason, searched = found_near, "", True
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
                 degeneracy = self.degeneracy.check(result)
@@ -218,7 +235,7 @@ class Localizer:
                 pose, covariance = predicted, predicted_covariance
             accepted = result is not None and reason == ""
             lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
-            relocalized = False
+            relocalized = searched
             if lost and usable >= _core.MIN_SCAN_POINTS:
                 found = self._recovery.step(points, motion, predicted)
                 if found is not None:
@@ -234,6 +251,33 @@ class Localizer:
             hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses)
+
+    def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
+        """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a
+        prediction whose 3-sigma position uncertainty exceeds the translation limit."""
+        if self._recovery.config.local_radius <= 0.0:
+            return False
+        if reason != "" and self.gate.fit_rejection(result) == "":
+            return True
+        sigma_xy = math.sqrt(max(float(np.linalg.eigvalsh(predicted_covariance[:2, :2]).max()), 0.0))
+        return 3.0 * sigma_xy > self.gate.max_translation_jump
+
+    def _search_near(self, points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None) -> IcpResult | None:
+        """The fit at the unambiguous best place around `predicted`, when it explains at least the
+        recovery's `min_inlier_ratio` of the scan and (if the fit from the prediction was
+        acceptable, `accepted`) more of it than that fit by the recovery's `margin`; else None."""
+        config = self._recovery.config
+        found = relocalize(points, self.plan, region=SearchRegion(predicted, config.local_radius, math.pi),
+                           config=config.search, max_candidates=config.max_hypotheses)
+        best = found.best
+        if best is None or found.ambiguous or best.inlier_ratio < config.min_inlier_ratio:
+            return None
+        refined = localize(points, self.plan, best.pose, self.config)
+        if self.gate.rejection(refined, best.pose) or refined.inlier_ratio < config.min_inlier_ratio:
+            return None
+        if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
+            return None
+        return refined
 
 
 DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))
