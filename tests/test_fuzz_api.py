@@ -535,6 +535,7 @@ def test_robustness_api(data: Any) -> None:
     Localizer.relocalize/covariance with random settings, scans and poses."""
     number = st.one_of(values, anything, st.integers(-3, 100))
     call(planicp.DegeneracyRule, data.draw(number))
+    call(planicp.ContinuityRule, data.draw(number), data.draw(number), data.draw(number))
     call(planicp.LostRule, data.draw(number), data.draw(number), data.draw(number))
     ok, noise = call(planicp.MotionNoise, *[data.draw(number) for _ in range(5)])
     if ok:
@@ -567,7 +568,8 @@ def test_every_public_name_is_fuzzed() -> None:
     covered = {"AcceptanceGate", "EnhancedOccupancyGrid", "IcpConfig", "IcpResult", "Localizer", "PlanMap",
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
                "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
-               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize"}
+               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize",
+               "ContinuityRule"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
     elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",

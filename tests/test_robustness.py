@@ -303,3 +303,37 @@ def test_a_crowd_taking_half_of_the_returns() -> None:
     plain = rms_error("crowd", IcpConfig())
     assert empty < 0.005 and crowded < 0.02, (empty, crowded)
     assert plain > 3 * crowded, (plain, crowded)
+
+
+def test_clutter_is_not_mistaken_for_a_kidnap() -> None:
+    """On a generated floor with diagonal walls the robot crosses places where the plan explains
+    only a fifth of the scans. Before the continuity check the localizer declared itself lost there
+    and adopted a wrong place 2-6 m away that explained more of the clutter."""
+    from planicp import synthetic
+
+    floor = synthetic.generate_floor(11, "diagonal")
+    plan = PlanMap.from_raster(PlanRaster(floor.walls[::-1], floor.resolution, (floor.origin[0], floor.origin[1], 0.0)))
+    for seed in (0, 3):
+        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=seed))
+        error = np.hypot(*(recording.estimate[:, :2] - recording.truth[:, :2]).T)
+        assert error.max() < 0.05, (seed, error.max())
+        assert np.nanmin(recording.inlier_ratio) < 0.25  # the clutter is there
+
+
+def test_continuity_rule() -> None:
+    from planicp import ContinuityRule
+
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=6.0, seed=6))
+    rule = ContinuityRule()
+    motion = between(tuple(recording.odometry_in_odom[10]), tuple(recording.odometry_in_odom[12]))
+    assert rule.continues(recording.scans[12], recording.scans[10], motion)
+    far = np.argmax(np.hypot(*(recording.truth[:, :2] - recording.truth[10, :2]).T))
+    assert math.dist(recording.truth[far, :2], recording.truth[10, :2]) > 1.0
+    moved = between(tuple(recording.odometry_in_odom[far]), tuple(recording.odometry_in_odom[far]))
+    assert not rule.continues(recording.scans[far], recording.scans[10], moved)  # as if nothing moved
+    assert not rule.continues(np.zeros((2, 2)), recording.scans[10], motion)
+    with pytest.raises(ValueError, match="min_overlap"):
+        ContinuityRule(min_overlap=0.0)
+    with pytest.raises(ValueError, match="max_correction"):
+        ContinuityRule(max_correction=-1.0)

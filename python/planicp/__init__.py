@@ -31,12 +31,14 @@ from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import RecoveryConfig
 from .plan_raster import PlanRaster, resolution_from_pixels
+from .scan_continuity import ContinuityRule
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchRegion, relocalize
 from .ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",
     "Candidate",
+    "ContinuityRule",
     "Degeneracy",
     "DegeneracyRule",
     "EnhancedOccupancyGrid",

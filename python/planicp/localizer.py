@@ -21,6 +21,7 @@ from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
+from .scan_continuity import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
 
@@ -85,7 +86,9 @@ class Localizer:
     Along the weak axis of a degenerate fit (`DegeneracyRule`: a long corridor) the pose keeps the
     odometry motion. A covariance is carried along: propagated through each motion with
     `MotionNoise`, replaced by ICP's when a fit is accepted. `LostRule` decides when the scans no
-    longer match the plan (`Estimate.lost`); while lost, a `Recovery` searches the whole plan and
+    longer match the plan (`Estimate.lost`); a scan rejected because the plan explains too little of
+    it does not count towards that while it continues the previous scan (`ContinuityRule`: clutter,
+    not a kidnapped robot). While lost, a `Recovery` searches the whole plan and
     confirms a place over several scans before the pose jumps there (`Estimate.relocalized`).
 
     The gate's jump limits are the span ICP is trusted to correct from the prediction. Beyond it,
@@ -113,6 +116,7 @@ class Localizer:
         lost_rule: LostRule | None = None,
         initial_covariance: Any = None,
         recovery: RecoveryConfig | None = None,
+        continuity: ContinuityRule | None = None,
     ) -> None:
         """
         Args:
@@ -125,6 +129,9 @@ class Localizer:
             lost_rule: when the localizer is lost (None: `LostRule()`).
             initial_covariance: 3x3 covariance of `initial_pose` (None: 10 cm and 5 degrees).
             recovery: how to find the robot again when lost (None: `RecoveryConfig()`).
+            continuity: when a scan the plan explains too little of still continues the previous
+                scan (clutter, not a kidnapped robot: it does not count towards `lost`; None:
+                `ContinuityRule()`).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -137,11 +144,14 @@ class Localizer:
         self.gate = gate if gate is not None else AcceptanceGate()
         self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
+        self.continuity = continuity if continuity is not None else ContinuityRule()
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self.config, self.gate)
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
+        # The last scan the plan explained, with its odometry pose.
+        self._anchor: tuple[NDArray[np.float64], Pose] | None = None
         self._lock = threading.Lock()
 
     @property
@@ -168,6 +178,7 @@ class Localizer:
             self._pose = new_pose
             self._covariance = new_covariance
             self._last_odom = None
+            self._anchor = None
             self._detector.reset()
             self._recovery.clear()
 
@@ -224,6 +235,21 @@ class Localizer:
                 found_near = self._search_near(points, predicted, result if reason == "" else None)
                 if found_near is not None:
                     result, reason, searched = found_near, "", True
+            # A fit the plan explains poorly (rejected for its fit, or accepted with a score below
+            # the lost rule's) is checked against the last scan the plan explained well: if the
+            # scan continues it, the robot is among clutter and nothing is concluded; if not, the
+            # fit is not trusted and counts towards being lost. (Against the last well explained
+            # scan, not simply the previous one: after a kidnap the second scan continues the first
+            # one elsewhere.)
+            continues: bool | None = None
+            poor = result is not None and (
+                (reason != "" and self.gate.fit_rejection(result) != "")
+                or (reason == "" and result.inlier_ratio < self._detector.rule.min_score))
+            if poor and result is not None and not self._detector.lost and self._anchor is not None:
+                continues = self.continuity.continues(points, self._anchor[0], between(self._anchor[1], odom))
+                if not continues and reason == "":
+                    reason = (f"the plan explains only {100 * result.inlier_ratio:.0f} % of the scan and it does not "
+                              f"continue the last scan the plan explained")
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
                 degeneracy = self.degeneracy.check(result)
@@ -234,7 +260,10 @@ class Localizer:
             else:
                 pose, covariance = predicted, predicted_covariance
             accepted = result is not None and reason == ""
-            lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
+            if continues:
+                lost = self._detector.hold()
+            else:
+                lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
             relocalized = searched
             if lost and usable >= _core.MIN_SCAN_POINTS:
                 found = self._recovery.step(points, motion, predicted)
@@ -248,6 +277,8 @@ class Localizer:
             self._pose = pose
             self._covariance = covariance
             self._last_odom = odom
+            if accepted and (continues or not poor):
+                self._anchor = (points, odom)
             hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses)
@@ -306,5 +337,7 @@ def _finite_or(covariance: NDArray[np.float64], fallback: NDArray[np.float64]) -
 
 
 def _wrapped(pose: Pose) -> Pose:
-    """`pose` with its yaw wrapped to (-pi, pi], as every pose the localizer reports."""
-    return (pose[0], pose[1], wrap_angle(pose[2]))
+    """`pose` with its yaw wrapped to (-pi, pi], as every pose the localizer reports (a yaw already
+    in range is kept exactly)."""
+    yaw = pose[2]
+    return (pose[0], pose[1], yaw if -math.pi < yaw <= math.pi else wrap_angle(yaw))

@@ -20,7 +20,11 @@ class LostRule:
 
     Attributes:
         window: scans the score is averaged over (>= 1).
-        min_score: lowest acceptable mean score, in [0, 1].
+        min_score: lowest acceptable mean score, in [0, 1]. The `Localizer` checks every scan
+            scoring below it against the last well explained scan (`ContinuityRule`): a scan
+            that continues it is clutter and does not count (in a cluttered room the plan may
+            explain only a third of the scans while every fit is sound); one that does not is
+            not trusted.
         max_rejections: rejections in a row that mean lost (>= 1).
     """
 
@@ -43,6 +47,11 @@ class LostDetector:
     rule: LostRule = field(default_factory=LostRule)
     scores: deque[float] = field(default_factory=deque)
     rejections: int = 0
+
+    def hold(self) -> bool:
+        """A scan that tells nothing about being lost (rejected in clutter, but continuing the
+        previous scan): the state is kept. Returns whether lost."""
+        return self.lost
 
     def update(self, score: float, accepted: bool) -> bool:
         """Adds one scan's score (NaN counts as 0) and acceptance; returns whether lost."""
