@@ -50,10 +50,10 @@ class IcpConfig:
         covariance_scale: factor applied to the point-to-wall covariance `sigma^2 H^-1`, which
             treats every residual as independent. Neighbouring beams see the same stretch of wall
             and the plan is sampled on a lattice, so the raw covariance is optimistic: over 11,943
-            accepted estimates on four simulated floors (`benches/covariance_calibration.py`) its
-            normalised estimation error squared (NEES) averaged 9.1 instead of 3. The default 3
-            brings the mean to 3.1 (1.4 to 5.8 per floor), with 90 % of the estimates inside the
-            chi-square 95 % bound.
+            accepted tracking estimates on four simulated floors
+            (`benches/covariance_calibration.py`) its normalised estimation error squared (NEES)
+            averaged 6.8 instead of 3. The default 3 brings the mean to 2.3 (0.9 to 5.4 per
+            floor), with 92.7 % of the estimates inside the chi-square 95 % bound.
     """
 
     max_correspondence_distance: float = 0.25
