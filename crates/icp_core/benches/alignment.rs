@@ -15,45 +15,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 
-/// Both faces of an axis-aligned wall from `a` to `b` (thickness 0.2 m), points every 5 cm.
-fn wall(points: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
-    let horizontal = (a[1] - b[1]).abs() < 1e-9;
-    let len = if horizontal { (b[0] - a[0]).abs() } else { (b[1] - a[1]).abs() };
-    let n = (len / 0.05).round() as usize;
-    for i in 0..=n {
-        let t = i as f64 / n as f64;
-        let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-        if horizontal {
-            points.push([p[0], p[1] - 0.1]);
-            points.push([p[0], p[1] + 0.1]);
-        } else {
-            points.push([p[0] - 0.1, p[1]]);
-            points.push([p[0] + 0.1, p[1]]);
-        }
-    }
-}
+mod common;
 
-/// A 40 x 25 m office: outer walls, a corridor at y 11..13.5, eight rooms with 1 m doors.
-fn office() -> Vec<[f64; 2]> {
-    let mut pts = Vec::new();
-    wall(&mut pts, [0.0, 0.0], [40.0, 0.0]);
-    wall(&mut pts, [0.0, 25.0], [40.0, 25.0]);
-    wall(&mut pts, [0.0, 0.0], [0.0, 25.0]);
-    wall(&mut pts, [40.0, 0.0], [40.0, 25.0]);
-    for (y, far) in [(11.0, 0.0), (13.5, 25.0)] {
-        let mut x = 0.0;
-        for k in 0..4 {
-            let x1 = 10.0 * (k + 1) as f64;
-            wall(&mut pts, [x, y], [x + 4.0, y]);
-            wall(&mut pts, [x + 5.0, y], [x1, y]);
-            if k < 3 {
-                wall(&mut pts, [x1, y], [x1, far]);
-            }
-            x = x1;
-        }
-    }
-    pts
-}
+use common::office;
 
 /// A noisy 1080-beam scan from `pose` (robot frame): plan points visible from the pose, jittered
 /// along and across the wall, thinned to 1080 points.

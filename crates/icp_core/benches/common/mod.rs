@@ -1,12 +1,16 @@
-//! The office floor shared by the ray casting and occupancy grid benches: 40 x 25 m, 0.2 m thick
-//! walls, eight rooms along a corridor (the floor of the `alignment` bench), rasterised at 5 cm.
+//! The office floor every bench uses: 40 x 25 m, 0.2 m thick walls, eight rooms along a corridor,
+//! as wall-surface points every 5 cm ([`office`]) and as an occupancy raster at 5 cm
+//! ([`office_raster`]).
+
+// Each bench compiles this module on its own and uses only part of it.
+#![allow(dead_code)]
 
 use icp_core::ray_casting::OccupancyRaster;
 
 /// Raster resolution, metres per cell.
 pub const RES: f64 = 0.05;
 
-/// Walls of the `alignment` bench's office as (a, b) centre lines, 0.2 m thick.
+/// Walls of the office as (a, b) centre lines, 0.2 m thick.
 fn office_walls() -> Vec<([f64; 2], [f64; 2])> {
     let mut walls = vec![
         ([0.0, 0.0], [40.0, 0.0]),
@@ -47,4 +51,31 @@ pub fn office_raster() -> OccupancyRaster {
         }
     }
     OccupancyRaster::new(cells, rows, cols, RES, origin).unwrap()
+}
+
+/// Both faces of an axis-aligned wall from `a` to `b` (thickness 0.2 m), points every 5 cm.
+fn wall(points: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
+    let horizontal = (a[1] - b[1]).abs() < 1e-9;
+    let len = if horizontal { (b[0] - a[0]).abs() } else { (b[1] - a[1]).abs() };
+    let n = (len / 0.05).round() as usize;
+    for i in 0..=n {
+        let t = i as f64 / n as f64;
+        let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        if horizontal {
+            points.push([p[0], p[1] - 0.1]);
+            points.push([p[0], p[1] + 0.1]);
+        } else {
+            points.push([p[0] - 0.1, p[1]]);
+            points.push([p[0] + 0.1, p[1]]);
+        }
+    }
+}
+
+/// The office as wall-surface points: both faces of every wall, every 5 cm.
+pub fn office() -> Vec<[f64; 2]> {
+    let mut pts = Vec::new();
+    for (a, b) in office_walls() {
+        wall(&mut pts, a, b);
+    }
+    pts
 }
