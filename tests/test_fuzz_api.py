@@ -536,6 +536,7 @@ def test_robustness_api(data: Any) -> None:
     number = st.one_of(values, anything, st.integers(-3, 100))
     call(planicp.DegeneracyRule, data.draw(number))
     call(planicp.ContinuityRule, data.draw(number), data.draw(number), data.draw(number))
+    call(planicp.OcclusionRule, data.draw(number), data.draw(number), data.draw(number))
     call(planicp.LostRule, data.draw(number), data.draw(number), data.draw(number))
     ok, noise = call(planicp.MotionNoise, *[data.draw(number) for _ in range(5)])
     if ok:
@@ -569,7 +570,7 @@ def test_every_public_name_is_fuzzed() -> None:
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
                "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
                "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize",
-               "ContinuityRule"}
+               "ContinuityRule", "OcclusionRule"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
     elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",

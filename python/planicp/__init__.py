@@ -28,6 +28,7 @@ from .acceptance_gate import AcceptanceGate
 from .localizer import Estimate, Localizer
 from .lost_detection import LostRule
 from .motion_noise import MotionNoise
+from .occlusion_rule import OcclusionRule
 from .plan_map import PlanMap
 from .recovery import RecoveryConfig
 from .plan_raster import PlanRaster, resolution_from_pixels
@@ -46,6 +47,7 @@ __all__ = [
     "GridAgreement",
     "OccupancyGridMessage",
     "OccupancyModel",
+    "OcclusionRule",
     "Estimate",
     "IcpConfig",
     "IcpResult",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,6 +21,7 @@ from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
+from .occlusion_rule import OcclusionFilter, OcclusionRule
 from .scan_continuity import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
@@ -45,6 +46,9 @@ class Estimate:
         lost: the plan no longer explains the scans (see `LostRule`); while lost, the
             `Recovery` searches the plan for the robot.
         score: mean match score (inlier ratio) over the `LostRule` window.
+        kept: (N,) bool over the scan's points: those aligned to the plan, after `OcclusionRule`
+            left out the returns in front of the plan's walls (people, furniture); None when every
+            point was aligned. `result.inlier_mask` is over the kept points.
         relocalized: this update adopted a pose found by a search of the plan (`pose` is it): by
             the recovery while lost, or around a prediction the acceptance gate cannot vouch for.
         hypotheses: places the recovery is following while lost (more than one: the building is
@@ -63,6 +67,7 @@ class Estimate:
     score: float
     relocalized: bool = False
     hypotheses: tuple[Pose, ...] = ()
+    kept: NDArray[np.bool_] | None = None
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
@@ -117,6 +122,7 @@ class Localizer:
         initial_covariance: Any = None,
         recovery: RecoveryConfig | None = None,
         continuity: ContinuityRule | None = None,
+        occlusion: OcclusionRule | Literal[False] | None = None,
     ) -> None:
         """
         Args:
@@ -132,6 +138,8 @@ class Localizer:
             continuity: when a scan the plan explains too little of still continues the previous
                 scan (clutter, not a kidnapped robot: it does not count towards `lost`; None:
                 `ContinuityRule()`).
+            occlusion: which returns stand in front of the plan's walls and are left out of the
+                alignment (None: `OcclusionRule()`; False: align every return).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -145,6 +153,9 @@ class Localizer:
         self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
         self.continuity = continuity if continuity is not None else ContinuityRule()
+        if occlusion is not False and occlusion is not None and not isinstance(occlusion, OcclusionRule):
+            raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
+        self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self.config, self.gate)
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
@@ -223,11 +234,13 @@ class Localizer:
             predicted = compose(self._pose, motion)
             predicted_covariance = self.motion_noise.propagate(self._covariance, self._pose, motion)
             result: IcpResult | None = None
+            kept: NDArray[np.bool_] | None = None
             usable = -(-len(points) // self.config.subsample)
             if usable < _core.MIN_SCAN_POINTS:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
-                result = localize(points, self.plan, predicted, self.config)
+                kept = self._unoccluded(points, predicted, predicted_covariance)
+                result = localize(points if kept is None else points[kept], self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
             searched = False
             if result is not None and not self._detector.lost and self._needs_search(result, reason,
@@ -242,13 +255,16 @@ class Localizer:
             # scan, not simply the previous one: after a kidnap the second scan continues the first
             # one elsewhere.)
             continues: bool | None = None
+            # How much of the WHOLE scan the plan explains: returns the occlusion rule left out count
+            # as unexplained, so that a wrong prediction cannot hide the evidence against it.
+            score = result.num_inliers / len(points) if result is not None else 0.0
             poor = result is not None and (
                 (reason != "" and self.gate.fit_rejection(result) != "")
-                or (reason == "" and result.inlier_ratio < self._detector.rule.min_score))
+                or (reason == "" and score < self._detector.rule.min_score))
             if poor and result is not None and not self._detector.lost and self._anchor is not None:
                 continues = self.continuity.continues(points, self._anchor[0], between(self._anchor[1], odom))
                 if not continues and reason == "":
-                    reason = (f"the plan explains only {100 * result.inlier_ratio:.0f} % of the scan and it does not "
+                    reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
                               f"continue the last scan the plan explained")
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
@@ -263,7 +279,7 @@ class Localizer:
             if continues:
                 lost = self._detector.hold()
             else:
-                lost = self._detector.update(result.inlier_ratio if result is not None else 0.0, accepted)
+                lost = self._detector.update(score, accepted)
             relocalized = searched
             if lost and usable >= _core.MIN_SCAN_POINTS:
                 found = self._recovery.step(points, motion, predicted)
@@ -280,8 +296,25 @@ class Localizer:
             if accepted and (continues or not poor):
                 self._anchor = (points, odom)
             hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
+            if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
+                kept = None  # a search's result is over the whole scan
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
-                            self._detector.score, relocalized, hypotheses)
+                            self._detector.score, relocalized, hypotheses, kept)
+
+    def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
+                    predicted_covariance: NDArray[np.float64]) -> NDArray[np.bool_] | None:
+        """The points not in front of the plan's walls, when the occlusion rule applies (a trusted
+        prediction, not lost, enough points left); else None (align them all)."""
+        if self._occlusion is None or self._detector.lost:
+            return None
+        rule = self._occlusion.rule
+        sigma_xy = math.sqrt(max(float(np.linalg.eigvalsh(predicted_covariance[:2, :2]).max()), 0.0))
+        if 3.0 * sigma_xy >= rule.margin:
+            return None
+        kept: NDArray[np.bool_] = ~self._occlusion.in_front(points, predicted)
+        if int(kept.sum()) < rule.min_points or kept.all():
+            return None
+        return kept
 
     def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
         """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a
