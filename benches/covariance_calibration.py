@@ -48,8 +48,8 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--duration", type=float, default=60.0)
     args = parser.parse_args()
-    default_scale = IcpConfig().covariance_scale
-    scales = [1.0, default_scale]
+    default_scale = IcpConfig.for_tracking().covariance_scale
+    scales = sorted({1.0, 3.0, 4.0, 5.0, default_scale})
     plans = {"office plan (shipped)": load_default_plan()}
     for layout in ("office", "hall", "diagonal"):
         floor = synthetic.generate_floor(11, layout)

@@ -84,20 +84,21 @@ def test_covariance_matches_the_error_spread() -> None:
     """NEES of the accepted estimates on the shipped plan: mean near 3 and most below the
     chi-square 95 % bound; the raw, unscaled covariance is clearly overconfident."""
     plan = load_default_plan()
-    nees: dict[float, list[float]] = {1.0: [], 3.0: []}
+    calibrated_scale = IcpConfig.for_tracking().covariance_scale
+    nees: dict[float, list[float]] = {1.0: [], calibrated_scale: []}
     for seed in (0, 1):
         recording, _ = run_experiment(plan, ExperimentConfig(duration_s=40.0, seed=seed))
         for scale in nees:
-            _, estimates = _track(plan, recording, config=IcpConfig(covariance_scale=scale))
+            _, estimates = _track(plan, recording, config=IcpConfig.for_tracking(covariance_scale=scale))
             for k, e in enumerate(estimates):
                 if e.accepted:  # type: ignore[attr-defined]
                     err = np.array(e.pose) - recording.truth[k]  # type: ignore[attr-defined]
                     err[2] = _wrap(err[2])
                     nees[scale].append(float(err @ np.linalg.solve(e.covariance, err)))  # type: ignore[attr-defined]
-    calibrated, raw = np.array(nees[3.0]), np.array(nees[1.0])
+    calibrated, raw = np.array(nees[calibrated_scale]), np.array(nees[1.0])
     assert len(calibrated) > 700
-    assert 1.5 < calibrated.mean() < 5.0
-    assert np.mean(calibrated < CHI2_3_95) > 0.85
+    assert 1.5 < calibrated.mean() < 4.5, calibrated.mean()
+    assert np.mean(calibrated < CHI2_3_95) > 0.88
     assert raw.mean() > 2 * calibrated.mean() and np.mean(raw < CHI2_3_95) < 0.8
 
 
@@ -316,7 +317,10 @@ def test_clutter_is_not_mistaken_for_a_kidnap() -> None:
         recording, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=seed))
         error = np.hypot(*(recording.estimate[:, :2] - recording.truth[:, :2]).T)
         assert error.max() < 0.05, (seed, error.max())
-        assert np.nanmin(recording.inlier_ratio) < 0.25  # the clutter is there
+        # The clutter is there: at the true pose the plan explains less than a quarter of some scans.
+        explained = [localize(s, plan, tuple(t), IcpConfig.for_tracking()).inlier_ratio
+                     for s, t in zip(recording.scans[::10], recording.truth[::10])]
+        assert min(explained) < 0.25, min(explained)
 
 
 def test_continuity_rule() -> None:

@@ -205,9 +205,11 @@ def _pose(row: NDArray[np.float64]) -> Pose:
     return (float(row[0]), float(row[1]), float(row[2]))
 
 
-def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: AcceptanceGate | None = None) -> Recording:
-    """The same scans and odometry through a Localizer with other settings (for ablations)."""
-    localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate)
+def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: AcceptanceGate | None = None,
+           **options: Any) -> Recording:
+    """The same scans and odometry through a Localizer with other settings (for ablations);
+    `options` go to the `Localizer` (e.g. `occlusion=False`)."""
+    localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate, **options)
     estimate, accepted, ratio, rmse = _track(localizer, recording.scans, recording.odometry_in_odom)
     return Recording(recording.times, recording.truth, recording.odometry, estimate, accepted, ratio, rmse,
                      recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar)
