@@ -11,30 +11,13 @@ use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::point_map::Tree2;
 use icp_core::{align, IcpConfig, PointMap, Pose2};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 
 mod common;
 
-use common::office;
-
-/// A noisy 1080-beam scan from `pose` (robot frame): plan points visible from the pose, jittered
-/// along and across the wall, thinned to 1080 points.
-fn scan(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
-    let vis = map.visible_from(pose, 30.0).unwrap();
-    let inv = pose.inverse();
-    (0..1080)
-        .map(|_| {
-            let i = vis[rng.random_range(0..vis.len())] as usize;
-            let q = map.points()[i];
-            let n = map.normals()[i];
-            let along = rng.random_range(-0.025..0.025);
-            let across = rng.random_range(-0.015..0.015);
-            inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
-        })
-        .collect()
-}
+use common::{noisy_scan, office};
 
 fn benches(c: &mut Criterion) {
     let pts = office();
@@ -42,7 +25,7 @@ fn benches(c: &mut Criterion) {
     let truth = Pose2::new(6.0, 5.0, 0.3);
     let guess = Pose2::new(6.15, 4.87, 0.35);
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let scan = scan(&map, truth, &mut rng);
+    let scan = noisy_scan(&map, truth, 1080, &mut rng);
 
     let mut g = c.benchmark_group("build");
     g.throughput(Throughput::Elements(pts.len() as u64));

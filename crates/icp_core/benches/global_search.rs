@@ -10,38 +10,21 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use icp_core::global_search::{GlobalMatcher, GlobalSearchConfig, SearchWindow};
 use icp_core::relocalization::{relocalize, RankingConfig};
 use icp_core::{IcpConfig, PointMap, Pose2};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 use std::time::Duration;
 
 mod common;
 
-use common::office;
-
-/// A noisy 1081-point scan from `pose` (robot frame): plan points visible from the pose, jittered
-/// along and across the wall.
-fn scan(map: &PointMap, pose: Pose2, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
-    let vis = map.visible_from(pose, 30.0).unwrap();
-    let inv = pose.inverse();
-    (0..1081)
-        .map(|_| {
-            let i = vis[rng.random_range(0..vis.len())] as usize;
-            let q = map.points()[i];
-            let n = map.normals()[i];
-            let along = rng.random_range(-0.025..0.025);
-            let across = rng.random_range(-0.015..0.015);
-            inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
-        })
-        .collect()
-}
+use common::{noisy_scan, office};
 
 fn benches(c: &mut Criterion) {
     let map = PointMap::new(office(), None).unwrap();
     // In a room, looking towards its door: the corridor and the room tell the place apart.
     let truth = Pose2::new(6.0, 5.0, 1.2);
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let scan = scan(&map, truth, &mut rng);
+    let scan = noisy_scan(&map, truth, 1081, &mut rng);
     let config = GlobalSearchConfig::default();
     let matcher = GlobalMatcher::new(&map, config.clone()).unwrap();
     let found = matcher.search(&scan, None).unwrap();

@@ -6,6 +6,9 @@
 #![allow(dead_code)]
 
 use icp_core::ray_casting::OccupancyRaster;
+use icp_core::{PointMap, Pose2};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 
 /// Raster resolution, metres per cell.
 pub const RES: f64 = 0.05;
@@ -78,4 +81,21 @@ pub fn office() -> Vec<[f64; 2]> {
         wall(&mut pts, a, b);
     }
     pts
+}
+
+/// A noisy scan of `points` returns from `pose` (robot frame): plan points visible from the pose,
+/// jittered by up to 2.5 cm along the wall and 1.5 cm across it.
+pub fn noisy_scan(map: &PointMap, pose: Pose2, points: usize, rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
+    let vis = map.visible_from(pose, 30.0).unwrap();
+    let inv = pose.inverse();
+    (0..points)
+        .map(|_| {
+            let i = vis[rng.random_range(0..vis.len())] as usize;
+            let q = map.points()[i];
+            let n = map.normals()[i];
+            let along = rng.random_range(-0.025..0.025);
+            let across = rng.random_range(-0.015..0.015);
+            inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
+        })
+        .collect()
 }
