@@ -275,6 +275,17 @@ def test_png_uses_the_thesis_colours(tmp_path: Path) -> None:
         assert (states == state).any()
         np.testing.assert_array_equal(top_left[states == state], np.tile(STATE_COLOURS[state], ((states == state).sum(), 1)))
     assert STATE_COLOURS[EogState.ARCHITECTURAL][2] > 200  # blue
+    with pytest.raises(ValueError, match="must end in .png"):
+        grid.to_png(tmp_path / "eog.jpeg")
+    with pytest.raises(ValueError, match="scale must be at most 64"):
+        grid.to_png(tmp_path / "eog.png", scale=65)
+    (tmp_path / "file").write_text("")
+    with pytest.raises(OSError):
+        grid.to_png(tmp_path / "file" / "eog.png")  # a file stands where the folder should be
+    with pytest.MonkeyPatch.context() as patch:  # OpenCV reporting a failed write (full disk, ...)
+        patch.setattr(cv2, "imwrite", lambda *args: False)
+        with pytest.raises(OSError, match="could not write the PNG"):
+            grid.to_png(tmp_path / "again.png")
     fig = plot_eog(grid, title="room")
     assert fig.axes[0].get_title() == "room"
     assert len(plot_eog_comparison({"a": grid, "b": grid}).axes) == 2

@@ -380,10 +380,12 @@ class EnhancedOccupancyGrid:
         import cv2
 
         scale = whole_number(scale, "scale", 1, 64)
+        out = Path(path)
+        if out.suffix.lower() != ".png":
+            raise ValueError(f"PNG path {out} must end in .png")
         image = self.to_image()
         if scale > 1:
             image = np.repeat(np.repeat(image, scale, axis=0), scale, axis=1)
-        out = Path(path)
         out.parent.mkdir(parents=True, exist_ok=True)
         if not cv2.imwrite(str(out), np.ascontiguousarray(image[:, :, ::-1])):
             raise OSError(f"could not write the PNG {out}")
