@@ -12,7 +12,7 @@ use std::hint::black_box;
 
 mod common;
 
-use common::{office_raster, RES};
+use common::{hokuyo, office_raster, RES};
 
 /// Map-frame end points of the returns of `ranges` from `pose` (finite ranges only).
 fn returns(pose: Pose2, model: &LidarModel, ranges: &[f64]) -> Vec<[f64; 2]> {
@@ -29,14 +29,7 @@ fn returns(pose: Pose2, model: &LidarModel, ranges: &[f64]) -> Vec<[f64; 2]> {
 
 fn benches(c: &mut Criterion) {
     let raster = office_raster();
-    let fov = 270f64.to_radians();
-    let model = LidarModel {
-        angle_min: -0.5 * fov,
-        angle_increment: fov / 1080.0,
-        beams: 1081,
-        range_min: 0.05,
-        range_max: 30.0,
-    };
+    let model = hokuyo();
     let (rows, cols) = raster.shape();
     let mut g = c.benchmark_group("occupancy_grid");
     g.throughput(Throughput::Elements(model.beams as u64));

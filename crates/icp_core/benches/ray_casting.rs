@@ -11,18 +11,11 @@ use std::hint::black_box;
 
 mod common;
 
-use common::office_raster;
+use common::{hokuyo, office_raster};
 
 fn benches(c: &mut Criterion) {
     let raster = office_raster();
-    let fov = 270f64.to_radians();
-    let model = LidarModel {
-        angle_min: -0.5 * fov,
-        angle_increment: fov / 1080.0,
-        beams: 1081,
-        range_min: 0.05,
-        range_max: 30.0,
-    };
+    let model = hokuyo();
     let room = Pose2::new(6.0, 5.0, 0.3);
     let corridor = Pose2::new(3.0, 12.25, 0.0);
     let people: Vec<Disc> =

@@ -5,7 +5,7 @@
 // Each bench compiles this module on its own and uses only part of it.
 #![allow(dead_code)]
 
-use icp_core::ray_casting::OccupancyRaster;
+use icp_core::ray_casting::{LidarModel, OccupancyRaster};
 use icp_core::{PointMap, Pose2};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -98,4 +98,16 @@ pub fn noisy_scan(map: &PointMap, pose: Pose2, points: usize, rng: &mut ChaCha8R
             inv.transform_point([q[0] - n[1] * along + n[0] * across, q[1] + n[0] * along + n[1] * across])
         })
         .collect()
+}
+
+/// A 270-degree, 1081-beam, 30 m LIDAR (a Hokuyo UTM-30LX), as the simulation uses.
+pub fn hokuyo() -> LidarModel {
+    let fov = 270f64.to_radians();
+    LidarModel {
+        angle_min: -0.5 * fov,
+        angle_increment: fov / 1080.0,
+        beams: 1081,
+        range_min: 0.05,
+        range_max: 30.0,
+    }
 }
