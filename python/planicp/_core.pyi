@@ -68,6 +68,7 @@ class IcpSettings:
         accelerate: bool,
         visibility_range: float | None = None,
         auto_trim: bool = False,
+        search: str = "wall_index",
     ) -> IcpSettings: ...
 
 @final

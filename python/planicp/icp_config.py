@@ -6,7 +6,9 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
+
+CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
 from . import _core
 from ._validation import positive, real_number, whole_number
@@ -56,6 +58,15 @@ class IcpConfig:
             tracking estimates (`benches/covariance_calibration.py --seeds 3`) the raw mean was
             10.2 and the scaled one 2.6 (2.1 to 3.0 per floor), with 94.8 % inside the chi-square
             95 % bound.
+        correspondence_search: how the nearest wall point of a scan point is found.
+            "wall_index" (default): the plan's precomputed nearest-wall index, a raster whose
+            every cell lists the only wall points that can be nearest to a point inside it (exact,
+            a few nanoseconds per look-up; built at the plan's first alignment and kept, see
+            `PlanMap.index_stats`). There `use_visibility` refuses pairs with a wall face that
+            looks away from the robot (the far face of a thick wall) instead of ray casting.
+            Schedules reaching beyond the index's reach (`PlanMap` `index_reach`, 0.5 m by
+            default) use the KD-tree. "kd_tree": exact KD-tree queries against the wall points
+            visible from the initial guess (ray cast through the plan).
     """
 
     max_correspondence_distance: float = 0.25
@@ -70,6 +81,7 @@ class IcpConfig:
     accelerate: bool = True
     visibility_range: float | None = None
     covariance_scale: float = 3.0
+    correspondence_search: CorrespondenceSearch = "wall_index"
     _native: _core.IcpSettings = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -99,6 +111,10 @@ class IcpConfig:
         if self.visibility_range is not None:
             positive(self.visibility_range, "visibility_range", "metres")
         positive(self.covariance_scale, "covariance_scale")
+        if self.correspondence_search not in ("wall_index", "kd_tree"):
+            raise ValueError(
+                f'correspondence_search must be "wall_index" or "kd_tree", got {self.correspondence_search!r}'
+            )
         native = _core.IcpSettings(
             float(self.max_correspondence_distance),
             int(self.max_iterations),
@@ -111,6 +127,7 @@ class IcpConfig:
             self.accelerate,
             None if self.visibility_range is None else float(self.visibility_range),
             self.auto_trim,
+            self.correspondence_search,
         )
         object.__setattr__(self, "_native", native)
 

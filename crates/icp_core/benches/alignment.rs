@@ -1,6 +1,7 @@
-//! Criterion benches of the alignment hot path: KD-tree build, one correspondence pass over a
-//! 1080-point scan (KD-tree, and the settled candidate cache), visibility ray casting and a full
-//! alignment (30 fixed iterations with and without visibility, and the default termination).
+//! Criterion benches of the alignment hot path: KD-tree build, nearest-wall index build, one
+//! correspondence pass over a 1080-point scan (nearest-wall index; KD-tree over the plan and over
+//! the visible subset; the settled candidate cache), visibility ray casting and a full alignment
+//! in both correspondence modes (30 fixed iterations, and the default termination).
 //!
 //! The test case is a generated office floor (40 x 25 m, rooms along a corridor, 0.2 m thick
 //! walls with both faces sampled every 5 cm) and a 1080-beam scan cast against it from inside a
@@ -9,7 +10,9 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
-use icp_core::point_map::Tree2;
+use icp_core::icp::CorrespondenceSearch;
+use icp_core::nearest_wall_index::NearestWallIndex;
+use icp_core::point_map::{Tree2, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -31,16 +34,40 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(pts.len() as u64));
     g.bench_function("kdtree", |b| b.iter(|| Tree2::new_from_slice(black_box(&pts))));
     g.bench_function("point_map", |b| b.iter(|| PointMap::new(black_box(pts.clone()), None).unwrap()));
+    let tree = Tree2::new_from_slice(&pts);
+    g.bench_function("nearest_wall_index", |b| {
+        b.iter(|| {
+            NearestWallIndex::new(black_box(&pts), &tree, None, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH)
+                .unwrap()
+        })
+    });
+    g.bench_function("wall_index_with_facing", |b| {
+        b.iter(|| {
+            let map = PointMap::new(black_box(pts.clone()), None).unwrap();
+            map.wall_index().unwrap();
+            map
+        })
+    });
     g.finish();
 
     let mut g = c.benchmark_group("correspondences_1080");
     g.throughput(Throughput::Elements(scan.len() as u64));
     let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
     let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
+    let wall = map.wall_index().unwrap();
+    let sensor = Some([guess.x, guess.y]);
+    g.bench_function("wall_index", |b| {
+        b.iter(|| wall.find_pairs(black_box(&moved), 0.4, sensor, &mut pairs))
+    });
+    g.bench_function("wall_index_no_facing", |b| {
+        b.iter(|| wall.find_pairs(black_box(&moved), 0.4, None, &mut pairs))
+    });
     let full = TargetSet::Full(&map);
-    g.bench_function("full_plan", |b| b.iter(|| find_pairs(&full, black_box(&moved), 0.4, &mut pairs)));
+    g.bench_function("kdtree_full_plan", |b| {
+        b.iter(|| find_pairs(&full, black_box(&moved), 0.4, &mut pairs))
+    });
     let visible = TargetSet::subset(&map, map.visible_from(guess, 30.0).unwrap()).unwrap();
-    g.bench_function("visible_subset", |b| {
+    g.bench_function("kdtree_visible_subset", |b| {
         b.iter(|| find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
     });
     // The cached path ICP iterations take once the pose has settled: candidates fetched once.
@@ -63,10 +90,16 @@ fn benches(c: &mut Criterion) {
         rotation_tolerance: 0.0,
         ..IcpConfig::default()
     };
+    let kd = CorrespondenceSearch::KdTree;
     for (name, cfg) in [
-        ("fixed_30_iterations", fixed.clone()),
-        ("fixed_30_no_visibility", IcpConfig { use_visibility: false, ..fixed.clone() }),
-        ("default", IcpConfig { max_correspondence_distance: 0.4, ..IcpConfig::default() }),
+        ("wall_index_fixed_30", fixed.clone()),
+        ("wall_index_default", IcpConfig { max_correspondence_distance: 0.4, ..IcpConfig::default() }),
+        ("kdtree_fixed_30", IcpConfig { search: kd, ..fixed.clone() }),
+        ("kdtree_fixed_30_no_visibility", IcpConfig { search: kd, use_visibility: false, ..fixed.clone() }),
+        (
+            "kdtree_default",
+            IcpConfig { search: kd, max_correspondence_distance: 0.4, ..IcpConfig::default() },
+        ),
     ] {
         g.bench_with_input(BenchmarkId::from_parameter(name), &cfg, |b, cfg| {
             b.iter(|| align(&map, black_box(&scan), guess, cfg).unwrap())

@@ -14,6 +14,7 @@ use crate::correspondence::{
 };
 use crate::covariance::pose_covariance;
 use crate::error::{check_finite, invalid, IcpError, Result};
+use crate::nearest_wall_index::NearestWallIndex;
 use crate::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
@@ -67,6 +68,22 @@ pub struct IcpConfig {
     /// Range for the visibility ray casting; `None`: the scan's farthest point plus the largest
     /// stage distance.
     pub visibility_range: Option<f64>,
+    /// How nearest plan points are found.
+    pub search: CorrespondenceSearch,
+}
+
+/// How the nearest plan point of a scan point is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CorrespondenceSearch {
+    /// The plan's precomputed nearest-wall index ([`crate::nearest_wall_index`]): a few
+    /// nanoseconds per look-up. `use_visibility` refuses pairings with the far face of a wall
+    /// ([`crate::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
+    /// exceeds the index's reach, or plans whose index cannot be built, use the KD-tree.
+    #[default]
+    WallIndex,
+    /// Exact KD-tree queries (against the points visible from the initial guess with
+    /// `use_visibility`), reused across iterations by a [`CandidateCache`].
+    KdTree,
 }
 
 impl Default for IcpConfig {
@@ -83,6 +100,7 @@ impl Default for IcpConfig {
             use_visibility: true,
             accelerate: true,
             visibility_range: None,
+            search: CorrespondenceSearch::default(),
         }
     }
 }
@@ -180,7 +198,14 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
         });
     }
     let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
-    let target = if config.use_visibility {
+    let largest_distance = largest_factor * config.max_correspondence_distance;
+    let indexed = match config.search {
+        CorrespondenceSearch::WallIndex => map.wall_index().ok().filter(|w| largest_distance <= w.reach()),
+        CorrespondenceSearch::KdTree => None,
+    };
+    let target = if indexed.is_some() {
+        TargetSet::Full(map)
+    } else if config.use_visibility {
         let range = match config.visibility_range {
             Some(r) => r,
             None => {
@@ -212,9 +237,8 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     let mut converged = false;
     let mut moved = Vec::with_capacity(used.len());
     let mut pairs: Vec<Pair> = Vec::with_capacity(used.len());
-    let largest_distance = largest_factor * config.max_correspondence_distance;
     // Beyond a metre a candidate list holds whole rooms: plain KD-tree queries are cheaper.
-    let use_cache = largest_distance <= MAX_CACHED_DISTANCE;
+    let use_cache = indexed.is_none() && largest_distance <= MAX_CACHED_DISTANCE;
     let mut cache = CandidateCache::new(CACHE_RADIUS_FACTOR * largest_distance);
     'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
         let distance = stage_distance(*factor, config.max_correspondence_distance, map.spacing());
@@ -227,7 +251,10 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
         let mut cooldown = 0usize;
         while iterations < end {
             pose.transform_points(&used, &mut moved);
-            if use_cache {
+            if let Some(wall) = indexed {
+                let sensor = config.use_visibility.then_some([pose.x, pose.y]);
+                wall.find_pairs(&moved, distance, sensor, &mut pairs);
+            } else if use_cache {
                 cache.find_pairs(&target, &moved, distance, &mut pairs);
             } else {
                 find_pairs(&target, &moved, distance, &mut pairs);
@@ -287,9 +314,21 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
             last_update = Some(update);
         }
     }
-    let scored_with = (use_cache && config.subsample == 1).then_some(&mut cache);
+    let search = match indexed {
+        Some(wall) => Search::Indexed(wall),
+        None if use_cache && config.subsample == 1 => Search::Cached(&mut cache),
+        None => Search::Plain,
+    };
     let outcome = LoopOutcome { pose, converged, iterations };
-    Ok(score(map, &target, scored_with, scan, config, outcome))
+    Ok(score(map, &target, search, scan, config, outcome))
+}
+
+/// How the final scoring finds its pairs.
+enum Search<'a> {
+    Indexed(&'a NearestWallIndex),
+    /// The iterations ran on every scan point, so the cache holds candidates for all of them.
+    Cached(&'a mut CandidateCache),
+    Plain,
 }
 
 /// Where the iterations ended.
@@ -303,7 +342,7 @@ struct LoopOutcome {
 fn score(
     map: &PointMap,
     target: &TargetSet<'_>,
-    cache: Option<&mut CandidateCache>,
+    search: Search<'_>,
     scan: &[[f64; 2]],
     config: &IcpConfig,
     LoopOutcome { pose, converged, iterations }: LoopOutcome,
@@ -312,9 +351,12 @@ fn score(
     pose.transform_points(scan, &mut moved);
     let mut pairs = Vec::with_capacity(scan.len());
     let d = config.max_correspondence_distance;
-    match cache {
-        // The iterations ran on every scan point, so the cache holds candidates for all of them.
-        Some(cache) if d <= cache.radius() => cache.find_pairs(target, &moved, d, &mut pairs),
+    match search {
+        Search::Indexed(wall) => {
+            let sensor = config.use_visibility.then_some([pose.x, pose.y]);
+            wall.find_pairs(&moved, d, sensor, &mut pairs)
+        }
+        Search::Cached(cache) if d <= cache.radius() => cache.find_pairs(target, &moved, d, &mut pairs),
         _ => find_pairs(target, &moved, d, &mut pairs),
     }
     let mut inlier_mask = vec![false; scan.len()];

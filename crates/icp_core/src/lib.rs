@@ -7,11 +7,13 @@
 //! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
+//! - [`wall_facing`]: the outward normal of each wall point, to refuse pairings with a wall's far face.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
 //! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
 //! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
 //! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
+//! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
 //! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
 //! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
@@ -35,6 +37,7 @@ pub mod global_search;
 pub mod icp;
 pub mod likelihood_field;
 pub mod log_odds_grid;
+pub mod nearest_wall_index;
 pub mod point_map;
 pub mod pose;
 pub mod ray_casting;
@@ -42,6 +45,7 @@ pub mod relocalization;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;
+pub mod wall_facing;
 pub mod wall_raster;
 
 pub use error::{IcpError, Result};

@@ -3,11 +3,14 @@
 
 use crate::covariance;
 use crate::error::{check_finite, IcpError, Result};
+use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
+use crate::wall_facing::outward_normals;
 use crate::wall_raster::WallRaster;
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use kiddo::SquaredEuclidean;
+use std::sync::OnceLock;
 
 /// KD-tree over 2D points; items are indices into the point slice it was built from.
 pub type Tree2 = ImmutableKdTree<f64, u32, 2, 16>;
@@ -18,7 +21,15 @@ pub const MAX_POINTS: usize = u32::MAX as usize;
 /// When no raster resolution is given, the raster is coarsened until it has at most this many cells.
 pub const AUTO_RASTER_MAX_CELLS: f64 = 16.0 * 1024.0 * 1024.0;
 
-/// Wall points, their KD-tree, their wall normals and their visibility raster.
+/// Default reach of the nearest-wall index, metres: the largest correspondence distance it
+/// answers (alignments asking for more use the KD-tree).
+pub const DEFAULT_INDEX_REACH: f64 = 0.5;
+
+/// Default cell of the nearest-wall index, metres.
+pub const DEFAULT_INDEX_CELL: f64 = 0.03;
+
+/// Wall points, their KD-tree, their wall normals and their visibility raster; the nearest-wall
+/// index with the outward normals is built at first use.
 #[derive(Debug, Clone)]
 pub struct PointMap {
     points: Vec<[f64; 2]>,
@@ -26,6 +37,9 @@ pub struct PointMap {
     raster: WallRaster,
     normals: Vec<[f64; 2]>,
     spacing: f64,
+    index_cell: f64,
+    index_reach: f64,
+    wall_index: OnceLock<Result<NearestWallIndex>>,
 }
 
 impl PointMap {
@@ -76,7 +90,55 @@ impl PointMap {
             }
             None => covariance::estimate_normals(&points, &tree),
         };
-        Ok(Self { points, tree, raster, normals, spacing })
+        Ok(Self {
+            points,
+            tree,
+            raster,
+            normals,
+            spacing,
+            index_cell: DEFAULT_INDEX_CELL,
+            index_reach: DEFAULT_INDEX_REACH,
+            wall_index: OnceLock::new(),
+        })
+    }
+
+    /// Sets the cell and reach (metres) of the nearest-wall index, which is built at its first
+    /// use (see [`PointMap::wall_index`]). Errors: values that are not positive and finite.
+    pub fn with_index_settings(mut self, cell: f64, reach: f64) -> Result<Self> {
+        for (name, v) in [("index cell", cell), ("index reach", reach)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(crate::error::invalid(name, v, "must be a positive finite number of metres"));
+            }
+        }
+        self.index_cell = cell;
+        self.index_reach = reach;
+        self.wall_index = OnceLock::new();
+        Ok(self)
+    }
+
+    /// The nearest-wall index, with the points' outward normals ([`crate::wall_facing`]), built
+    /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
+    /// plan's extent at its cell size.
+    pub fn wall_index(&self) -> Result<&NearestWallIndex> {
+        self.wall_index
+            .get_or_init(|| {
+                let cell = if self.index_cell == DEFAULT_INDEX_CELL {
+                    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+                    for p in &self.points {
+                        for k in 0..2 {
+                            lo[k] = lo[k].min(p[k]);
+                            hi[k] = hi[k].max(p[k]);
+                        }
+                    }
+                    cell_within_budget(self.index_cell, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
+                } else {
+                    self.index_cell
+                };
+                let outward = outward_normals(&self.points, &self.normals, &self.raster);
+                NearestWallIndex::new(&self.points, &self.tree, Some(&outward), cell, self.index_reach)
+            })
+            .as_ref()
+            .map_err(Clone::clone)
     }
 
     /// The wall points, metres, map frame.

@@ -4,6 +4,7 @@
 //! become `PlanicpError` (a `ValueError`), and a panic inside the core is caught and raised as
 //! `PlanicpInternalError` (a `RuntimeError`) instead of crossing into Python.
 
+use icp_core::icp::CorrespondenceSearch;
 use icp_core::{IcpConfig, IcpError, IcpResult, PointMap, Pose2};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -136,7 +137,7 @@ impl IcpSettings {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
                         rotation_tolerance, subsample, correspondence_schedule, use_visibility,
-                        accelerate, visibility_range=None, auto_trim=false))]
+                        accelerate, visibility_range=None, auto_trim=false, search="wall_index"))]
     fn new(
         max_correspondence_distance: f64,
         max_iterations: &Bound<'_, PyAny>,
@@ -149,7 +150,19 @@ impl IcpSettings {
         accelerate: bool,
         visibility_range: Option<f64>,
         auto_trim: bool,
+        search: &str,
     ) -> PyResult<Self> {
+        let search = match search {
+            "wall_index" => CorrespondenceSearch::WallIndex,
+            "kd_tree" => CorrespondenceSearch::KdTree,
+            other => {
+                return Err(core_error(icp_core::error::invalid(
+                    "correspondence_search",
+                    format!("{other:?}"),
+                    "must be \"wall_index\" or \"kd_tree\"",
+                )))
+            }
+        };
         // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
         let count = |what: &str, v: &Bound<'_, PyAny>| {
             unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
@@ -168,6 +181,7 @@ impl IcpSettings {
             use_visibility,
             accelerate,
             visibility_range,
+            search,
         };
         inner.validate().map_err(core_error)?;
         Ok(Self { inner })

@@ -111,3 +111,43 @@ pub fn hokuyo() -> LidarModel {
         range_max: 30.0,
     }
 }
+
+/// A square floor of `size` metres: a grid of `room[0]` x `room[1]` m rooms, 0.2 m thick walls
+/// with a 1 m door in every wall between two crossings, both faces sampled every `spacing` metres
+/// (a plan drawn at `spacing` metres per pixel gives its wall surface points that far apart).
+pub fn grid_floor(size: f64, room: [f64; 2], spacing: f64) -> Vec<[f64; 2]> {
+    let mut pts = Vec::new();
+    let mut face = |a: [f64; 2], b: [f64; 2]| {
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let n = (len / spacing).round().max(1.0) as usize;
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            pts.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    };
+    for axis in 0..2 {
+        let step = room[axis];
+        let lines = (size / step).round() as usize;
+        let segments = (size / room[1 - axis]).round() as usize;
+        for k in 0..=lines {
+            let c = k as f64 * step;
+            for s in 0..segments {
+                let (s0, s1) = (s as f64 * room[1 - axis], (s + 1) as f64 * room[1 - axis]);
+                let mid = 0.5 * (s0 + s1);
+                let outer = k == 0 || k == lines;
+                let spans = if outer { vec![(s0, s1)] } else { vec![(s0, mid - 0.5), (mid + 0.5, s1)] };
+                for (u0, u1) in spans {
+                    for side in [-0.1, 0.1] {
+                        let (a, b) = if axis == 0 {
+                            ([c + side, u0], [c + side, u1])
+                        } else {
+                            ([u0, c + side], [u1, c + side])
+                        };
+                        face(a, b);
+                    }
+                }
+            }
+        }
+    }
+    pts
+}

@@ -1,0 +1,63 @@
+#!/usr/bin/env python3
+"""Cost of one `Localizer.update` from Python, for a 1081-beam scan (issue 8: under 1 ms).
+
+A simulated drive through the shipped default plan (furniture and people, 1081-beam Hokuyo-like
+LIDAR, 100 Hz odometry with the thesis drift; `planicp.sim.run_experiment`) is recorded once. Its
+scans are then fed to a fresh `Localizer` exactly as a robot stack would: ranges to points
+(`scan_to_points`, the laser mount included) and the odometry pose. Each update is timed with
+`time.perf_counter`; the table gives the median and 90th percentile over all updates, per
+correspondence search, with the share spent in the conversion.
+
+    python benches/localizer_update.py               # 60 s drive (600 scans)
+    python benches/localizer_update.py --duration 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+import planicp
+from planicp import IcpConfig, Localizer, scan_to_points
+from planicp.default_plan import load_default_plan
+from planicp.sim.experiment import ExperimentConfig, run_experiment
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--duration", type=float, default=60.0, help="simulated drive, seconds")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=args.duration, seed=args.seed))
+    frames = recording.scan_frames()
+    print(f"# planicp {planicp.__version__}: {len(frames)} scans of {len(frames[0].ranges)} beams, "
+          f"default plan ({len(plan)} wall points)")
+    print("| correspondence search | update p50 | update p90 | of which scan_to_points | RMS error |")
+    print("|---|---|---|---|---|")
+    truth = recording.poses("truth")
+    for search in ("wall_index", "kd_tree"):
+        config = IcpConfig.for_tracking(correspondence_search=search)
+        localizer = Localizer(plan, truth[0], config)
+        update_s, convert_s, errors = [], [], []
+        for k, frame in enumerate(frames):
+            assert frame.odometry is not None
+            t0 = time.perf_counter()
+            points = scan_to_points(frame.ranges, frame.angle_min, frame.angle_increment,
+                                    frame.range_min, frame.range_max, frame.laser_pose)
+            t1 = time.perf_counter()
+            estimate = localizer.update(points, frame.odometry)
+            t2 = time.perf_counter()
+            update_s.append(t2 - t0)
+            convert_s.append(t1 - t0)
+            errors.append(np.hypot(estimate.pose[0] - truth[k][0], estimate.pose[1] - truth[k][1]))
+        p50, p90 = np.percentile(update_s, [50, 90]) * 1e3
+        rms = float(np.sqrt(np.mean(np.square(errors))))
+        print(f"| {search} | {p50:.3f} ms | {p90:.3f} ms | {np.median(convert_s) * 1e3:.3f} ms "
+              f"| {rms * 100:.2f} cm |")
+
+
+if __name__ == "__main__":
+    main()

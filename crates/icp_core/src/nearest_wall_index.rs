@@ -1,0 +1,619 @@
+//! A precomputed nearest-wall-point index: a raster over the plan's extent whose every cell lists
+//! the only wall points that can be nearest to a query inside it.
+//!
+//! For a cell with centre `c`, half-diagonal `r` and nearest wall point at distance `d(c)`, any
+//! query `q` in the cell has its nearest wall point within `d(c) + r` of `q`, hence within
+//! `d(c) + 2r` of `c`. The cell lists exactly the points within that radius of its centre, so the
+//! nearest of them is the exact nearest wall point of `q` (the same answer as a KD-tree). A point
+//! of that list that another one is at least as near to at all four corners of the cell is
+//! dropped: it is nowhere in the cell strictly nearer, so the lists keep only the points whose
+//! Voronoi regions meet the cell (one or two along a straight wall).
+//! Cells farther than `reach + r` from every wall hold no list: every query there is more than
+//! `reach` from the plan, and the index answers "no wall point within reach". A look-up is one
+//! cell address and a scan of a handful of candidates (a few nanoseconds), against 200-300 ns for
+//! a KD-tree query.
+//!
+//! Memory is bounded by the band of cells within `reach` of the walls: cells are grouped in
+//! blocks of [`BLOCK`] x [`BLOCK`], and only blocks that reach a wall are stored, at 8 bytes per
+//! cell: the one or two plan points whose Voronoi regions meet the cell (nearly every cell), or the
+//! offset of a longer list (4 bytes per candidate plus a 4-byte length). The index keeps its own
+//! copy of the wall points with their outward normals (24 bytes per point), so that a look-up
+//! touches only the index. [`NearestWallIndex::memory_bytes`] reports the total.
+//!
+//! A look-up has no data-dependent branch in the common case: an empty block or cell points at a
+//! sentinel point infinitely far away, and a single candidate is stored twice.
+//!
+//! Build: one KD-tree radius query per block (all points that can matter to any of its cells,
+//! sorted by distance to the block centre), then for every cell the exact nearest distance and
+//! its list from that short, sorted prefix.
+
+use crate::correspondence::Pair;
+use crate::error::{invalid, IcpError, Result};
+use crate::point_map::Tree2;
+use kiddo::SquaredEuclidean;
+
+/// Cells per block side.
+pub const BLOCK: usize = 8;
+const BLOCK_CELLS: usize = BLOCK * BLOCK;
+/// Marks a block with no wall within reach (before the build ends: then it points at the empty
+/// block 0).
+const EMPTY: u32 = u32::MAX;
+/// Set in a cell's first slot when the second holds the offset of a list.
+const LIST: u32 = 1 << 31;
+/// Largest plan an index can hold (one index is the sentinel, one bit marks lists).
+pub const MAX_INDEX_POINTS: usize = (LIST - 1) as usize;
+/// Most cells (stored or not) an index may span: larger plans need a coarser cell
+/// (see [`cell_within_budget`]). The block table then takes at most 16 MiB.
+pub const MAX_INDEX_CELLS: f64 = (1u64 << 28) as f64;
+
+/// `cell`, or the smallest cell that keeps an index of a plan spanning `extent` (metres, x and y)
+/// within [`MAX_INDEX_CELLS`] with `reach`.
+pub fn cell_within_budget(cell: f64, extent: [f64; 2], reach: f64) -> f64 {
+    let mut cell = cell;
+    let cells = |c: f64| {
+        let m = 2.0 * (reach + c);
+        ((extent[0] + m) / c / BLOCK as f64 + 1.0)
+            * ((extent[1] + m) / c / BLOCK as f64 + 1.0)
+            * BLOCK_CELLS as f64
+    };
+    while cells(cell) > MAX_INDEX_CELLS {
+        cell *= 1.25;
+    }
+    cell
+}
+
+/// A wall point as the index stores it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Site {
+    x: f64,
+    y: f64,
+    /// Outward unit normal (`[0, 0]`: two-sided), see [`crate::wall_facing`].
+    outward: [f32; 2],
+}
+
+/// Exact nearest-wall-point look-ups within a fixed reach, from a precomputed raster.
+#[derive(Debug, Clone)]
+pub struct NearestWallIndex {
+    origin: [f64; 2],
+    cell: f64,
+    inv_cell: f64,
+    reach: f64,
+    cols: usize,
+    rows: usize,
+    block_cols: usize,
+    /// Per block (row-major): its number among the stored blocks (0: the empty block).
+    blocks: Vec<u32>,
+    /// Per stored block, `BLOCK_CELLS` cells (row-major) of two plan indices (the sentinel
+    /// `sites.len() - 1` when none), or `[LIST | length, offset]` of a list in `lists`.
+    slots: Vec<[u32; 2]>,
+    lists: Vec<u32>,
+    /// The wall points in the order cells first name them (neighbours in the plan are
+    /// neighbours in memory), and, last, the sentinel. Slots and lists index into it.
+    sites: Vec<Site>,
+    /// Plan index of every site (a placeholder for the sentinel).
+    plan_index: Vec<u32>,
+}
+
+/// Sizes of a built index.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IndexStats {
+    /// Cells across the plan's extent (columns times rows).
+    pub cells: usize,
+    /// Blocks stored (those within reach of a wall), of all blocks.
+    pub stored_blocks: usize,
+    /// All blocks.
+    pub blocks: usize,
+    /// Candidates over all stored cells.
+    pub candidates: usize,
+    /// Bytes held by the index.
+    pub memory_bytes: usize,
+}
+
+impl NearestWallIndex {
+    /// Builds the index of `points` (the plan's wall points, metres, map frame; `tree` is their
+    /// KD-tree; `outward` their outward normals, `[0, 0]` or `None` for two-sided) with square
+    /// cells of `cell` metres, answering exactly for queries up to `reach` metres from the walls.
+    ///
+    /// Errors: `cell` or `reach` not positive and finite, no points, more than
+    /// [`MAX_INDEX_POINTS`] points or [`MAX_INDEX_CELLS`] cells, `outward` of another length.
+    pub fn new(
+        points: &[[f64; 2]],
+        tree: &Tree2,
+        outward: Option<&[[f32; 2]]>,
+        cell: f64,
+        reach: f64,
+    ) -> Result<Self> {
+        if !(cell.is_finite() && cell > 0.0) {
+            return Err(invalid("index cell", cell, "must be a positive finite number of metres"));
+        }
+        if !(reach.is_finite() && reach > 0.0) {
+            return Err(invalid("index reach", reach, "must be a positive finite number of metres"));
+        }
+        if points.is_empty() {
+            return Err(IcpError::Empty { what: "plan" });
+        }
+        if points.len() > MAX_INDEX_POINTS {
+            return Err(IcpError::TooFewPoints {
+                what: "plan (too many points for a nearest-wall index)",
+                got: points.len(),
+                need: MAX_INDEX_POINTS,
+            });
+        }
+        if outward.is_some_and(|o| o.len() != points.len()) {
+            return Err(invalid("outward normals", "length", "must have one row per plan point"));
+        }
+        let mut sites: Vec<Site> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Site { x: p[0], y: p[1], outward: outward.map_or([0.0, 0.0], |o| o[i]) })
+            .collect();
+        sites.push(Site { x: f64::INFINITY, y: f64::INFINITY, outward: [0.0, 0.0] });
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let margin = reach + cell;
+        let origin = [lo[0] - margin, lo[1] - margin];
+        let cols_f = ((hi[0] + margin - origin[0]) / cell).ceil().max(1.0);
+        let rows_f = ((hi[1] + margin - origin[1]) / cell).ceil().max(1.0);
+        // Whole blocks, so that every cell of a stored block exists.
+        let block_cols_f = (cols_f / BLOCK as f64).ceil();
+        let block_rows_f = (rows_f / BLOCK as f64).ceil();
+        let cells = block_cols_f * block_rows_f * BLOCK_CELLS as f64;
+        if !(cells.is_finite() && cells <= MAX_INDEX_CELLS) {
+            return Err(IcpError::RasterTooLarge {
+                resolution: cell,
+                cells,
+                limit: MAX_INDEX_CELLS as usize,
+            });
+        }
+        let (block_cols, block_rows) = (block_cols_f as usize, block_rows_f as usize);
+        let mut index = Self {
+            origin,
+            cell,
+            inv_cell: 1.0 / cell,
+            reach,
+            cols: block_cols * BLOCK,
+            rows: block_rows * BLOCK,
+            block_cols,
+            blocks: vec![EMPTY; block_cols * block_rows],
+            slots: Vec::new(),
+            lists: Vec::new(),
+            sites,
+            plan_index: Vec::new(),
+        };
+        index.fill(points, tree)?;
+        Ok(index)
+    }
+
+    fn fill(&mut self, points: &[[f64; 2]], tree: &Tree2) -> Result<()> {
+        let cell = self.cell;
+        let half_diagonal = cell * std::f64::consts::FRAC_1_SQRT_2;
+        let block_size = cell * BLOCK as f64;
+        let block_half_diagonal = block_size * std::f64::consts::FRAC_1_SQRT_2;
+        // Per cell in a block: (squared distance to the cell's centre, plan index) of the block's
+        // points.
+        let mut nearby: Vec<(f64, u32)> = Vec::new();
+        let mut list: Vec<(f64, u32)> = Vec::new();
+        let mut kept: Vec<u32> = Vec::new();
+        let block_rows = self.blocks.len() / self.block_cols;
+        let sentinel = points.len() as u32;
+        // Block 0: every cell empty.
+        self.slots.resize(BLOCK_CELLS, [sentinel, sentinel]);
+        // Blocks within reach of some point, found point by point: free space costs nothing.
+        let mut near = vec![false; self.blocks.len()];
+        let pad = self.reach + half_diagonal + block_half_diagonal;
+        for p in points {
+            let span = |v: f64, o: f64, n: usize| {
+                let lo = ((v - pad - o) / block_size).floor().max(0.0) as usize;
+                let hi = (((v + pad - o) / block_size).floor() as usize).min(n - 1);
+                lo..=hi
+            };
+            for brow in span(p[1], self.origin[1], block_rows) {
+                let row = &mut near[brow * self.block_cols..(brow + 1) * self.block_cols];
+                for flag in &mut row[span(p[0], self.origin[0], self.block_cols)] {
+                    *flag = true;
+                }
+            }
+        }
+        for brow in 0..block_rows {
+            for bcol in 0..self.block_cols {
+                if !near[brow * self.block_cols + bcol] {
+                    continue;
+                }
+                let corner =
+                    [self.origin[0] + bcol as f64 * block_size, self.origin[1] + brow as f64 * block_size];
+                let centre = [corner[0] + 0.5 * block_size, corner[1] + 0.5 * block_size];
+                let nn = tree.nearest_one::<SquaredEuclidean>(&centre);
+                let d_block = nn.distance.sqrt();
+                if d_block > self.reach + half_diagonal + block_half_diagonal {
+                    continue;
+                }
+                // A cell's nearest point is within d(c) <= d_block + R of the cell, so within
+                // d_block + 2R of the block centre; its list within d(c) + 2r of the cell.
+                let radius = d_block + 2.0 * block_half_diagonal + 2.0 * half_diagonal;
+                nearby.clear();
+                for n in tree.within_unsorted::<SquaredEuclidean>(&centre, radius * radius) {
+                    nearby.push((n.distance, n.item));
+                }
+                nearby.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let stored = (self.slots.len() / BLOCK_CELLS) as u32;
+                self.blocks[brow * self.block_cols + bcol] = stored;
+                for r in 0..BLOCK {
+                    for c in 0..BLOCK {
+                        let q = [corner[0] + (c as f64 + 0.5) * cell, corner[1] + (r as f64 + 0.5) * cell];
+                        let from_centre = ((q[0] - centre[0]).powi(2) + (q[1] - centre[1]).powi(2)).sqrt();
+                        let sq = |i: u32| {
+                            let p = points[i as usize];
+                            (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)
+                        };
+                        // Exact nearest distance: d(c) <= d_block + |c - centre|, so the nearest
+                        // point lies within d_block + 2 |c - centre| of the block centre.
+                        let mut best = f64::INFINITY;
+                        let limit = (d_block + 2.0 * from_centre).powi(2);
+                        for &(dc, i) in &nearby {
+                            if dc > limit {
+                                break;
+                            }
+                            best = best.min(sq(i));
+                        }
+                        let d_cell = best.sqrt();
+                        let mut slot = [sentinel, sentinel];
+                        if d_cell <= self.reach + half_diagonal {
+                            let keep = d_cell + 2.0 * half_diagonal;
+                            let scan_to = (keep + from_centre).powi(2);
+                            list.clear();
+                            for &(dc, i) in &nearby {
+                                if dc > scan_to {
+                                    break;
+                                }
+                                let d2 = sq(i);
+                                if d2 <= keep * keep {
+                                    list.push((d2, i));
+                                }
+                            }
+                            // Nearest to the cell centre first: the likeliest answer is met first.
+                            list.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                            let half = 0.5 * cell;
+                            let corners = [
+                                [q[0] - half, q[1] - half],
+                                [q[0] + half, q[1] - half],
+                                [q[0] - half, q[1] + half],
+                                [q[0] + half, q[1] + half],
+                            ];
+                            kept.clear();
+                            for &(_, i) in &list {
+                                let p = points[i as usize];
+                                // A point no nearer than a kept one at every corner of the cell is
+                                // no nearer anywhere in it (the set where it is nearer is a
+                                // half-plane): it is never the answer.
+                                let dominated = kept.iter().any(|&k| {
+                                    let kp = points[k as usize];
+                                    corners.iter().all(|c| {
+                                        (kp[0] - c[0]).powi(2) + (kp[1] - c[1]).powi(2)
+                                            <= (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)
+                                    })
+                                });
+                                if !dominated {
+                                    kept.push(i);
+                                }
+                            }
+                            slot = match kept[..] {
+                                [only] => [only, only],
+                                [a, b] => [a, b],
+                                _ => {
+                                    let offset = self.lists_len()?;
+                                    self.lists.extend_from_slice(&kept);
+                                    [LIST | kept.len() as u32, offset]
+                                }
+                            };
+                        }
+                        self.slots.push(slot);
+                    }
+                }
+            }
+        }
+        for b in &mut self.blocks {
+            if *b == EMPTY {
+                *b = 0;
+            }
+        }
+        self.renumber();
+        self.slots.shrink_to_fit();
+        self.lists.shrink_to_fit();
+        Ok(())
+    }
+
+    /// Renumbers the sites (still in plan order) in the order the cells name them, and drops
+    /// those no cell names.
+    fn renumber(&mut self) {
+        let sentinel = (self.sites.len() - 1) as u32;
+        let mut rank = vec![u32::MAX; self.sites.len()];
+        let mut order: Vec<u32> = Vec::new();
+        let mut visit = |i: &mut u32| {
+            if *i != sentinel {
+                if rank[*i as usize] == u32::MAX {
+                    rank[*i as usize] = order.len() as u32;
+                    order.push(*i);
+                }
+                *i = rank[*i as usize];
+            }
+        };
+        for slot in &mut self.slots {
+            if slot[0] & LIST != 0 {
+                let (len, at) = ((slot[0] & !LIST) as usize, slot[1] as usize);
+                for i in &mut self.lists[at..at + len] {
+                    visit(i);
+                }
+            } else {
+                let [a, b] = slot;
+                visit(a);
+                visit(b);
+            }
+        }
+        let new_sentinel = order.len() as u32;
+        for slot in &mut self.slots {
+            if slot[0] & LIST == 0 {
+                for i in slot.iter_mut() {
+                    if *i == sentinel {
+                        *i = new_sentinel;
+                    }
+                }
+            }
+        }
+        let mut sites: Vec<Site> = order.iter().map(|&i| self.sites[i as usize]).collect();
+        sites.push(self.sites[sentinel as usize]);
+        self.sites = sites;
+        self.plan_index = order;
+        // The sentinel's: never reported (it is never within reach), read without a branch.
+        self.plan_index.push(0);
+    }
+
+    fn lists_len(&self) -> Result<u32> {
+        u32::try_from(self.lists.len()).ok().filter(|&n| n < LIST).ok_or(IcpError::RasterTooLarge {
+            resolution: self.cell,
+            cells: self.lists.len() as f64,
+            limit: LIST as usize,
+        })
+    }
+    /// Cell size, metres.
+    pub fn cell(&self) -> f64 {
+        self.cell
+    }
+
+    /// Largest distance from the walls at which look-ups are answered, metres.
+    pub fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    /// Sizes and memory of the index.
+    pub fn stats(&self) -> IndexStats {
+        let stored_blocks = self.slots.len() / BLOCK_CELLS - 1;
+        let sentinel = (self.sites.len() - 1) as u32;
+        let candidates = self.slots[BLOCK_CELLS..]
+            .iter()
+            .map(|s| match *s {
+                [a, _] if a & LIST != 0 => (a & !LIST) as usize,
+                [a, _] if a == sentinel => 0,
+                [a, b] => 1 + usize::from(a != b),
+            })
+            .sum();
+        IndexStats {
+            cells: self.cols * self.rows,
+            stored_blocks,
+            blocks: self.blocks.len(),
+            candidates,
+            memory_bytes: self.memory_bytes(),
+        }
+    }
+
+    /// Bytes held by the index (tables and candidates).
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>()
+            + self.blocks.len() * 4
+            + self.slots.len() * 8
+            + self.lists.len() * 4
+            + self.sites.len() * std::mem::size_of::<Site>()
+            + self.plan_index.len() * 4
+    }
+
+    /// The plan index and squared distance (m^2) of the wall point nearest to `q` (map frame,
+    /// metres), or `None` when no wall point lies within [`NearestWallIndex::reach`].
+    #[inline]
+    pub fn nearest(&self, q: [f64; 2]) -> Option<(u32, f64)> {
+        let (i, d2) = self.lookup(q);
+        (d2 <= self.reach * self.reach).then_some((self.plan_index[i as usize], d2))
+    }
+
+    /// Pairs every point of `transformed` (map frame) with its nearest wall point when nearer
+    /// than `max_distance` (at most the reach) and, given a `sensor` position, when that wall
+    /// point faces the sensor ([`crate::wall_facing::faces`]). `out` is cleared first.
+    pub fn find_pairs(
+        &self,
+        transformed: &[[f64; 2]],
+        max_distance: f64,
+        sensor: Option<[f64; 2]>,
+        out: &mut Vec<Pair>,
+    ) {
+        let max_sq = max_distance.min(self.reach).powi(2);
+        out.clear();
+        out.resize(transformed.len(), Pair { source: 0, target: 0, sq_dist: 0.0 });
+        let mut kept = 0usize;
+        for (i, q) in transformed.iter().enumerate() {
+            let (t, d2) = self.lookup(*q);
+            let site = &self.sites[t as usize];
+            let facing = match sensor {
+                Some(s) => {
+                    let (dx, dy) = (s[0] - site.x, s[1] - site.y);
+                    let dot = site.outward[0] as f64 * dx + site.outward[1] as f64 * dy;
+                    (dot >= 0.0) | (dot * dot <= GRAZING_SQ * (dx * dx + dy * dy))
+                }
+                None => true,
+            };
+            // Written always, kept when it counts: no branch to mispredict.
+            let keep = (d2 <= max_sq) & facing;
+            // The sentinel (no wall within reach) is never kept; its plan index is a placeholder.
+            out[kept] = Pair { source: i as u32, target: self.plan_index[t as usize], sq_dist: d2 };
+            kept += usize::from(keep);
+        }
+        out.truncate(kept);
+    }
+
+    /// The nearest candidate of `q`'s cell and its squared distance (infinite: none).
+    #[inline]
+    fn lookup(&self, q: [f64; 2]) -> (u32, f64) {
+        let fx = (q[0] - self.origin[0]) * self.inv_cell;
+        let fy = (q[1] - self.origin[1]) * self.inv_cell;
+        let sentinel = (self.sites.len() - 1) as u32;
+        // Also false for NaN.
+        if !(fx >= 0.0 && fy >= 0.0 && fx < self.cols as f64 && fy < self.rows as f64) {
+            return (sentinel, f64::INFINITY);
+        }
+        let (col, row) = (cell_index(fx), cell_index(fy));
+        let stored = self.blocks[(row / BLOCK) * self.block_cols + col / BLOCK] as usize;
+        let [a, b] = self.slots[stored * BLOCK_CELLS + (row % BLOCK) * BLOCK + col % BLOCK];
+        let sq = |i: u32| {
+            let s = &self.sites[i as usize];
+            (s.x - q[0]) * (s.x - q[0]) + (s.y - q[1]) * (s.y - q[1])
+        };
+        if a & LIST != 0 {
+            let list = &self.lists[b as usize..b as usize + (a & !LIST) as usize];
+            return list.iter().map(|&i| (i, sq(i))).fold((sentinel, f64::INFINITY), |best, c| {
+                if c.1 < best.1 || (c.1 == best.1 && c.0 < best.0) {
+                    c
+                } else {
+                    best
+                }
+            });
+        }
+        // Selected without a branch: which of two neighbouring points wins is a coin toss for
+        // the branch predictor. (Equidistant points tie to the first; either is exact.)
+        let (da, db) = (sq(a), sq(b));
+        let take_b = db < da;
+        (select(take_b, b, a), if take_b { db } else { da })
+    }
+}
+
+/// The cell of a raster coordinate `f` (cells) in `[0, 2^31)`: `f - 0.5` rounded to the nearest
+/// integer by the float unit itself (adding 1.5 * 2^52 leaves the integer in the low mantissa
+/// bits). A point exactly on a cell border lands in either neighbour; both hold it in their closed
+/// square, which is all the lists promise. Two instructions, against the dozen of a saturating
+/// `as usize` cast.
+#[inline]
+fn cell_index(f: f64) -> usize {
+    const ROUNDING: f64 = 6_755_399_441_055_744.0;
+    ((f - 0.5 + ROUNDING).to_bits() & 0xFFFF_FFFF) as usize
+}
+
+/// `yes` if `pick` else `no`, as arithmetic (a conditional move).
+#[inline]
+fn select(pick: bool, yes: u32, no: u32) -> u32 {
+    let mask = (pick as u32).wrapping_neg();
+    (yes & mask) | (no & !mask)
+}
+
+/// sin^2 of the grazing tolerance of [`crate::wall_facing::faces`].
+const GRAZING_SQ: f64 = crate::wall_facing::GRAZING_SQ;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn walls(rng: &mut ChaCha8Rng) -> Vec<[f64; 2]> {
+        let mut pts = Vec::new();
+        for i in 0..400 {
+            let t = i as f64 * 0.05;
+            pts.extend([[t, 0.0], [t, 0.2], [t, 6.0], [0.0, t * 0.3], [20.0, t * 0.3], [7.0, 0.2 + t * 0.1]]);
+        }
+        // Clutter of isolated points, and a wall at an angle.
+        pts.extend((0..300).map(|_| [rng.random_range(0.0..20.0), rng.random_range(0.0..6.0)]));
+        pts.extend((0..200).map(|i| [2.0 + i as f64 * 0.03, 1.0 + i as f64 * 0.017]));
+        pts
+    }
+
+    fn brute(points: &[[f64; 2]], q: [f64; 2]) -> f64 {
+        points.iter().map(|p| (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn agrees_with_brute_force_within_reach_and_answers_none_beyond() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let pts = walls(&mut rng);
+        let tree = Tree2::new_from_slice(&pts);
+        for (cell, reach) in [(0.02, 0.4), (0.05, 0.25), (0.11, 1.0)] {
+            let index = NearestWallIndex::new(&pts, &tree, None, cell, reach).unwrap();
+            let (mut answered, mut beyond) = (0, 0);
+            for _ in 0..20_000 {
+                let q = [rng.random_range(-2.0..22.0), rng.random_range(-2.0..8.0)];
+                let exact = brute(&pts, q);
+                match index.nearest(q) {
+                    Some((i, d2)) => {
+                        answered += 1;
+                        assert!((d2 - exact).abs() < 1e-12, "cell {cell}: {q:?} index {d2} exact {exact}");
+                        let p = pts[i as usize];
+                        assert_eq!(d2, (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2));
+                    }
+                    None => {
+                        beyond += 1;
+                        assert!(
+                            exact > reach * reach,
+                            "cell {cell}: {q:?} is {} m from a wall",
+                            exact.sqrt()
+                        );
+                    }
+                }
+            }
+            assert!(answered > 1000 && beyond > 1000, "cell {cell}: {answered} answered, {beyond} beyond");
+        }
+    }
+
+    #[test]
+    fn stores_only_blocks_near_walls() {
+        // One short wall in a large empty extent: most blocks stay empty.
+        let mut pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
+        pts.push([40.0, 40.0]);
+        let tree = Tree2::new_from_slice(&pts);
+        let index = NearestWallIndex::new(&pts, &tree, None, 0.05, 0.3).unwrap();
+        let stats = index.stats();
+        assert!(stats.stored_blocks * 50 < stats.blocks, "{stats:?}");
+        assert!(stats.memory_bytes < 200_000, "{stats:?}");
+        assert!(index.nearest([20.0, 20.0]).is_none());
+        assert_eq!(index.nearest([0.51, 0.1]).map(|(i, _)| i), Some(10));
+        assert!(index.nearest([f64::NAN, 0.0]).is_none());
+        assert!(index.nearest([-1e12, 0.0]).is_none());
+    }
+
+    #[test]
+    fn cell_index_floors_inside_and_lands_on_either_side_of_a_border() {
+        for (f, cell) in [(0.0, 0), (0.25, 0), (0.75, 0), (1.5, 1), (2.999_999, 2), (1e6 + 0.3, 1_000_000)] {
+            assert_eq!(cell_index(f), cell, "{f}");
+        }
+        for border in [1.0, 2.0, 3.0, 1e6] {
+            let c = cell_index(border);
+            assert!(c == border as usize || c + 1 == border as usize, "{border}: {c}");
+        }
+    }
+
+    #[test]
+    fn rejects_bad_parameters() {
+        let pts = vec![[0.0, 0.0], [1.0, 0.0]];
+        let tree = Tree2::new_from_slice(&pts);
+        for (cell, reach) in [(0.0, 0.3), (f64::NAN, 0.3), (0.05, -1.0), (0.05, f64::INFINITY)] {
+            assert!(matches!(
+                NearestWallIndex::new(&pts, &tree, None, cell, reach),
+                Err(IcpError::InvalidParameter { .. })
+            ));
+        }
+        let far = vec![[0.0, 0.0], [1e6, 1e6]];
+        let tree = Tree2::new_from_slice(&far);
+        assert!(matches!(
+            NearestWallIndex::new(&far, &tree, None, 0.01, 0.3),
+            Err(IcpError::RasterTooLarge { .. })
+        ));
+    }
+}
