@@ -378,6 +378,7 @@ def test_icp_config_dict_round_trip(cfg: IcpConfig) -> None:
         "accelerate",
         "visibility_range",
         "covariance_scale",
+        "correspondence_search",
     }
     back = IcpConfig.from_dict(d)
     assert back == cfg

@@ -333,7 +333,13 @@ def test_result_fields_and_covariance(office_plan: PlanMap, office_scan: Any) ->
     assert res.inlier_mask.shape == (len(pts),) and res.inlier_mask.dtype == np.bool_
     assert res.num_inliers == int(res.inlier_mask.sum())
     assert res.inlier_ratio == pytest.approx(res.num_inliers / len(pts))
-    assert 0 < res.num_target_points < len(office_plan), "visibility should select a subset"
+    # The nearest-wall index matches against the whole plan (hidden faces are refused pair by
+    # pair); the KD-tree search against the subset visible from the guess.
+    assert res.num_target_points == len(office_plan)
+    guess = syn.perturb_pose(truth, np.random.default_rng(3), 0.2, 3 * DEG)
+    kd = localize(pts, office_plan, guess, IcpConfig(correspondence_search="kd_tree"))
+    assert 0 < kd.num_target_points < len(office_plan), "visibility should select a subset"
+    assert _success(truth, kd), kd
     assert 0.005 < res.rmse < 0.05  # 1.5 cm range noise
     cov = res.covariance
     assert cov.shape == (3, 3)
@@ -561,3 +567,29 @@ def test_public_api_exports() -> None:
     for name in planicp.__all__:
         assert hasattr(planicp, name), name
     assert isinstance(planicp.__version__, str) and planicp.__version__
+
+
+def test_both_correspondence_searches_agree(office: Any, office_plan: PlanMap) -> None:
+    """The nearest-wall index (default) and the KD-tree over the visible walls end at the same pose
+    on cluttered scans from guesses 0.2 m and 3 degrees off; the index is built once and kept."""
+    rng = np.random.default_rng(11)
+    stats = office_plan.prepare_index()
+    assert stats.reach == 0.5 and stats.cell == 0.03
+    assert 0 < stats.stored_blocks < stats.blocks and stats.candidates > len(office_plan)
+    assert office_plan.prepare_index() == stats
+    gaps = []
+    for _ in range(12):
+        truth = office.sample_pose(rng, clearance=0.6)
+        pts, _ = syn.simulate_scan(office, truth, rng)
+        guess = syn.perturb_pose(truth, rng, 0.2, 3 * DEG)
+        fast = localize(pts, office_plan, guess)
+        exact = localize(pts, office_plan, guess, IcpConfig(correspondence_search="kd_tree"))
+        if _success(truth, exact):
+            gaps.append(math.dist(fast.pose[:2], exact.pose[:2]))
+    assert len(gaps) >= 10, gaps
+    assert max(gaps) < 0.01, gaps
+
+
+def test_correspondence_search_is_checked() -> None:
+    with pytest.raises(ValueError, match="correspondence_search"):
+        IcpConfig(correspondence_search="octree")  # type: ignore[arg-type]

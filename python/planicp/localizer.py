@@ -157,7 +157,13 @@ class Localizer:
             raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
         self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
-        self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self.config, self.gate)
+        # The nearest-wall index refuses pairs with hidden wall faces where the KD-tree finds the
+        # nearest visible one, so its basin is narrower from a poor start (a 15-degree odometry
+        # step, a candidate place): fits it cannot make are tried again with the KD-tree, and the
+        # recovery refines its candidates with it.
+        self._wide_config = self.config.replace(correspondence_search="kd_tree")
+        self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self._wide_config,
+                                  self.gate)
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
@@ -240,8 +246,13 @@ class Localizer:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
                 kept = self._unoccluded(points, predicted, predicted_covariance)
-                result = localize(points if kept is None else points[kept], self.plan, predicted, self.config)
+                used = points if kept is None else points[kept]
+                result = localize(used, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
+                if self._poor_fit(result, reason, len(points)) and self.config.correspondence_search == "wall_index":
+                    wide = localize(used, self.plan, predicted, self._wide_config)
+                    if wide.num_inliers > result.num_inliers:
+                        result, reason = wide, self.gate.rejection(wide, predicted)
             searched = False
             if result is not None and not self._detector.lost and self._needs_search(result, reason,
                                                                                       predicted_covariance):
@@ -258,9 +269,7 @@ class Localizer:
             # How much of the WHOLE scan the plan explains: returns the occlusion rule left out count
             # as unexplained, so that a wrong prediction cannot hide the evidence against it.
             score = result.num_inliers / len(points) if result is not None else 0.0
-            poor = result is not None and (
-                (reason != "" and self.gate.fit_rejection(result) != "")
-                or (reason == "" and score < self._detector.rule.min_score))
+            poor = result is not None and self._poor_fit(result, reason, len(points))
             if poor and result is not None and not self._detector.lost and self._anchor is not None:
                 continues = self.continuity.continues(points, self._anchor[0], between(self._anchor[1], odom))
                 if not continues and reason == "":
@@ -300,6 +309,13 @@ class Localizer:
                 kept = None  # a search's result is over the whole scan
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses, kept)
+
+    def _poor_fit(self, result: IcpResult, reason: str, scan_points: int) -> bool:
+        """Whether the plan explains `result` poorly: rejected for its fit, or accepted with a score
+        (inliers over the whole scan of `scan_points`) below the lost rule's."""
+        score = result.num_inliers / scan_points
+        return (reason != "" and self.gate.fit_rejection(result) != "") or (
+            reason == "" and score < self._detector.rule.min_score)
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
                     predicted_covariance: NDArray[np.float64]) -> NDArray[np.bool_] | None:

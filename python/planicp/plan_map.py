@@ -14,6 +14,7 @@ from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import dxf_segments, house_expo_segments, sample_segments
+from .wall_index_stats import WallIndexStats
 
 CacheSetting = bool | str | Path
 """True: the default cache folder; False: no cache; a path: that folder."""
@@ -232,6 +233,12 @@ class PlanMap:
         """(xmin, ymin, xmax, ymax) of the points, metres."""
         lo, hi = self._points.min(axis=0), self._points.max(axis=0)
         return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
+    def prepare_index(self) -> WallIndexStats:
+        """Builds the plan's nearest-wall index now (the first alignment builds it otherwise; it
+        is kept with the plan) and returns its sizes. About 1.8 s and 70 MB for a 100 x 100 m
+        floor sampled every 2 cm (README, "Performance")."""
+        return WallIndexStats(*self._native.wall_index_stats())
 
     def visible_indices(self, pose: Any, max_range: float = 30.0) -> NDArray[np.uint32]:
         """Indices (ascending) of the wall points a 360-degree LIDAR at `pose` sees.

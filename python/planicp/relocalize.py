@@ -53,7 +53,8 @@ class RelocalizationConfig:
             `complete=False`.
         ambiguity_margin: a runner-up whose inlier ratio is within this share of the best's makes
             the result ambiguous.
-        icp: settings of the ICP refinement of each hypothesis.
+        icp: settings of the ICP refinement of each hypothesis (default: the KD-tree search over the
+            visible walls, whose basin suits coarse candidates).
     """
 
     resolution: float = 0.1
@@ -69,7 +70,7 @@ class RelocalizationConfig:
     max_scan_points: int = 200
     max_nodes: int = 4_000_000
     ambiguity_margin: float = 0.05
-    icp: IcpConfig = field(default_factory=IcpConfig)
+    icp: IcpConfig = field(default_factory=lambda: IcpConfig(correspondence_search="kd_tree"))
 
     def __post_init__(self) -> None:
         positive(self.resolution, "resolution", "metres")

@@ -7,7 +7,7 @@
 //! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
-//! - [`wall_facing`]: the outward normal of each wall point, to refuse pairings with a wall's far face.
+//! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
 //! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
 //! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).

@@ -17,7 +17,7 @@
 //! blocks of [`BLOCK`] x [`BLOCK`], and only blocks that reach a wall are stored, at 8 bytes per
 //! cell: the one or two plan points whose Voronoi regions meet the cell (nearly every cell), or the
 //! offset of a longer list (4 bytes per candidate plus a 4-byte length). The index keeps its own
-//! copy of the wall points with their outward normals (24 bytes per point), so that a look-up
+//! copy of the wall points with the directions they can be seen from (24 bytes per point), so that a look-up
 //! touches only the index. [`NearestWallIndex::memory_bytes`] reports the total.
 //!
 //! A look-up has no data-dependent branch in the common case: an empty block or cell points at a
@@ -30,6 +30,7 @@
 use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
 use crate::point_map::Tree2;
+use crate::wall_facing::{seen_from, SEEN_FROM_EVERYWHERE};
 use kiddo::SquaredEuclidean;
 
 /// Cells per block side.
@@ -40,6 +41,9 @@ const BLOCK_CELLS: usize = BLOCK * BLOCK;
 const EMPTY: u32 = u32::MAX;
 /// Set in a cell's first slot when the second holds the offset of a list.
 const LIST: u32 = 1 << 31;
+/// How far beyond a cell's nearest wall point its alternative is looked for, metres (the
+/// thickest wall whose near face stands in for its far one).
+pub const ALTERNATIVE_REACH: f64 = 0.45;
 /// Largest plan an index can hold (one index is the sentinel, one bit marks lists).
 pub const MAX_INDEX_POINTS: usize = (LIST - 1) as usize;
 /// Most cells (stored or not) an index may span: larger plans need a coarser cell
@@ -67,8 +71,8 @@ pub fn cell_within_budget(cell: f64, extent: [f64; 2], reach: f64) -> f64 {
 struct Site {
     x: f64,
     y: f64,
-    /// Outward unit normal (`[0, 0]`: two-sided), see [`crate::wall_facing`].
-    outward: [f32; 2],
+    /// Sectors it can be seen from, see [`crate::wall_facing`].
+    seen: u16,
 }
 
 /// Exact nearest-wall-point look-ups within a fixed reach, from a precomputed raster.
@@ -83,9 +87,11 @@ pub struct NearestWallIndex {
     block_cols: usize,
     /// Per block (row-major): its number among the stored blocks (0: the empty block).
     blocks: Vec<u32>,
-    /// Per stored block, `BLOCK_CELLS` cells (row-major) of two plan indices (the sentinel
-    /// `sites.len() - 1` when none), or `[LIST | length, offset]` of a list in `lists`.
-    slots: Vec<[u32; 2]>,
+    /// Per stored block, `BLOCK_CELLS` cells (row-major) of two site indices (the sentinel
+    /// `sites.len() - 1` when none), or `[LIST | length, offset]` of a list in `lists`; then the
+    /// cell's alternative: the site nearest to the cell among those seen from a direction the
+    /// nearest one is hidden from (the near face of a wall whose far face is nearest).
+    slots: Vec<[u32; 3]>,
     lists: Vec<u32>,
     /// The wall points in the order cells first name them (neighbours in the plan are
     /// neighbours in memory), and, last, the sentinel. Slots and lists index into it.
@@ -111,15 +117,16 @@ pub struct IndexStats {
 
 impl NearestWallIndex {
     /// Builds the index of `points` (the plan's wall points, metres, map frame; `tree` is their
-    /// KD-tree; `outward` their outward normals, `[0, 0]` or `None` for two-sided) with square
+    /// KD-tree; `seen` their visibility masks ([`crate::wall_facing`], `None`: seen from
+    /// everywhere) with square
     /// cells of `cell` metres, answering exactly for queries up to `reach` metres from the walls.
     ///
     /// Errors: `cell` or `reach` not positive and finite, no points, more than
-    /// [`MAX_INDEX_POINTS`] points or [`MAX_INDEX_CELLS`] cells, `outward` of another length.
+    /// [`MAX_INDEX_POINTS`] points or [`MAX_INDEX_CELLS`] cells, `seen` of another length.
     pub fn new(
         points: &[[f64; 2]],
         tree: &Tree2,
-        outward: Option<&[[f32; 2]]>,
+        seen: Option<&[u16]>,
         cell: f64,
         reach: f64,
     ) -> Result<Self> {
@@ -139,15 +146,15 @@ impl NearestWallIndex {
                 need: MAX_INDEX_POINTS,
             });
         }
-        if outward.is_some_and(|o| o.len() != points.len()) {
-            return Err(invalid("outward normals", "length", "must have one row per plan point"));
+        if seen.is_some_and(|o| o.len() != points.len()) {
+            return Err(invalid("visibility masks", "length", "must have one per plan point"));
         }
         let mut sites: Vec<Site> = points
             .iter()
             .enumerate()
-            .map(|(i, p)| Site { x: p[0], y: p[1], outward: outward.map_or([0.0, 0.0], |o| o[i]) })
+            .map(|(i, p)| Site { x: p[0], y: p[1], seen: seen.map_or(SEEN_FROM_EVERYWHERE, |o| o[i]) })
             .collect();
-        sites.push(Site { x: f64::INFINITY, y: f64::INFINITY, outward: [0.0, 0.0] });
+        sites.push(Site { x: f64::INFINITY, y: f64::INFINITY, seen: SEEN_FROM_EVERYWHERE });
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in points {
             for k in 0..2 {
@@ -202,7 +209,7 @@ impl NearestWallIndex {
         let block_rows = self.blocks.len() / self.block_cols;
         let sentinel = points.len() as u32;
         // Block 0: every cell empty.
-        self.slots.resize(BLOCK_CELLS, [sentinel, sentinel]);
+        self.slots.resize(BLOCK_CELLS, [sentinel, sentinel, sentinel]);
         // Blocks within reach of some point, found point by point: free space costs nothing.
         let mut near = vec![false; self.blocks.len()];
         let pad = self.reach + half_diagonal + block_half_diagonal;
@@ -261,7 +268,7 @@ impl NearestWallIndex {
                             best = best.min(sq(i));
                         }
                         let d_cell = best.sqrt();
-                        let mut slot = [sentinel, sentinel];
+                        let mut slot = [sentinel, sentinel, sentinel];
                         if d_cell <= self.reach + half_diagonal {
                             let keep = d_cell + 2.0 * half_diagonal;
                             let scan_to = (keep + from_centre).powi(2);
@@ -301,13 +308,32 @@ impl NearestWallIndex {
                                     kept.push(i);
                                 }
                             }
+                            // The alternative, for when the nearest point is hidden from the
+                            // sensor: searched up to ALTERNATIVE_REACH beyond the nearest.
+                            let hidden_from = !self.sites[list[0].1 as usize].seen;
+                            let mut alternative = (sentinel, f64::INFINITY);
+                            if hidden_from != 0 {
+                                let bound = (d_cell + ALTERNATIVE_REACH + from_centre).powi(2);
+                                for &(dc, i) in &nearby {
+                                    if dc > bound {
+                                        break;
+                                    }
+                                    if self.sites[i as usize].seen & hidden_from != 0 {
+                                        let d2 = sq(i);
+                                        if d2 < alternative.1 {
+                                            alternative = (i, d2);
+                                        }
+                                    }
+                                }
+                            }
+                            let alt = alternative.0;
                             slot = match kept[..] {
-                                [only] => [only, only],
-                                [a, b] => [a, b],
+                                [only] => [only, only, alt],
+                                [a, b] => [a, b, alt],
                                 _ => {
                                     let offset = self.lists_len()?;
                                     self.lists.extend_from_slice(&kept);
-                                    [LIST | kept.len() as u32, offset]
+                                    [LIST | kept.len() as u32, offset, alt]
                                 }
                             };
                         }
@@ -349,18 +375,20 @@ impl NearestWallIndex {
                     visit(i);
                 }
             } else {
-                let [a, b] = slot;
+                let [a, b, _] = slot;
                 visit(a);
                 visit(b);
             }
         }
+        for slot in &mut self.slots {
+            visit(&mut slot[2]);
+        }
         let new_sentinel = order.len() as u32;
         for slot in &mut self.slots {
-            if slot[0] & LIST == 0 {
-                for i in slot.iter_mut() {
-                    if *i == sentinel {
-                        *i = new_sentinel;
-                    }
+            let singles = if slot[0] & LIST == 0 { 0..3 } else { 2..3 };
+            for i in &mut slot[singles] {
+                if *i == sentinel {
+                    *i = new_sentinel;
                 }
             }
         }
@@ -396,9 +424,9 @@ impl NearestWallIndex {
         let candidates = self.slots[BLOCK_CELLS..]
             .iter()
             .map(|s| match *s {
-                [a, _] if a & LIST != 0 => (a & !LIST) as usize,
-                [a, _] if a == sentinel => 0,
-                [a, b] => 1 + usize::from(a != b),
+                [a, _, _] if a & LIST != 0 => (a & !LIST) as usize,
+                [a, _, _] if a == sentinel => 0,
+                [a, b, _] => 1 + usize::from(a != b),
             })
             .sum();
         IndexStats {
@@ -414,7 +442,7 @@ impl NearestWallIndex {
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.blocks.len() * 4
-            + self.slots.len() * 8
+            + self.slots.len() * 12
             + self.lists.len() * 4
             + self.sites.len() * std::mem::size_of::<Site>()
             + self.plan_index.len() * 4
@@ -424,13 +452,14 @@ impl NearestWallIndex {
     /// metres), or `None` when no wall point lies within [`NearestWallIndex::reach`].
     #[inline]
     pub fn nearest(&self, q: [f64; 2]) -> Option<(u32, f64)> {
-        let (i, d2) = self.lookup(q);
+        let (i, d2, _) = self.lookup(q);
         (d2 <= self.reach * self.reach).then_some((self.plan_index[i as usize], d2))
     }
 
     /// Pairs every point of `transformed` (map frame) with its nearest wall point when nearer
     /// than `max_distance` (at most the reach) and, given a `sensor` position, when that wall
-    /// point faces the sensor ([`crate::wall_facing::faces`]). `out` is cleared first.
+    /// point can be seen from the sensor ([`crate::wall_facing::seen_from`]). `out` is cleared
+    /// first.
     pub fn find_pairs(
         &self,
         transformed: &[[f64; 2]],
@@ -443,13 +472,20 @@ impl NearestWallIndex {
         out.resize(transformed.len(), Pair { source: 0, target: 0, sq_dist: 0.0 });
         let mut kept = 0usize;
         for (i, q) in transformed.iter().enumerate() {
-            let (t, d2) = self.lookup(*q);
+            let (mut t, mut d2, alt) = self.lookup(*q);
             let site = &self.sites[t as usize];
             let facing = match sensor {
                 Some(s) => {
-                    let (dx, dy) = (s[0] - site.x, s[1] - site.y);
-                    let dot = site.outward[0] as f64 * dx + site.outward[1] as f64 * dy;
-                    (dot >= 0.0) | (dot * dot <= GRAZING_SQ * (dx * dx + dy * dy))
+                    let seen = seen_from(site.seen, [site.x, site.y], s);
+                    if !seen {
+                        // Hidden: the cell's alternative, when the sensor sees it.
+                        let a = &self.sites[alt as usize];
+                        if seen_from(a.seen, [a.x, a.y], s) {
+                            t = alt;
+                            d2 = (a.x - q[0]).powi(2) + (a.y - q[1]).powi(2);
+                        }
+                    }
+                    t == alt || seen
                 }
                 None => true,
             };
@@ -464,36 +500,37 @@ impl NearestWallIndex {
 
     /// The nearest candidate of `q`'s cell and its squared distance (infinite: none).
     #[inline]
-    fn lookup(&self, q: [f64; 2]) -> (u32, f64) {
+    fn lookup(&self, q: [f64; 2]) -> (u32, f64, u32) {
         let fx = (q[0] - self.origin[0]) * self.inv_cell;
         let fy = (q[1] - self.origin[1]) * self.inv_cell;
         let sentinel = (self.sites.len() - 1) as u32;
         // Also false for NaN.
         if !(fx >= 0.0 && fy >= 0.0 && fx < self.cols as f64 && fy < self.rows as f64) {
-            return (sentinel, f64::INFINITY);
+            return (sentinel, f64::INFINITY, sentinel);
         }
         let (col, row) = (cell_index(fx), cell_index(fy));
         let stored = self.blocks[(row / BLOCK) * self.block_cols + col / BLOCK] as usize;
-        let [a, b] = self.slots[stored * BLOCK_CELLS + (row % BLOCK) * BLOCK + col % BLOCK];
+        let [a, b, alt] = self.slots[stored * BLOCK_CELLS + (row % BLOCK) * BLOCK + col % BLOCK];
         let sq = |i: u32| {
             let s = &self.sites[i as usize];
             (s.x - q[0]) * (s.x - q[0]) + (s.y - q[1]) * (s.y - q[1])
         };
         if a & LIST != 0 {
             let list = &self.lists[b as usize..b as usize + (a & !LIST) as usize];
-            return list.iter().map(|&i| (i, sq(i))).fold((sentinel, f64::INFINITY), |best, c| {
+            let (i, d2) = list.iter().map(|&i| (i, sq(i))).fold((sentinel, f64::INFINITY), |best, c| {
                 if c.1 < best.1 || (c.1 == best.1 && c.0 < best.0) {
                     c
                 } else {
                     best
                 }
             });
+            return (i, d2, alt);
         }
         // Selected without a branch: which of two neighbouring points wins is a coin toss for
         // the branch predictor. (Equidistant points tie to the first; either is exact.)
         let (da, db) = (sq(a), sq(b));
         let take_b = db < da;
-        (select(take_b, b, a), if take_b { db } else { da })
+        (select(take_b, b, a), if take_b { db } else { da }, alt)
     }
 }
 
@@ -514,9 +551,6 @@ fn select(pick: bool, yes: u32, no: u32) -> u32 {
     let mask = (pick as u32).wrapping_neg();
     (yes & mask) | (no & !mask)
 }
-
-/// sin^2 of the grazing tolerance of [`crate::wall_facing::faces`].
-const GRAZING_SQ: f64 = crate::wall_facing::GRAZING_SQ;
 
 #[cfg(test)]
 mod tests {

@@ -6,7 +6,7 @@ use crate::error::{check_finite, IcpError, Result};
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
-use crate::wall_facing::outward_normals;
+use crate::wall_facing::visibility_masks;
 use crate::wall_raster::WallRaster;
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use kiddo::SquaredEuclidean;
@@ -116,7 +116,7 @@ impl PointMap {
         Ok(self)
     }
 
-    /// The nearest-wall index, with the points' outward normals ([`crate::wall_facing`]), built
+    /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
     /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
     /// plan's extent at its cell size.
     pub fn wall_index(&self) -> Result<&NearestWallIndex> {
@@ -134,8 +134,8 @@ impl PointMap {
                 } else {
                     self.index_cell
                 };
-                let outward = outward_normals(&self.points, &self.normals, &self.raster);
-                NearestWallIndex::new(&self.points, &self.tree, Some(&outward), cell, self.index_reach)
+                let seen = visibility_masks(&self.points, &self.normals, &self.raster);
+                NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach)
             })
             .as_ref()
             .map_err(Clone::clone)

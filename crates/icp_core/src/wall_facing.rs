@@ -1,100 +1,112 @@
-//! Which side of a wall face its points look out from: the outward (free-space) normal of every
-//! plan point, so that a pairing with the far face of a wall can be refused without ray casting.
+//! From which directions each wall point can be seen: a 16-sector mask per plan point, so that a
+//! pairing with a point the robot cannot see (the far face of a wall, a face around a corner or
+//! behind a jamb) is refused without ray casting from the robot.
 //!
-//! A plan drawn with thick walls gives two parallel faces a wall's thickness apart, with nothing
-//! between them in the point set. From a point on one face, march along both directions of its
-//! (unoriented) wall normal through the plan's [`WallRaster`]: leave the face's own cells, cross
-//! free cells, and note the distance of the next wall cell. The side that meets another face within
-//! [`WALL_THICKNESS_LIMIT`], while the other side stays free at least twice as far and
-//! [`WALL_MARGIN`] farther, is the inside of the wall; the normal points the other way. Points
-//! where that cannot be told (a single-line wall, a corner, a wall thicker than the limit, a gap
-//! narrower than it on both sides) are two-sided: visible from anywhere, as without this module.
+//! For every point and each of [`SECTORS`] directions (sector centres every 22.5 degrees), a
+//! march through the plan's [`WallRaster`] leaves the point's own run of wall cells, crosses free
+//! cells, and notes whether it meets another wall cell within [`OCCLUSION_REACH`]. A sector whose
+//! march meets one is hidden: a sensor in that direction sees the other wall first. The far face
+//! of a thick wall is hidden from the whole half-plane across the wall (the near face is within
+//! reach), a face in a corner from the directions the other wall covers. A wall point with no wall
+//! within reach in any direction (a one-line wall, a pillar) is seen from everywhere.
 //!
-//! The known misreading: a one-line (thin) wall beside a space narrower than
-//! [`WALL_THICKNESS_LIMIT`] on one side only looks like a thick wall's face; that space is then
-//! taken for the wall's inside. No robot fits in such a space.
+//! The mask answers for the sector's centre direction, to within 11.25 degrees, and only for
+//! occluders within reach: a far face seen at less than about 18 degrees to its plane through a
+//! 0.2 m wall, and an occluder farther than [`OCCLUSION_REACH`] from the point, are not caught.
 
 use crate::wall_raster::WallRaster;
 
-/// Thickest wall whose faces are told apart, metres.
-pub const WALL_THICKNESS_LIMIT: f64 = 0.45;
-/// How much farther than the inside the outside must stay free, metres.
-pub const WALL_MARGIN: f64 = 0.3;
-/// Farthest a march looks, metres...
-const MARCH_LIMIT: f64 = 1.5;
-/// ...and in steps of half a raster cell (a plan sampled at micrometres would march forever).
+/// Directions per point.
+pub const SECTORS: usize = 16;
+/// Farthest occluder considered, metres.
+pub const OCCLUSION_REACH: f64 = 0.6;
+/// Most half-cell steps of one march (a plan sampled at micrometres would march forever).
 const MARCH_STEPS: usize = 1024;
+/// A mask where every sector is visible.
+pub const SEEN_FROM_EVERYWHERE: u16 = u16::MAX;
 
-/// Outward unit normal per point, or `[0, 0]` for a two-sided point. `normals` are the plan's
-/// unoriented wall normals (`[0, 0]` where none was fitted).
-pub fn outward_normals(points: &[[f64; 2]], normals: &[[f64; 2]], raster: &WallRaster) -> Vec<[f32; 2]> {
+/// Per point: bit `k` set when the point can be seen from sector `k` (see [`sector`]).
+/// `normals` are the points' wall normals (`[0, 0]` where none was fitted): wall cells within a
+/// cell and a half of the point's own wall line are the wall itself (a rotated wall's raster
+/// staircase), not an occluder.
+pub fn visibility_masks(points: &[[f64; 2]], normals: &[[f64; 2]], raster: &WallRaster) -> Vec<u16> {
+    let directions: Vec<[f64; 2]> = (0..SECTORS)
+        .map(|k| {
+            let a = (k as f64 + 0.5) * std::f64::consts::TAU / SECTORS as f64;
+            [a.cos(), a.sin()]
+        })
+        .collect();
     points
         .iter()
         .zip(normals)
         .map(|(&p, &n)| {
-            if n == [0.0, 0.0] {
-                return [0.0, 0.0];
-            }
-            let ahead = next_face(raster, p, n);
-            let behind = next_face(raster, p, [-n[0], -n[1]]);
-            let inside_is = |near: Option<f64>, far: Option<f64>| match near {
-                Some(d) if d <= WALL_THICKNESS_LIMIT => {
-                    far.is_none_or(|f| f >= (2.0 * d).max(d + WALL_MARGIN))
+            directions.iter().enumerate().fold(0u16, |mask, (k, &d)| {
+                if occluded(raster, p, n, d) {
+                    mask
+                } else {
+                    mask | (1 << k)
                 }
-                _ => false,
-            };
-            if inside_is(behind, ahead) {
-                [n[0] as f32, n[1] as f32]
-            } else if inside_is(ahead, behind) {
-                [-n[0] as f32, -n[1] as f32]
-            } else {
-                [0.0, 0.0]
-            }
+            })
         })
         .collect()
 }
 
-/// Distance from `p` along the unit direction `d` to the first wall cell past the free cells that
-/// follow `p`'s own run of wall cells; `None` within [`MARCH_LIMIT`].
-fn next_face(raster: &WallRaster, p: [f64; 2], d: [f64; 2]) -> Option<f64> {
+/// Whether a march from `p` along the unit direction `d` meets a wall cell past the free cells
+/// that follow `p`'s own run of wall cells, within [`OCCLUSION_REACH`].
+fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool {
     let res = raster.resolution();
     let origin = raster.origin();
     let step = 0.5 * res;
-    let mut left_own_face = false;
-    let limit = MARCH_LIMIT.min(MARCH_STEPS as f64 * step);
+    let limit = OCCLUSION_REACH.min(MARCH_STEPS as f64 * step);
+    let mut left_own_run = false;
+    // Distance from p's own wall line within which a wall cell is that wall.
+    let own_band = 1.5 * res;
+    let across = (d[0] * n[0] + d[1] * n[1]).abs();
     let mut t = step;
     while t <= limit {
         let x = ((p[0] + t * d[0] - origin[0]) / res).floor() as i64;
         let y = ((p[1] + t * d[1] - origin[1]) / res).floor() as i64;
-        let wall = raster.is_wall(x, y);
-        if !left_own_face {
-            left_own_face = !wall;
+        let own_line = n != [0.0, 0.0] && t * across < own_band;
+        let wall = raster.is_wall(x, y) && !(left_own_run && own_line);
+        if !left_own_run {
+            left_own_run = !wall;
         } else if wall {
-            return Some(t);
+            return true;
         }
         t += step;
     }
-    None
+    false
 }
 
-/// Whether a point with outward normal `outward` at `p` faces a sensor at `sensor`: two-sided
-/// points always do; others when the sensor lies on the outward side, with a grazing tolerance of
-/// about 6 degrees.
+/// The sector (0..16, counter-clockwise from +x, 22.5 degrees each) of the direction `(dx, dy)`,
+/// from comparisons only (no trigonometry in the look-up loop).
 #[inline]
-pub fn faces(outward: [f32; 2], p: [f64; 2], sensor: [f64; 2]) -> bool {
-    let (dx, dy) = (sensor[0] - p[0], sensor[1] - p[1]);
-    let dot = outward[0] as f64 * dx + outward[1] as f64 * dy;
-    dot >= 0.0 || dot * dot <= GRAZING_SQ * (dx * dx + dy * dy)
+pub fn sector(dx: f64, dy: f64) -> usize {
+    const TAN_22_5: f64 = 0.414_213_562_373_095_1;
+    let (ax, ay) = (dx.abs(), dy.abs());
+    // Within the first quadrant (angle of (ax, ay)): 0..4 in steps of 22.5 degrees.
+    let steep = ay > ax;
+    let (lo, hi) = if steep { (ax, ay) } else { (ay, ax) };
+    let half = lo > TAN_22_5 * hi;
+    let q = if steep { 3 - usize::from(half) } else { usize::from(half) };
+    // Mirror into the quadrant of (dx, dy).
+    match (dx < 0.0, dy < 0.0) {
+        (false, false) => q,
+        (true, false) => 7 - q,
+        (true, true) => 8 + q,
+        (false, true) => 15 - q,
+    }
 }
 
-/// sin^2 of the grazing tolerance of [`faces`].
-pub const GRAZING_SQ: f64 = 0.01;
+/// Whether a point with visibility `mask` at `p` can be seen from a sensor at `sensor`.
+#[inline]
+pub fn seen_from(mask: u16, p: [f64; 2], sensor: [f64; 2]) -> bool {
+    mask >> sector(sensor[0] - p[0], sensor[1] - p[1]) & 1 == 1
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::covariance::estimate_normals;
-    use crate::point_map::Tree2;
 
     fn sample(pts: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
         let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.05).round() as usize;
@@ -105,7 +117,17 @@ mod tests {
     }
 
     #[test]
-    fn thick_wall_faces_look_out_and_a_thin_wall_is_two_sided() {
+    fn sectors_follow_the_angle() {
+        for k in 0..64 {
+            let a = (k as f64 + 0.5) * std::f64::consts::TAU / 64.0;
+            let expected = (a / (std::f64::consts::TAU / 16.0)) as usize;
+            assert_eq!(sector(a.cos(), a.sin()), expected, "angle {a}");
+            assert_eq!(sector(3.0 * a.cos(), 3.0 * a.sin()), expected);
+        }
+    }
+
+    #[test]
+    fn a_thick_walls_far_face_is_hidden_and_a_thin_wall_is_seen_from_both_sides() {
         let mut pts = Vec::new();
         // A 0.2 m thick wall along x between rooms (faces at y = 0 and y = 0.2)...
         sample(&mut pts, [0.0, 0.0], [6.0, 0.0]);
@@ -113,28 +135,39 @@ mod tests {
         let thick = pts.len();
         // ...and a one-line wall far from everything.
         sample(&mut pts, [10.0, -3.0], [10.0, 3.0]);
-        let tree = Tree2::new_from_slice(&pts);
-        let normals = estimate_normals(&pts, &tree);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
-        let out = outward_normals(&pts, &normals, &raster);
+        let tree = crate::point_map::Tree2::new_from_slice(&pts);
+        let masks = visibility_masks(&pts, &crate::covariance::estimate_normals(&pts, &tree), &raster);
         for (i, p) in pts.iter().enumerate() {
-            // Away from the wall ends, where the faces are clear.
-            if p[0] < 0.5 || (p[0] > 5.5 && p[0] < 9.0) {
+            if p[0] < 1.0 || (p[0] > 5.0 && p[0] < 9.0) || p[1].abs() > 2.5 {
                 continue;
             }
-            let o = out[i];
+            let m = masks[i];
             if i < thick {
-                let expected = if p[1] < 0.1 { -1.0 } else { 1.0 };
-                assert!((o[1] - expected).abs() < 1e-3 && o[0].abs() < 1e-3, "{p:?}: {o:?}");
-                assert!(faces(o, *p, [3.0, 3.0 * expected as f64]));
-                assert!(!faces(o, *p, [3.0, -3.0 * expected as f64]));
+                // The face at y = 0 looks down (-y), the one at y = 0.2 up.
+                let outward = if p[1] < 0.1 { -1.0 } else { 1.0 };
+                assert!(seen_from(m, *p, [p[0] + 1.0, p[1] + 3.0 * outward]), "{p:?}: {m:016b}");
+                assert!(seen_from(m, *p, [p[0] - 2.0, p[1] + 3.0 * outward]), "{p:?}: {m:016b}");
+                assert!(!seen_from(m, *p, [p[0] + 1.0, p[1] - 3.0 * outward]), "{p:?}: {m:016b}");
+                assert!(!seen_from(m, *p, [p[0], p[1] - 3.0 * outward]), "{p:?}: {m:016b}");
             } else {
-                assert_eq!(o, [0.0, 0.0], "{p:?}");
-                assert!(faces(o, *p, [0.0, 0.0]) && faces(o, *p, [20.0, 0.0]));
+                assert_eq!(m, SEEN_FROM_EVERYWHERE, "{p:?}");
             }
         }
-        // Grazing views still count.
-        assert!(faces([0.0, 1.0], [0.0, 0.0], [10.0, -0.5]));
-        assert!(!faces([0.0, 1.0], [0.0, 0.0], [10.0, -2.0]));
+    }
+
+    #[test]
+    fn a_face_in_a_corner_is_hidden_behind_the_other_wall() {
+        // An inner corner: walls along y = 0 and x = 0, both one line.
+        let mut pts = Vec::new();
+        sample(&mut pts, [0.0, 0.0], [4.0, 0.0]);
+        sample(&mut pts, [0.0, 0.05], [0.0, 4.0]);
+        let raster = WallRaster::new(&pts, 0.075).unwrap();
+        let tree = crate::point_map::Tree2::new_from_slice(&pts);
+        let masks = visibility_masks(&pts, &crate::covariance::estimate_normals(&pts, &tree), &raster);
+        let i = pts.iter().position(|p| (p[0] - 0.3).abs() < 1e-9 && p[1] == 0.0).unwrap();
+        // Seen from the room (up and to the right), hidden from behind the x = 0 wall.
+        assert!(seen_from(masks[i], pts[i], [2.0, 2.0]));
+        assert!(!seen_from(masks[i], pts[i], [-3.0, 2.0]));
     }
 }

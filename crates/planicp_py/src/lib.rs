@@ -111,6 +111,20 @@ impl PyPointMap {
         self.inner.raster().resolution()
     }
 
+    /// Builds the nearest-wall index if not built yet (it is kept) and returns its sizes:
+    /// (cell m, reach m, memory bytes, stored blocks, blocks, candidates).
+    fn wall_index_stats(&self, py: Python<'_>) -> PyResult<(f64, f64, usize, usize, usize, usize)> {
+        let map = Arc::clone(&self.inner);
+        py.detach(|| {
+            guarded(|| {
+                map.wall_index().map(|index| {
+                    let s = index.stats();
+                    (index.cell(), index.reach(), s.memory_bytes, s.stored_blocks, s.blocks, s.candidates)
+                })
+            })
+        })
+    }
+
     /// Indices of the wall points visible from (x, y) within max_range metres.
     fn visible_indices<'py>(
         &self,
