@@ -75,3 +75,31 @@ def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
     if math.fsum(v * v for v in values) < 1e-12:
         raise ValueError("orientation is a zero quaternion (all four components 0)")
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def planar_mount(translation: Any, quaternion: Any) -> tuple[tuple[float, float, float], bool]:
+    """The 2D mounting pose of a laser from its 3D transform in the base frame (tf's base -> laser).
+
+    Args:
+        translation: (x, y, z) metres.
+        quaternion: (x, y, z, w) of the laser frame's orientation in the base frame.
+
+    Returns:
+        ((x, y, yaw) of the laser in the base plane, flipped): `flipped` is True for a laser
+        mounted upside down (its z axis points down), whose beam angles then turn clockwise in the
+        base frame: negate `angle_min` and `angle_increment` before using the mount.
+
+    Raises:
+        ValueError: a non-finite translation or a non-finite or zero quaternion.
+    """
+    t = np.asarray(translation, dtype=np.float64).ravel()
+    if t.shape != (3,) or not np.isfinite(t).all():
+        raise ValueError(f"translation must be 3 finite numbers, got {t.tolist()}")
+    qx, qy, qz, qw = (float(v) for v in np.asarray(quaternion, dtype=np.float64).ravel()[:4])
+    quaternion_to_yaw(qx, qy, qz, qw)  # validates
+    n = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
+    # First column of the rotation matrix (the laser's x axis in the base frame) and its z-z entry.
+    x_axis = (1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy + qz * qw))
+    zz = 1.0 - 2.0 * (qx * qx + qy * qy)
+    return (float(t[0]), float(t[1]), math.atan2(x_axis[1], x_axis[0])), zz < 0.0

@@ -22,6 +22,8 @@ class NodeDiagnostics:
         malformed_scans, malformed_odometry, malformed_initial_poses: messages refused as malformed
             (each logged with its reason); none of them changes the pose.
         scans_without_odometry: scans dropped because no odometry covered their stamp.
+        scans_without_laser_pose: scans dropped because tf had no transform from the base frame to
+            their laser frame (and no `laser_pose` parameter was set).
         out_of_order: scans older than the last processed scan, dropped.
         inlier_ratio: share of the last processed scan's points within the correspondence
             distance of the plan (NaN before the first alignment).
@@ -42,6 +44,7 @@ class NodeDiagnostics:
     malformed_odometry: int
     malformed_initial_poses: int
     scans_without_odometry: int
+    scans_without_laser_pose: int
     out_of_order: int
     inlier_ratio: float
     recent_accepted_share: float

@@ -80,7 +80,7 @@ class PlanicpNodeCore:
         self._recent: deque[tuple[bool, float]] = deque(maxlen=DIAGNOSTIC_WINDOW)
         self._counts = dict.fromkeys(("scans_received", "scans_processed", "accepted", "rejected", "malformed_scans",
                                       "malformed_odometry", "malformed_initial_poses", "scans_without_odometry",
-                                      "out_of_order"), 0)
+                                      "scans_without_laser_pose", "out_of_order"), 0)
         self._last_reason = ""
         self._last_problem = ""
         self._lock = threading.RLock()
@@ -166,6 +166,12 @@ class PlanicpNodeCore:
                 return []
             return [self._process(scan)]
 
+    def drop_scan_without_laser_pose(self, frame_id: str, why: str) -> None:
+        """Counts a scan the wrapper could not place: no transform from the base to its laser frame."""
+        with self._lock:
+            self._counts["scans_received"] += 1
+            self._problem("scans_without_laser_pose", f"scan in frame {frame_id!r} dropped: {why}")
+
     def set_initial_pose(self, stamp: float, pose: Any, covariance: Any = None) -> None:
         """An initial pose (RViz's "2D Pose Estimate"): T_map_base at `stamp` seconds.
 
@@ -231,7 +237,7 @@ class PlanicpNodeCore:
             return NodeDiagnostics(
                 level, message, c["scans_received"], c["scans_processed"], c["accepted"], c["rejected"],
                 c["malformed_scans"], c["malformed_odometry"], c["malformed_initial_poses"],
-                c["scans_without_odometry"], c["out_of_order"],
+                c["scans_without_odometry"], c["scans_without_laser_pose"], c["out_of_order"],
                 last.inlier_ratio if last is not None else math.nan, share, mean_ratio, lost,
                 self._last_reason, self._last_problem)
 
