@@ -115,7 +115,7 @@ class PlanicpRosNode:
                                          msg.range_min, msg.range_max, angle_max=sign * msg.angle_max,
                                          laser_pose=laser_pose)
         except (TypeError, ValueError) as exc:
-            self.rospy.logwarn_throttle(5.0, f"{NODE_NAME}: {exc}")
+            self.rospy.logwarn_throttle_identical(5.0, f"{NODE_NAME}: {exc}")
             return
         except Exception:  # never let one message kill the node
             self.rospy.logerr(f"{NODE_NAME}: scan callback failed:\n{traceback.format_exc()}")
@@ -130,7 +130,7 @@ class PlanicpRosNode:
             pose = (p.x, p.y, quaternion_to_yaw(q.x, q.y, q.z, q.w))
             outputs = self.core.add_odometry(msg.header.stamp.to_sec(), pose)
         except (TypeError, ValueError) as exc:
-            self.rospy.logwarn_throttle(5.0, f"{NODE_NAME}: {exc}")
+            self.rospy.logwarn_throttle_identical(5.0, f"{NODE_NAME}: {exc}")
             return
         except Exception:
             self.rospy.logerr(f"{NODE_NAME}: odometry callback failed:\n{traceback.format_exc()}")
