@@ -114,7 +114,8 @@ class LiveRun:
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
     missing = _missing()
     if missing is not None:
-        message = f"the live ROS test needs ROS 1 for this interpreter: {missing}"
+        message = (f"the live ROS test needs ROS 1 for this interpreter: {missing} (.ci/run runs it under "
+                   f"Debian's /usr/bin/python3 with PLANICP_REQUIRE_ROS=1)")
         if os.environ.get("PLANICP_REQUIRE_ROS") == "1":
             pytest.fail(f"{message} (PLANICP_REQUIRE_ROS=1)")
         pytest.skip(message)
