@@ -137,3 +137,14 @@ def test_recording_occupancy_grids() -> None:
         recording.poses("ground truth")
     with pytest.raises(ValueError, match="which must be 'odometry' or 'estimate'"):
         recording.errors("truth")
+
+
+def test_recording_keeps_the_whole_odometry_stream() -> None:
+    """The 100 Hz odometry a robot publishes is kept; at the scan times it is what the Localizer got."""
+    config = ExperimentConfig(duration_s=3.0, seed=6)
+    recording, _ = run_experiment(load_default_plan(), config)
+    assert recording.odometry_stream is not None and recording.odometry_stream_times is not None
+    assert recording.odometry_stream.shape == (len(recording.odometry_stream_times), 3)
+    np.testing.assert_allclose(np.diff(recording.odometry_stream_times), 1.0 / config.odometry_rate_hz)
+    at_scans = np.searchsorted(recording.odometry_stream_times, recording.times)
+    np.testing.assert_array_equal(recording.odometry_stream[at_scans], recording.odometry_in_odom)

@@ -124,6 +124,10 @@ class Recording:
         odometry_in_odom: (K, 3) T_odom_base fed to the Localizer.
         ranges: the K scans as the LIDAR measured them (REP-117 ranges of `lidar`), or None.
         lidar: the LIDAR model that measured them, or None.
+        odometry_stream_times: (M,) seconds of every odometry message (the odometry rate, not only
+            the scan times), or None.
+        odometry_stream: (M, 3) T_odom_base of every odometry message, or None: what a robot
+            publishes on its odometry topic, e.g. to replay the drive to a ROS node.
     """
 
     times: NDArray[np.float64]
@@ -137,6 +141,8 @@ class Recording:
     odometry_in_odom: NDArray[np.float64]
     ranges: list[NDArray[np.float64]] | None = None
     lidar: LidarModel | None = None
+    odometry_stream_times: NDArray[np.float64] | None = None
+    odometry_stream: NDArray[np.float64] | None = None
 
     def errors(self, which: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error m, heading error rad) over time of "odometry" or "estimate"."""
@@ -212,7 +218,8 @@ def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: Acceptance
     localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate, **options)
     estimate, accepted, ratio, rmse = _track(localizer, recording.scans, recording.odometry_in_odom)
     return Recording(recording.times, recording.truth, recording.odometry, estimate, accepted, ratio, rmse,
-                     recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar)
+                     recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar,
+                     recording.odometry_stream_times, recording.odometry_stream)
 
 
 def _track(localizer: Localizer, scans: list[NDArray[np.float64]], odometry: NDArray[np.float64]) -> tuple[
@@ -258,8 +265,10 @@ def run_experiment(
     localizer = Localizer(plan, start, config.icp, gate=config.gate)
     times, truth, odom_map, odom_odom, scans, measured = [], [], [], [], [], []
     estimate, accepted, ratio, rmse = [], [], [], []
+    stream = np.zeros((len(trajectory.times), 3))
     for k, (t, pose) in enumerate(zip(trajectory.times, trajectory.poses)):
         odom_pose = odometry.update(pose)
+        stream[k] = odom_pose
         if k % every:
             continue
         true_pose: Pose = (float(pose[0]), float(pose[1]), float(pose[2]))
@@ -285,5 +294,6 @@ def run_experiment(
     recording = Recording(
         np.array(times), np.array(truth), np.array(odom_map), np.array(estimate), np.array(accepted),
         np.array(ratio), np.array(rmse), scans, np.array(odom_odom), measured, lidar,
+        np.array(trajectory.times, dtype=np.float64), stream,
     )
     return recording, world

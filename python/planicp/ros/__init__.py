@@ -1,0 +1,52 @@
+"""planicp as a ROS localization node, in place of AMCL: same inputs, same outputs, same frames.
+
+The node's logic is framework-free and importable without ROS:
+
+* `PlanicpNodeCore` (`node_logic`): scans, odometry and initial poses in; `PoseOutput` (pose with
+  covariance, the map -> odom correction), the enhanced occupancy grid and `NodeDiagnostics` out;
+* `NodeSettings` (`node_settings`): the node's parameters, validated;
+* `ScanInput` (`node_io`), `OdometryBuffer` (`odometry_buffer`), the message layouts of covariances
+  and quaternions (`message_layout`) and the plan as an occupancy grid (`plan_grid`).
+
+`planicp.ros.rospy_node` is the ROS 1 node (`python -m planicp.ros.rospy_node`, or `roslaunch` with
+the launch files of `ros_package_path()`); `planicp.ros.sim_drive` publishes a simulated drive as a
+robot would. Both need rospy (on Debian: `apt-get install ros-base python3-rospy
+python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-ros python3-diagnostic-msgs`,
+and planicp installed for Debian's `/usr/bin/python3`).
+
+Frames and units follow REP-103/105: metres, radians, seconds; poses are (x, y, yaw).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .message_layout import covariance_from_6x6, covariance_to_6x6, quaternion_to_yaw, yaw_to_quaternion
+from .node_diagnostics import NodeDiagnostics
+from .node_io import PoseOutput, ScanInput
+from .node_logic import PlanicpNodeCore
+from .node_settings import NodeSettings
+from .odometry_buffer import OdometryBuffer
+from .plan_grid import plan_occupancy_grid
+
+
+def ros_package_path() -> Path:
+    """The folder of the ROS package `planicp_ros` shipped with planicp (its launch and parameter
+    files, and the node executables roslaunch starts): add it to `ROS_PACKAGE_PATH`."""
+    return Path(__file__).resolve().parent / "share"
+
+
+__all__ = [
+    "NodeDiagnostics",
+    "NodeSettings",
+    "OdometryBuffer",
+    "PlanicpNodeCore",
+    "PoseOutput",
+    "ScanInput",
+    "covariance_from_6x6",
+    "covariance_to_6x6",
+    "plan_occupancy_grid",
+    "quaternion_to_yaw",
+    "ros_package_path",
+    "yaw_to_quaternion",
+]
