@@ -151,7 +151,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON or DXF")
-    plan.add_argument("--resolution", type=float, help="metres per pixel (images; a YAML has its own)")
+    plan.add_argument("--resolution", type=float,
+                      help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own)")
     plan.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
                       help="pose of the image's lower-left corner in the map frame (m, m, rad)")
     plan.add_argument("--threshold", type=int, default=None, help="wall grey level 1..255 (default: Otsu)")

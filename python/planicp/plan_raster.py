@@ -127,6 +127,57 @@ class PlanRaster:
         return cls(walls, res, (float(lo[0]), float(lo[1]), 0.0))
 
 
+    @classmethod
+    def from_free_polygon(cls, vertices: Any, resolution: float, wall_thickness: float = 0.15,
+                          margin: int = 2) -> PlanRaster:
+        """Rasterises a floor given as the outline of its free space (a HouseExpo `verts` polygon):
+        pixels inside the polygon are free; everything outside it within its bounding box grown by
+        `wall_thickness` metres is wall (the outer walls, and the slits and notches an outline has
+        where interior walls and shafts are). The image is axis-aligned (yaw 0) with `margin` free
+        pixels around that box; vertex coordinates are map-frame metres.
+
+        Raises:
+            ValueError: fewer than 3 vertices, a non-finite vertex, a bad resolution or thickness,
+                a raster of more than 4e8 pixels, or a polygon with no pixel inside it.
+        """
+        verts = _polygon(vertices)
+        res = positive(resolution, "resolution", "metres per pixel")
+        band = max(1, int(math.ceil(positive(wall_thickness, "wall_thickness", "metres") / res - 1e-9)))
+        margin = int(margin)
+        if margin < 0:
+            raise ValueError(f"margin must be >= 0 pixels, got {margin}")
+        pad = band + margin
+        lo = verts.min(axis=0) - pad * res
+        cols_rows = np.ceil((verts.max(axis=0) - lo) / res).astype(np.int64) + pad
+        cols, rows = int(cols_rows[0]), int(cols_rows[1])
+        if cols * rows > 400_000_000:
+            raise ValueError(f"a raster of {cols} x {rows} pixels at {res} m is too large; use a coarser resolution")
+        from matplotlib.path import Path as PolygonPath
+
+        # A pixel is free when its centre lies inside the polygon (rows grow with +y until the flip).
+        yy, xx = np.mgrid[0:rows, 0:cols]
+        centres = np.column_stack([lo[0] + (xx.ravel() + 0.5) * res, lo[1] + (yy.ravel() + 0.5) * res])
+        inside = PolygonPath(verts).contains_points(centres).reshape(rows, cols)
+        if not inside.any():
+            raise ValueError(f"the polygon covers no pixel at resolution {res} m (is it smaller than a pixel?)")
+        walls = np.zeros((rows, cols), dtype=bool)
+        walls[margin : rows - margin, margin : cols - margin] = True
+        walls &= ~inside
+        return cls(np.ascontiguousarray(walls[::-1]), res, (float(lo[0]), float(lo[1]), 0.0))
+
+
+def _polygon(vertices: Any) -> NDArray[np.float64]:
+    try:
+        verts = np.asarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"polygon vertices must be an (N, 2) array of numbers: {exc}") from None
+    if verts.ndim != 2 or verts.shape[1] != 2 or len(verts) < 3:
+        raise ValueError(f"a polygon needs an (N >= 3, 2) array of vertices, got shape {verts.shape}")
+    if not np.isfinite(verts).all():
+        raise ValueError("polygon vertices must be finite (no NaN or inf)")
+    return verts
+
+
 def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:
     """An 8-bit grey image from a path (PNG, JPG, PGM, BMP, ...) or an array.
 
