@@ -30,6 +30,8 @@ def test_default_plan_odometry_drifts_planicp_does_not() -> None:
     check_flat(metrics)
     assert metrics["odometry_heading_max_deg"] > 5.0
     assert len(recording.times) == 601 and len(world.people) >= 3
+    assert recording.lost is not None and recording.lost.shape == (601,)
+    assert metrics["lost_scans"] == 0 and metrics["lost_at_end"] == 0
     # odometry and truth start together (the odom frame is the start pose)
     np.testing.assert_allclose(recording.odometry[0], recording.truth[0], atol=1e-12)
 
