@@ -4,7 +4,7 @@ a Markdown report. Plots return matplotlib Figures (drawn with the Agg backend, 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,11 +36,19 @@ def _figure(width: float, height: float) -> Figure:
     return Figure(figsize=(width, height), dpi=100, layout="constrained")
 
 
-def _values(rows: Sequence[dict[str, Any]], column: str) -> list[Any]:
-    """Distinct values of a column: numbers ascending, names in order of appearance."""
+Order = Mapping[str, Sequence[Any]]
+"""The study's order of the values of an axis column (e.g. setting names as the study lists them)."""
+
+
+def _values(rows: Sequence[dict[str, Any]], column: str, order: Order | None = None) -> list[Any]:
+    """Distinct values of a column: numbers ascending, names in the study's `order` (else in order
+    of appearance)."""
     seen = list(dict.fromkeys(r[column] for r in rows))
     if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in seen):
         return sorted(seen)
+    if order is not None and column in order:
+        rank = {v: i for i, v in enumerate(order[column])}
+        seen.sort(key=lambda v: rank.get(v, len(rank)))
     return seen
 
 
@@ -51,11 +59,11 @@ def _label(value: Any) -> str:
     return text if len(text) <= 18 else "..." + text[-15:]
 
 
-def summary_by_setting(rows: Sequence[dict[str, Any]], column: str) -> list[dict[str, Any]]:
-    """Per value of `column`: runs, failed runs, success rate, and the median and 95th percentile of
+def summary_by_setting(rows: Sequence[dict[str, Any]], column: str, order: Order | None = None) -> list[dict[str, Any]]:
+    """Per value of `column` (in the study's `order`): runs, failed runs, success rate, and the median and 95th percentile of
     planicp's largest position error (metres) and the median of odometry's, over finished runs."""
     out = []
-    for value in _values(rows, column):
+    for value in _values(rows, column, order):
         group = [r for r in rows if r[column] == value]
         finished = [r for r in group if r["status"] == "ok"]
         p = np.array([r["planicp_position_max_m"] for r in finished], dtype=float)
@@ -74,15 +82,17 @@ def summary_by_setting(rows: Sequence[dict[str, Any]], column: str) -> list[dict
     return out
 
 
-def plot_error_distributions(rows: Sequence[dict[str, Any]], threshold_m: float | None = None) -> Figure:
+def plot_error_distributions(rows: Sequence[dict[str, Any]], threshold_m: float | None = None,
+                             order: Order | None = None) -> Figure:
     """Box plots of planicp's largest position error per run (metres, log scale) for each setting of
-    every axis, odometry's beside them in grey; the success threshold as a dashed line."""
+    every axis that varies, odometry's beside them in grey; the success threshold as a dashed line.
+    Failed runs have no error and are left out."""
     axes_used = [(c, t) for c, t in AXES if rows and len(_values(rows, c)) > 1] or [AXES[0]]
     fig = _figure(4.0 * len(axes_used), 3.6)
     subplots = fig.subplots(1, len(axes_used), squeeze=False)[0]
     finished = [r for r in rows if r["status"] == "ok"]
     for ax, (column, title) in zip(subplots, axes_used):
-        values = _values(rows, column) if rows else []
+        values = _values(rows, column, order) if rows else []
         data_p = [[max(r["planicp_position_max_m"], 1e-4) for r in finished if r[column] == v] for v in values]
         data_o = [[max(r["odometry_position_max_m"], 1e-4) for r in finished if r[column] == v] for v in values]
         positions = np.arange(len(values), dtype=float)
@@ -110,13 +120,13 @@ def plot_error_distributions(rows: Sequence[dict[str, Any]], threshold_m: float 
     return fig
 
 
-def plot_success_rates(rows: Sequence[dict[str, Any]]) -> Figure:
+def plot_success_rates(rows: Sequence[dict[str, Any]], order: Order | None = None) -> Figure:
     """Success rate against furniture density (one line per odometry setting) and against the
-    odometry's heading drift in degrees per second (one line per furniture density); points are
-    annotated with their number of runs."""
+    odometry's heading drift in degrees per second, log scale (one line per furniture density);
+    points are annotated with their number of runs. A failed run is not a success."""
     fig = _figure(9.0, 3.6)
     left, right = fig.subplots(1, 2)
-    for name in _values(rows, "odometry") if rows else []:
+    for name in _values(rows, "odometry", order) if rows else []:
         group = [r for r in rows if r["odometry"] == name]
         xs = _values(group, "furniture")
         _rate_line(left, group, "furniture", xs, str(name))
@@ -126,6 +136,9 @@ def plot_success_rates(rows: Sequence[dict[str, Any]]) -> Figure:
         group = [r for r in rows if r["furniture"] == level]
         xs = _values(group, "odometry_drift_deg_per_s")
         _rate_line(right, group, "odometry_drift_deg_per_s", xs, f"furniture {level:g}")
+    drifts = [r["odometry_drift_deg_per_s"] for r in rows]
+    if drifts and min(drifts) > 0 and max(drifts) > 2 * min(drifts):
+        right.set_xscale("log")
     right.set_xlabel("odometry heading drift (deg/s)")
     right.set_title("success rate vs drift")
     for ax in (left, right):
@@ -149,7 +162,7 @@ def _rate_line(ax: Any, group: Sequence[dict[str, Any]], column: str, xs: list[A
 
 
 def markdown_report(study: Study, rows: Sequence[dict[str, Any]], *, expected_runs: int, figures: Sequence[str],
-                    command: str = "", version: str = "") -> str:
+                    command: str = "", version: str = "", order: Order | None = None) -> str:
     """The study's report: what ran, overall success, a table per axis, the failed runs, figures."""
     done = len(rows)
     failed = [r for r in rows if r["status"] != "ok"]
@@ -172,7 +185,7 @@ def markdown_report(study: Study, rows: Sequence[dict[str, Any]], *, expected_ru
             f"planicp's largest position error stayed below {criterion.max_position_error_m:g} m{lost_rule}.",
         ]
     for column, title in AXES:
-        summary = summary_by_setting(rows, column) if rows else []
+        summary = summary_by_setting(rows, column, order) if rows else []
         if not summary:
             continue
         lines += ["", f"## By {title.replace('$^2$', '²')}", "",

@@ -24,7 +24,7 @@ from .. import __version__
 from ..progress import progress_bar
 from .executors import RunFunction, run_local, run_ray
 from .report import markdown_report, plot_error_distributions, plot_success_rates
-from .runs import RunSpec, execute_run, expand_runs
+from .runs import RunSpec, execute_run, expand_runs, study_axes
 from .store import ResultStore, table_rows, write_table
 from .study import Study
 
@@ -127,11 +127,12 @@ def run_study(
 def _summaries(study: Study, runs: Sequence[RunSpec], rows: list[dict[str, Any]], folder: Path,
                command: str) -> list[Path]:
     figures = []
+    order = {"plan": list(dict.fromkeys(r.plan for r in runs)), **study_axes(study)}
     if rows:
-        plot_error_distributions(rows, study.success.max_position_error_m).savefig(folder / "errors.png")
-        plot_success_rates(rows).savefig(folder / "success.png")
+        plot_error_distributions(rows, study.success.max_position_error_m, order).savefig(folder / "errors.png")
+        plot_success_rates(rows, order).savefig(folder / "success.png")
         figures = ["errors.png", "success.png"]
     report = markdown_report(study, rows, expected_runs=len(runs), figures=figures, command=command,
-                             version=__version__)
+                             version=__version__, order=order)
     (folder / "report.md").write_text(report, encoding="utf-8")
     return [folder / name for name in figures] + [folder / "report.md"]
