@@ -329,8 +329,10 @@ def test_free_polygon_raster_walls_the_outline_and_fills_notches() -> None:
     rows, cols = np.nonzero(~raster.walls)
     free_xy = to_map(rows + 0.5, cols + 0.5)
     assert not ((np.abs(free_xy[:, 0] - 2.0) < 0.25) & (free_xy[:, 1] > 2.05) & (free_xy[:, 1] < 3.1)).any()
-    with pytest.raises(ValueError, match="needs an"):
+    with pytest.raises(ValueError, match="needs at least 3 vertices"):
         PlanRaster.from_free_polygon([(0, 0), (1, 1)], 0.05)
+    with pytest.raises(ValueError, match="too large"):
+        PlanRaster.from_free_polygon(verts, 1e-6)
     with pytest.raises(ValueError, match="finite"):
         PlanRaster.from_free_polygon([(0, 0), (1, 0), (0, math.nan)], 0.05)
     with pytest.raises(ValueError, match="wall_thickness"):

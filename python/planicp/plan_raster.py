@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, as_pose, positive
+from ._validation import Pose, as_points, as_pose, positive, whole_number
 
 
 def _cv2() -> Any:
@@ -137,21 +137,24 @@ class PlanRaster:
         pixels around that box; vertex coordinates are map-frame metres.
 
         Raises:
-            ValueError: fewer than 3 vertices, a non-finite vertex, a bad resolution or thickness,
-                a raster of more than 4e8 pixels, or a polygon with no pixel inside it.
+            TypeError: vertices that are not real numbers, a non-integer margin.
+            ValueError: not (N >= 3, 2) vertices, a non-finite vertex, a bad resolution, thickness
+                or margin, a raster of more than 4e8 pixels, or a polygon with no pixel inside it.
         """
         verts = _polygon(vertices)
         res = positive(resolution, "resolution", "metres per pixel")
-        band = max(1, int(math.ceil(positive(wall_thickness, "wall_thickness", "metres") / res - 1e-9)))
-        margin = int(margin)
-        if margin < 0:
-            raise ValueError(f"margin must be >= 0 pixels, got {margin}")
+        thickness = positive(wall_thickness, "wall_thickness", "metres")
+        margin = whole_number(margin, "margin", 0, 1 << 20)
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a too large raster, below
+            span = (verts.max(axis=0) - verts.min(axis=0) + 2 * thickness) / res + 2 * margin + 2
+        if not np.isfinite(span).all() or float(span[0]) * float(span[1]) > 400_000_000:
+            raise ValueError(f"a raster of {span[0]:.3g} x {span[1]:.3g} pixels at {res} m is too large; use a "
+                             "coarser resolution or a thinner wall")
+        band = max(1, int(math.ceil(thickness / res - 1e-9)))
         pad = band + margin
         lo = verts.min(axis=0) - pad * res
         cols_rows = np.ceil((verts.max(axis=0) - lo) / res).astype(np.int64) + pad
         cols, rows = int(cols_rows[0]), int(cols_rows[1])
-        if cols * rows > 400_000_000:
-            raise ValueError(f"a raster of {cols} x {rows} pixels at {res} m is too large; use a coarser resolution")
         from matplotlib.path import Path as PolygonPath
 
         # A pixel is free when its centre lies inside the polygon (rows grow with +y until the flip).
@@ -167,14 +170,9 @@ class PlanRaster:
 
 
 def _polygon(vertices: Any) -> NDArray[np.float64]:
-    try:
-        verts = np.asarray(vertices, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"polygon vertices must be an (N, 2) array of numbers: {exc}") from None
-    if verts.ndim != 2 or verts.shape[1] != 2 or len(verts) < 3:
-        raise ValueError(f"a polygon needs an (N >= 3, 2) array of vertices, got shape {verts.shape}")
-    if not np.isfinite(verts).all():
-        raise ValueError("polygon vertices must be finite (no NaN or inf)")
+    verts = as_points(vertices, "polygon vertices")
+    if len(verts) < 3:
+        raise ValueError(f"a polygon needs at least 3 vertices, got {len(verts)}")
     return verts
 
 
