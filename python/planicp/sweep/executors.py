@@ -97,7 +97,9 @@ def run_ray(
     ray = import_ray()
     started_here = not ray.is_initialized()
     if started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False)
+        # No dashboard for an instance started here; a cluster joined keeps its own settings.
+        options = {"include_dashboard": False} if address is None else {}
+        ray.init(address=address, log_to_driver=False, **options)
     try:
         task = ray.remote(num_cpus=1)(run)
         pending = {task.remote(spec): spec for spec in runs}

@@ -290,7 +290,11 @@ class Study:
             for name in settings:
                 if not isinstance(name, str) or not name:
                     raise StudyError(f"key {key!r}: setting names must be non-empty strings, got {name!r}")
+        icp_keys = sorted(f.name for f in dataclasses.fields(IcpConfig) if f.init)
         for name, changes in self.icp.items():
+            unknown = sorted(str(k) for k in changes if k not in icp_keys)
+            if unknown:
+                raise StudyError(f"unknown key(s) {[f'icp.{name}.{k}' for k in unknown]}; known: {icp_keys}")
             try:
                 IcpConfig.for_tracking(**dict(changes))
             except (TypeError, ValueError) as exc:
