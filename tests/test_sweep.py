@@ -199,7 +199,8 @@ def test_local_and_ray_give_identical_tables(tmp_path: Path) -> None:
     local = run_study(study, tmp_path / "local", base_dir=base, workers=2)
     assert (local.total, local.executed, local.skipped, local.failed) == (12, 12, 0, 0)
     ray = import_ray()
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    # address="local": a new instance even when this machine runs a Ray cluster (ray.init() would join it)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         on_ray = run_study(study, tmp_path / "ray", base_dir=base, ray=True)
     finally:

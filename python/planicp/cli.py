@@ -220,8 +220,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="output folder; an interrupted study there is resumed")
     sweep.add_argument("--workers", type=int, default=None, help="local processes (default: one per CPU)")
     sweep.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
-                       help="run on Ray: a new local instance, or the cluster at ADDRESS ('auto', "
-                            "'ray://host:10001'); needs pip install 'planicp[cluster]'")
+                       help="run on Ray: without ADDRESS Ray's default (RAY_ADDRESS, else a cluster "
+                            "started here with 'ray start', else a new local instance); or ADDRESS: "
+                            "'local', 'auto', 'ray://host:10001'; needs pip install 'planicp[cluster]'")
     sweep.add_argument("--retry-failed", action="store_true", help="run the runs recorded as failed again")
     sweep.set_defaults(func=_sweep)
     return parser

@@ -84,9 +84,10 @@ def run_ray(
     """Runs `runs` as Ray tasks (one CPU each) and collects them as they finish.
 
     Connects with `ray.init(address=address)` unless Ray is already initialised in this process
-    (then that instance is used and left running): None starts a local instance (or joins the
-    cluster in `RAY_ADDRESS`), "auto" joins the cluster this machine belongs to, "ray://host:10001"
-    a remote one. Every node needs planicp installed and the plan files at the same paths (a shared
+    (then that instance is used and left running). None is Ray's default: the cluster in
+    `RAY_ADDRESS`, else one started on this machine with `ray start`, else a new local instance;
+    "local" always starts a new local instance, "auto" joins the cluster this machine belongs to,
+    "ray://host:10001" a remote one through Ray Client. Every node needs planicp installed and the plan files at the same paths (a shared
     folder), or only the shipped `default` plan.
 
     A task that fails in Ray itself (its worker died after Ray's retries) is recorded as a failed
@@ -98,7 +99,7 @@ def run_ray(
     started_here = not ray.is_initialized()
     if started_here:
         # No dashboard for an instance started here; a cluster joined keeps its own settings.
-        options = {"include_dashboard": False} if address is None else {}
+        options = {"include_dashboard": False} if address in (None, "local") else {}
         ray.init(address=address, log_to_driver=False, **options)
     try:
         task = ray.remote(num_cpus=1)(run)
