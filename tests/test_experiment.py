@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +11,7 @@ import pytest
 from planicp import EnhancedOccupancyGrid, PlanMap, PlanRaster, compare_grids, synthetic
 from planicp.cli import main as cli_main
 from planicp.default_plan import load_default_plan
+from planicp.plan_loading import load_plan
 from planicp.sim.experiment import ExperimentConfig, LidarModel, replay, run_experiment
 from planicp.icp_config import IcpConfig
 
@@ -30,6 +30,8 @@ def test_default_plan_odometry_drifts_planicp_does_not() -> None:
     check_flat(metrics)
     assert metrics["odometry_heading_max_deg"] > 5.0
     assert len(recording.times) == 601 and len(world.people) >= 3
+    assert recording.lost is not None and recording.lost.shape == (601,)
+    assert metrics["lost_scans"] == 0 and metrics["lost_at_end"] == 0
     # odometry and truth start together (the odom frame is the start pose)
     np.testing.assert_allclose(recording.odometry[0], recording.truth[0], atol=1e-12)
 
@@ -43,19 +45,9 @@ def test_generated_floors(layout: str) -> None:
 
 
 def test_real_layout_house_expo() -> None:
-    """The HouseExpo sample (a real home's outline), rendered with 15 cm walls."""
-    import cv2
-
-    from planicp import vector_plan
-
-    segments, (xmin, ymin, xmax, ymax) = vector_plan.house_expo_segments(
-        Path(__file__).parent / "data" / "house_expo_room_0000.json")
-    res, margin = 0.05, 1.0
-    rows, cols = int(math.ceil((ymax - ymin + 2 * margin) / res)), int(math.ceil((xmax - xmin + 2 * margin) / res))
-    inside = np.zeros((rows, cols), np.uint8)
-    cv2.fillPoly(inside, [np.round((segments[:, 0, :] - (xmin - margin, ymin - margin)) / res).astype(np.int32)], 1)
-    walls = cv2.dilate(inside, np.ones((7, 7), np.uint8)).astype(bool) & ~inside.astype(bool)
-    plan = PlanMap.from_raster(PlanRaster(walls[::-1], res, (xmin - margin, ymin - margin, 0.0)))
+    """The HouseExpo sample (a real home's outline), rasterised with 15 cm walls."""
+    plan = load_plan(Path(__file__).parent / "data" / "house_expo_room_0000.json", resolution=0.05)
+    assert plan.raster is not None
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=30.0, seed=3))
     check_flat(recording.metrics())
 

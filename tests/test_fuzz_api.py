@@ -285,6 +285,21 @@ def test_plan_from_segments_and_raster(data: Any) -> None:
             assert np.isfinite(plan.points).all() and len(plan.points) > 0
 
 
+@FUZZ
+@given(st.data())
+def test_raster_from_free_polygon(data: Any) -> None:
+    vertices = data.draw(st.one_of(arrays(12), st.just([(0.0, 0.0), (4.0, 0.0), (4.0, 3.0), (0.0, 3.0)])))
+    resolution = data.draw(st.one_of(st.sampled_from([0.05, 0.5]), values, anything))
+    thickness = data.draw(st.one_of(st.sampled_from([0.15, 0.01]), values, anything))
+    margin = data.draw(st.one_of(st.integers(0, 4), values, anything))
+    ok, raster = call(PlanRaster.from_free_polygon, vertices, resolution, thickness, margin)
+    if ok:
+        assert raster.walls.dtype == np.bool_ and raster.walls.any() and not raster.walls.all()
+        ok, plan = call(PlanMap.from_raster, raster)
+        if ok:
+            assert np.isfinite(plan.points).all() and len(plan.points) > 0
+
+
 # --------------------------------------------------------------------------------------------------
 # alignment
 # --------------------------------------------------------------------------------------------------

@@ -304,6 +304,69 @@ def test_vector_constructors_and_cli(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert "no layer 'doors'" in capsys.readouterr().err.lower()
 
 
+def test_free_polygon_raster_walls_the_outline_and_fills_notches() -> None:
+    """A U-shaped free space (a 4 x 3 m room with a 1 m deep, 0.6 m wide notch in its top wall):
+    the outline becomes the wall surface, the notch is filled with wall, the inside stays free."""
+    verts = [(0, 0), (4, 0), (4, 3), (2.3, 3), (2.3, 2), (1.7, 2), (1.7, 3), (0, 3)]
+    raster = PlanRaster.from_free_polygon(verts, 0.05, wall_thickness=0.15)
+    plan = PlanMap.from_raster(raster)
+    outline = np.array(verts, float)
+    segments = np.stack([outline, np.roll(outline, -1, axis=0)], axis=1)
+    sampled = planicp.vector_plan.sample_segments(segments, 0.01)
+    from scipy.spatial import cKDTree
+
+    # every inner wall surface point lies on the outline (within a pixel), and the outline is covered
+    inner = plan.points[(plan.points[:, 0] > -0.01) & (plan.points[:, 0] < 4.01)
+                        & (plan.points[:, 1] > -0.01) & (plan.points[:, 1] < 3.01)]
+    assert cKDTree(sampled).query(inner)[0].max() <= 0.05
+    assert cKDTree(plan.points).query(sampled)[0].max() <= 0.05
+    # the notch (between x 1.7 and 2.3 above y 2) is wall all the way up through the band
+    to_map = raster.pixel_to_map
+    rows, cols = np.nonzero(raster.walls)
+    wall_xy = to_map(rows + 0.5, cols + 0.5)
+    notch = (np.abs(wall_xy[:, 0] - 2.0) < 0.25) & (wall_xy[:, 1] > 2.05) & (wall_xy[:, 1] < 3.1)
+    assert notch.sum() == pytest.approx(0.5 / 0.05 * 1.0 / 0.05, rel=0.25)
+    rows, cols = np.nonzero(~raster.walls)
+    free_xy = to_map(rows + 0.5, cols + 0.5)
+    assert not ((np.abs(free_xy[:, 0] - 2.0) < 0.25) & (free_xy[:, 1] > 2.05) & (free_xy[:, 1] < 3.1)).any()
+    with pytest.raises(ValueError, match="needs at least 3 vertices"):
+        PlanRaster.from_free_polygon([(0, 0), (1, 1)], 0.05)
+    with pytest.raises(ValueError, match="too large"):
+        PlanRaster.from_free_polygon(verts, 1e-6)
+    with pytest.raises(ValueError, match="finite"):
+        PlanRaster.from_free_polygon([(0, 0), (1, 0), (0, math.nan)], 0.05)
+    with pytest.raises(ValueError, match="wall_thickness"):
+        PlanRaster.from_free_polygon(verts, 0.05, wall_thickness=0.0)
+    with pytest.raises(ValueError, match="covers no pixel"):
+        PlanRaster.from_free_polygon([(0, 0), (0.01, 0), (0, 0.01)], 0.05)
+
+
+def test_house_expo_raster_route_and_folder(tmp_path: Path) -> None:
+    """`load_plan(house.json, resolution=r)` gives a plan with a raster (what the simulation needs)
+    whose wall surfaces follow the outline; a folder lists its HouseExpo files."""
+    from planicp.plan_loading import house_expo_files, load_plan
+
+    source = DATA / "house_expo_room_0000.json"
+    points_only = load_plan(source)
+    rastered = load_plan(source, resolution=0.05)
+    assert points_only.raster is None and rastered.raster is not None
+    from scipy.spatial import cKDTree
+
+    assert cKDTree(rastered.points).query(points_only.points)[0].max() <= 0.05
+    folder = tmp_path / "plans"
+    folder.mkdir()
+    with pytest.raises(ValueError, match="holds no HouseExpo .json file"):
+        house_expo_files(folder)
+    shutil.copy(source, folder / "b.json")
+    shutil.copy(source, folder / "a.JSON")
+    (folder / "notes.txt").write_text("not a plan")
+    assert [p.name for p in house_expo_files(folder)] == ["a.JSON", "b.json"]
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        house_expo_files(tmp_path / "none")
+    with pytest.raises(NotADirectoryError, match="is not a folder"):
+        house_expo_files(source)
+
+
 @pytest.mark.parametrize("suffix", [".bmp", ".jpg"])
 def test_other_image_formats(floor: synthetic.Floor, tmp_path: Path, suffix: str) -> None:
     import cv2

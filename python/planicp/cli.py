@@ -115,6 +115,26 @@ def _evaluate_log(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    import shlex
+
+    from .sweep import load_study, run_study
+
+    study, base = load_study(args.config)
+    try:
+        result = run_study(study, args.out, base_dir=base, ray=args.ray is not None, ray_address=args.ray or None,
+                           workers=args.workers, retry_failed=args.retry_failed, stream=sys.stdout,
+                           command="planicp " + shlex.join(args.argv))
+    except KeyboardInterrupt:
+        print(f"\nplanicp sweep: interrupted; the finished runs are recorded in {args.out}: run the same "
+              "command again to finish the study", file=sys.stderr)
+        return 130
+    except RuntimeError as exc:  # a worker process died
+        print(f"planicp sweep: error: {exc}", file=sys.stderr)
+        return 1
+    return 0 if result.executed + result.skipped == result.total else 1
+
+
 def _add_log_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("log", help="CARMEN log (.log/.clf[.gz]), g2o file, ROS 1 .bag or ROS 2 bag folder")
     parser.add_argument("--scan-topic", default="/scan", help="LaserScan topic (bags)")
@@ -151,7 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON or DXF")
-    plan.add_argument("--resolution", type=float, help="metres per pixel (images; a YAML has its own)")
+    plan.add_argument("--resolution", type=float,
+                      help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own)")
     plan.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
                       help="pose of the image's lower-left corner in the map frame (m, m, rad)")
     plan.add_argument("--threshold", type=int, default=None, help="wall grey level 1..255 (default: Otsu)")
@@ -189,6 +210,21 @@ def build_parser() -> argparse.ArgumentParser:
                           help="synthetic: reference motion + thesis drift + noise; log: the log's own odometry")
     evaluate.add_argument("--seed", type=int, default=0, help="seed of the synthetic odometry noise")
     evaluate.set_defaults(func=_evaluate_log)
+    sweep = sub.add_parser(
+        "sweep",
+        help="a study of many simulated runs (plans x seeds x clutter x sensors x drift x ICP) into one table",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    sweep.add_argument("config", type=Path, help="study YAML (see planicp.sweep.study)")
+    sweep.add_argument("--out", type=Path, required=True,
+                       help="output folder; an interrupted study there is resumed")
+    sweep.add_argument("--workers", type=int, default=None, help="local processes (default: one per CPU)")
+    sweep.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                       help="run on Ray: without ADDRESS Ray's default (RAY_ADDRESS, else a cluster "
+                            "started here with 'ray start', else a new local instance); or ADDRESS: "
+                            "'local', 'auto', 'ray://host:10001'; needs pip install 'planicp[cluster]'")
+    sweep.add_argument("--retry-failed", action="store_true", help="run the runs recorded as failed again")
+    sweep.set_defaults(func=_sweep)
     return parser
 
 
@@ -196,9 +232,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `planicp` command; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     try:
         code: int = args.func(args)
-    except (ValueError, TypeError, OSError) as exc:
+    except (ValueError, TypeError, OSError, ImportError) as exc:
         print(f"planicp {args.command}: error: {exc}", file=sys.stderr)
         return 2
     return code

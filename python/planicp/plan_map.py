@@ -182,11 +182,20 @@ class PlanMap:
         return cls.from_points(sample_segments(segments, spacing), resolution=1.5 * spacing)
 
     @classmethod
-    def from_house_expo(cls, source: str | Path | dict[str, Any], spacing: float = 0.02) -> PlanMap:
-        """A plan from a HouseExpo JSON file (or its parsed dict): the outline polygon `verts`
-        (metres) sampled every `spacing` metres."""
+    def from_house_expo(cls, source: str | Path | dict[str, Any], spacing: float = 0.02, *,
+                        resolution: float | None = None, wall_thickness: float = 0.15) -> PlanMap:
+        """A plan from a HouseExpo JSON file (or its parsed dict), whose outline polygon `verts`
+        (metres, map frame) bounds the free space.
+
+        Without `resolution`: the outline sampled every `spacing` metres (a plan of points). With
+        `resolution` (metres per pixel): the outline rasterised with walls `wall_thickness` metres
+        thick around it (`PlanRaster.from_free_polygon`), so that the plan has a raster, as the
+        simulation (`planicp.sim`, `planicp sweep`) needs; its points are the wall surfaces of that
+        raster, at most half a pixel from the outline."""
         segments, _ = house_expo_segments(source)
-        return cls.from_segments(segments, spacing)
+        if resolution is None:
+            return cls.from_segments(segments, spacing)
+        return cls.from_raster(PlanRaster.from_free_polygon(segments[:, 0, :], resolution, wall_thickness))
 
     @classmethod
     def from_dxf(

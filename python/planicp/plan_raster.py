@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, as_pose, positive
+from ._validation import Pose, as_points, as_pose, positive, whole_number
 
 
 def _cv2() -> Any:
@@ -125,6 +125,55 @@ class PlanRaster:
         walls = np.zeros((rows, cols), dtype=bool)
         walls[rows - 1 - r_up, c] = True
         return cls(walls, res, (float(lo[0]), float(lo[1]), 0.0))
+
+
+    @classmethod
+    def from_free_polygon(cls, vertices: Any, resolution: float, wall_thickness: float = 0.15,
+                          margin: int = 2) -> PlanRaster:
+        """Rasterises a floor given as the outline of its free space (a HouseExpo `verts` polygon):
+        pixels inside the polygon are free; everything outside it within its bounding box grown by
+        `wall_thickness` metres is wall (the outer walls, and the slits and notches an outline has
+        where interior walls and shafts are). The image is axis-aligned (yaw 0) with `margin` free
+        pixels around that box; vertex coordinates are map-frame metres.
+
+        Raises:
+            TypeError: vertices that are not real numbers, a non-integer margin.
+            ValueError: not (N >= 3, 2) vertices, a non-finite vertex, a bad resolution, thickness
+                or margin, a raster of more than 4e8 pixels, or a polygon with no pixel inside it.
+        """
+        verts = _polygon(vertices)
+        res = positive(resolution, "resolution", "metres per pixel")
+        thickness = positive(wall_thickness, "wall_thickness", "metres")
+        margin = whole_number(margin, "margin", 0, 1 << 20)
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a too large raster, below
+            span = (verts.max(axis=0) - verts.min(axis=0) + 2 * thickness) / res + 2 * margin + 2
+        if not np.isfinite(span).all() or float(span[0]) * float(span[1]) > 400_000_000:
+            raise ValueError(f"a raster of {span[0]:.3g} x {span[1]:.3g} pixels at {res} m is too large; use a "
+                             "coarser resolution or a thinner wall")
+        band = max(1, int(math.ceil(thickness / res - 1e-9)))
+        pad = band + margin
+        lo = verts.min(axis=0) - pad * res
+        cols_rows = np.ceil((verts.max(axis=0) - lo) / res).astype(np.int64) + pad
+        cols, rows = int(cols_rows[0]), int(cols_rows[1])
+        from matplotlib.path import Path as PolygonPath
+
+        # A pixel is free when its centre lies inside the polygon (rows grow with +y until the flip).
+        yy, xx = np.mgrid[0:rows, 0:cols]
+        centres = np.column_stack([lo[0] + (xx.ravel() + 0.5) * res, lo[1] + (yy.ravel() + 0.5) * res])
+        inside = PolygonPath(verts).contains_points(centres).reshape(rows, cols)
+        if not inside.any():
+            raise ValueError(f"the polygon covers no pixel at resolution {res} m (is it smaller than a pixel?)")
+        walls = np.zeros((rows, cols), dtype=bool)
+        walls[margin : rows - margin, margin : cols - margin] = True
+        walls &= ~inside
+        return cls(np.ascontiguousarray(walls[::-1]), res, (float(lo[0]), float(lo[1]), 0.0))
+
+
+def _polygon(vertices: Any) -> NDArray[np.float64]:
+    verts = as_points(vertices, "polygon vertices")
+    if len(verts) < 3:
+        raise ValueError(f"a polygon needs at least 3 vertices, got {len(verts)}")
+    return verts
 
 
 def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:

@@ -128,6 +128,7 @@ class Recording:
             the scan times), or None.
         odometry_stream: (M, 3) T_odom_base of every odometry message, or None: what a robot
             publishes on its odometry topic, e.g. to replay the drive to a ROS node.
+        lost: (K,) whether the Localizer was lost after each scan (`Estimate.lost`), or None.
     """
 
     times: NDArray[np.float64]
@@ -143,6 +144,7 @@ class Recording:
     lidar: LidarModel | None = None
     odometry_stream_times: NDArray[np.float64] | None = None
     odometry_stream: NDArray[np.float64] | None = None
+    lost: NDArray[np.bool_] | None = None
 
     def errors(self, which: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error m, heading error rad) over time of "odometry" or "estimate"."""
@@ -189,7 +191,9 @@ class Recording:
         return grid
 
     def metrics(self) -> dict[str, float]:
-        """RMS, maximum and final errors of odometry and planicp, plus acceptance statistics."""
+        """RMS, maximum and final errors of odometry and planicp (metres, degrees), acceptance
+        statistics and, when the recording has them, the scans after which the Localizer was lost
+        (`lost_scans`) and whether it was lost after the last one (`lost_at_end`, 0 or 1)."""
         out: dict[str, float] = {}
         for label, which in (("odometry", "odometry"), ("planicp", "estimate")):
             pos, yaw = self.errors(which)
@@ -204,6 +208,9 @@ class Recording:
         steps = np.hypot(*np.diff(self.estimate[:, :2], axis=0).T) if len(self.times) > 1 else np.zeros(1)
         true_steps = np.hypot(*np.diff(self.truth[:, :2], axis=0).T) if len(self.times) > 1 else np.zeros(1)
         out["largest_estimate_jump_beyond_truth_m"] = float(np.max(steps - true_steps)) if len(steps) else 0.0
+        if self.lost is not None:
+            out["lost_scans"] = float(self.lost.sum())
+            out["lost_at_end"] = float(bool(self.lost[-1])) if len(self.lost) else 0.0
         return out
 
 
@@ -216,26 +223,28 @@ def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: Acceptance
     """The same scans and odometry through a Localizer with other settings (for ablations);
     `options` go to the `Localizer` (e.g. `occlusion=False`)."""
     localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate, **options)
-    estimate, accepted, ratio, rmse = _track(localizer, recording.scans, recording.odometry_in_odom)
+    estimate, accepted, ratio, rmse, lost = _track(localizer, recording.scans, recording.odometry_in_odom)
     return Recording(recording.times, recording.truth, recording.odometry, estimate, accepted, ratio, rmse,
                      recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar,
-                     recording.odometry_stream_times, recording.odometry_stream)
+                     recording.odometry_stream_times, recording.odometry_stream, lost)
 
 
 def _track(localizer: Localizer, scans: list[NDArray[np.float64]], odometry: NDArray[np.float64]) -> tuple[
-        NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64]]:
+        NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     estimate = np.zeros((len(scans), 3))
     accepted = np.zeros(len(scans), dtype=bool)
+    lost = np.zeros(len(scans), dtype=bool)
     ratio = np.full(len(scans), np.nan)
     rmse = np.full(len(scans), np.nan)
     for k, (scan, odom) in enumerate(zip(scans, odometry)):
         est = localizer.update(scan, tuple(odom))
         estimate[k] = est.pose
         accepted[k] = est.accepted
+        lost[k] = est.lost
         if est.result is not None:
             ratio[k] = est.result.inlier_ratio
             rmse[k] = est.result.rmse
-    return estimate, accepted, ratio, rmse
+    return estimate, accepted, ratio, rmse, lost
 
 
 def run_experiment(
@@ -264,7 +273,7 @@ def run_experiment(
     start: Pose = tuple(float(v) for v in trajectory.poses[0])  # type: ignore[assignment]
     localizer = Localizer(plan, start, config.icp, gate=config.gate)
     times, truth, odom_map, odom_odom, scans, measured = [], [], [], [], [], []
-    estimate, accepted, ratio, rmse = [], [], [], []
+    estimate, accepted, ratio, rmse, lost = [], [], [], [], []
     stream = np.zeros((len(trajectory.times), 3))
     for k, (t, pose) in enumerate(zip(trajectory.times, trajectory.poses)):
         odom_pose = odometry.update(pose)
@@ -287,6 +296,7 @@ def run_experiment(
         measured.append(ranges)
         estimate.append(est.pose)
         accepted.append(est.accepted)
+        lost.append(est.lost)
         ratio.append(est.result.inlier_ratio if est.result is not None else math.nan)
         rmse.append(est.result.rmse if est.result is not None else math.nan)
         if progress is not None:
@@ -294,6 +304,6 @@ def run_experiment(
     recording = Recording(
         np.array(times), np.array(truth), np.array(odom_map), np.array(estimate), np.array(accepted),
         np.array(ratio), np.array(rmse), scans, np.array(odom_odom), measured, lidar,
-        np.array(trajectory.times, dtype=np.float64), stream,
+        np.array(trajectory.times, dtype=np.float64), stream, np.array(lost, dtype=bool),
     )
     return recording, world
