@@ -24,6 +24,7 @@ from planicp import synthetic
 
 VARIANTS: dict[str, dict[str, object]] = {
     "default": {},
+    "kd_tree search": {"correspondence_search": "kd_tree"},
     "no visibility": {"use_visibility": False},
     "single stage (1.0)": {"correspondence_schedule": (1.0,)},
     "no acceleration": {"accelerate": False},

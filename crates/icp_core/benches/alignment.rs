@@ -11,7 +11,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::icp::CorrespondenceSearch;
-use icp_core::nearest_wall_index::NearestWallIndex;
+use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
 use icp_core::point_map::{Tree2, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use rand::SeedableRng;
@@ -55,7 +55,8 @@ fn benches(c: &mut Criterion) {
     let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
     let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
     let wall = map.wall_index().unwrap();
-    let sensor = Some([guess.x, guess.y]);
+    let bearings = SensorView::bearings_of(&scan);
+    let sensor = Some(SensorView::new(&bearings, guess.yaw));
     g.bench_function("wall_index", |b| {
         b.iter(|| wall.find_pairs(black_box(&moved), 0.4, sensor, &mut pairs))
     });

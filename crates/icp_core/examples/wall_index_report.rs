@@ -9,7 +9,7 @@
 #[path = "../benches/common/mod.rs"]
 mod common;
 
-use icp_core::nearest_wall_index::NearestWallIndex;
+use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
 use icp_core::point_map::{DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{PointMap, Pose2};
 use rand::SeedableRng;
@@ -52,10 +52,12 @@ fn main() {
     let moved: Vec<[f64; 2]> =
         scan.iter().map(|p| Pose2::new(52.6, 44.9, 0.32).transform_point(*p)).collect();
     let mut pairs = Vec::new();
+    let bearings = SensorView::bearings_of(&scan);
+    let view = SensorView::new(&bearings, 0.32);
     let reps = 2000;
     let t = Instant::now();
     for _ in 0..reps {
-        index.find_pairs(std::hint::black_box(&moved), 0.4, Some([truth.x, truth.y]), &mut pairs);
+        index.find_pairs(std::hint::black_box(&moved), 0.4, Some(view), &mut pairs);
     }
     let ns = t.elapsed().as_nanos() as f64 / (reps * moved.len()) as f64;
     println!("look-ups: {ns:.1} ns each over a 1080-point scan ({} pairs)", pairs.len());

@@ -14,7 +14,7 @@ use crate::correspondence::{
 };
 use crate::covariance::pose_covariance;
 use crate::error::{check_finite, invalid, IcpError, Result};
-use crate::nearest_wall_index::NearestWallIndex;
+use crate::nearest_wall_index::{NearestWallIndex, SensorView};
 use crate::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
@@ -240,6 +240,7 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     // Beyond a metre a candidate list holds whole rooms: plain KD-tree queries are cheaper.
     let use_cache = indexed.is_none() && largest_distance <= MAX_CACHED_DISTANCE;
     let mut cache = CandidateCache::new(CACHE_RADIUS_FACTOR * largest_distance);
+    let bearings = if indexed.is_some() { SensorView::bearings_of(&used) } else { Vec::new() };
     'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
         let distance = stage_distance(*factor, config.max_correspondence_distance, map.spacing());
         let end = stage_end(stage, stages, config.max_iterations);
@@ -252,8 +253,8 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
         while iterations < end {
             pose.transform_points(&used, &mut moved);
             if let Some(wall) = indexed {
-                let sensor = config.use_visibility.then_some([pose.x, pose.y]);
-                wall.find_pairs(&moved, distance, sensor, &mut pairs);
+                let view = config.use_visibility.then(|| SensorView::new(&bearings, pose.yaw));
+                wall.find_pairs(&moved, distance, view, &mut pairs);
             } else if use_cache {
                 cache.find_pairs(&target, &moved, distance, &mut pairs);
             } else {
@@ -353,8 +354,9 @@ fn score(
     let d = config.max_correspondence_distance;
     match search {
         Search::Indexed(wall) => {
-            let sensor = config.use_visibility.then_some([pose.x, pose.y]);
-            wall.find_pairs(&moved, d, sensor, &mut pairs)
+            let bearings = SensorView::bearings_of(scan);
+            let view = config.use_visibility.then(|| SensorView::new(&bearings, pose.yaw));
+            wall.find_pairs(&moved, d, view, &mut pairs)
         }
         Search::Cached(cache) if d <= cache.radius() => cache.find_pairs(target, &moved, d, &mut pairs),
         _ => find_pairs(target, &moved, d, &mut pairs),

@@ -30,7 +30,7 @@
 use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
 use crate::point_map::Tree2;
-use crate::wall_facing::{seen_from, SEEN_FROM_EVERYWHERE};
+use crate::wall_facing::SEEN_FROM_EVERYWHERE;
 use kiddo::SquaredEuclidean;
 
 /// Cells per block side.
@@ -457,14 +457,14 @@ impl NearestWallIndex {
     }
 
     /// Pairs every point of `transformed` (map frame) with its nearest wall point when nearer
-    /// than `max_distance` (at most the reach) and, given a `sensor` position, when that wall
-    /// point can be seen from the sensor ([`crate::wall_facing::seen_from`]). `out` is cleared
-    /// first.
+    /// than `max_distance` (at most the reach) and, given a `view`, when that wall point can be
+    /// seen from the sensor ([`crate::wall_facing`]); a hidden one is replaced by its cell's
+    /// alternative when that is seen. `out` is cleared first.
     pub fn find_pairs(
         &self,
         transformed: &[[f64; 2]],
         max_distance: f64,
-        sensor: Option<[f64; 2]>,
+        view: Option<SensorView<'_>>,
         out: &mut Vec<Pair>,
     ) {
         let max_sq = max_distance.min(self.reach).powi(2);
@@ -473,14 +473,14 @@ impl NearestWallIndex {
         let mut kept = 0usize;
         for (i, q) in transformed.iter().enumerate() {
             let (mut t, mut d2, alt) = self.lookup(*q);
-            let site = &self.sites[t as usize];
-            let facing = match sensor {
-                Some(s) => {
-                    let seen = seen_from(site.seen, [site.x, site.y], s);
+            let facing = match view {
+                Some(v) => {
+                    let bit = 1u16 << v.sector(i);
+                    let seen = self.sites[t as usize].seen & bit != 0;
                     if !seen {
                         // Hidden: the cell's alternative, when the sensor sees it.
                         let a = &self.sites[alt as usize];
-                        if seen_from(a.seen, [a.x, a.y], s) {
+                        if a.seen & bit != 0 {
                             t = alt;
                             d2 = (a.x - q[0]).powi(2) + (a.y - q[1]).powi(2);
                         }
@@ -544,6 +544,65 @@ fn cell_index(f: f64) -> usize {
     const ROUNDING: f64 = 6_755_399_441_055_744.0;
     ((f - 0.5 + ROUNDING).to_bits() & 0xFFFF_FFFF) as usize
 }
+
+/// Where the sensor is seen from each scan point: the direction from a scan point to the sensor
+/// is its beam reversed, fixed in the robot frame, so the sector of that direction in the map
+/// frame is the robot-frame bearing turned by the pose's yaw (no trigonometry per look-up). The
+/// sector is that of the direction from the scan point, not from the wall point it is paired with:
+/// they are a correspondence distance apart, the sensor metres away.
+#[derive(Clone, Copy, Debug)]
+pub struct SensorView<'a> {
+    /// Per scan point: the robot-frame angle of the direction from it to the sensor, in sectors
+    /// ([`crate::wall_facing::SECTORS`] per turn).
+    pub bearings: &'a [f64],
+    /// The pose's yaw, in sectors.
+    pub yaw: f64,
+}
+
+impl<'a> SensorView<'a> {
+    /// `bearings` in sectors (see [`SensorView::bearings_of`]) seen from a pose with `yaw` radians.
+    pub fn new(bearings: &'a [f64], yaw: f64) -> Self {
+        Self { bearings, yaw: yaw * SECTORS_PER_RADIAN }
+    }
+
+    /// The bearings of [`SensorView`] for robot-frame scan points seen from the robot's origin.
+    pub fn bearings_of(scan: &[[f64; 2]]) -> Vec<f64> {
+        scan.iter().map(|p| fast_atan2(-p[1], -p[0]) * SECTORS_PER_RADIAN).collect()
+    }
+
+    #[inline]
+    fn sector(&self, i: usize) -> u32 {
+        (cell_index(self.bearings[i] + self.yaw) & (crate::wall_facing::SECTORS - 1)) as u32
+    }
+}
+
+/// `atan2(y, x)` to within 0.0015 rad (0.1 degree; a sector is 22.5), a quarter of libm's cost:
+/// a degree-5 odd polynomial on the octant, mirrored.
+#[inline]
+fn fast_atan2(y: f64, x: f64) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    let (lo, hi) = (ax.min(ay), ax.max(ay));
+    if hi == 0.0 {
+        return 0.0;
+    }
+    let t = lo / hi;
+    let t2 = t * t;
+    let mut a = t * (0.995_354 + t2 * (-0.288_679 + t2 * 0.079_331));
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = PI - a;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+const SECTORS_PER_RADIAN: f64 = crate::wall_facing::SECTORS as f64 / std::f64::consts::TAU;
 
 /// `yes` if `pick` else `no`, as arithmetic (a conditional move).
 #[inline]
@@ -631,6 +690,18 @@ mod tests {
             let c = cell_index(border);
             assert!(c == border as usize || c + 1 == border as usize, "{border}: {c}");
         }
+    }
+
+    #[test]
+    fn fast_atan2_is_within_a_tenth_of_a_degree() {
+        for k in 0..3600 {
+            let a = -std::f64::consts::PI + 0.001 + k as f64 * 0.001_745;
+            for r in [1e-3, 1.0, 40.0] {
+                let (y, x) = (r * a.sin(), r * a.cos());
+                assert!((fast_atan2(y, x) - y.atan2(x)).abs() < 0.0015, "{a}");
+            }
+        }
+        assert_eq!(fast_atan2(0.0, 0.0), 0.0);
     }
 
     #[test]

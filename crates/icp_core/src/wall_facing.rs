@@ -83,19 +83,31 @@ fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool 
 #[inline]
 pub fn sector(dx: f64, dy: f64) -> usize {
     const TAN_22_5: f64 = 0.414_213_562_373_095_1;
+    // Sector by quadrant (x < 0, y < 0), steepness (|y| > |x|) and which half of that octant:
+    // a table instead of branches, since the direction to the sensor changes from point to point.
+    const TABLE: [u8; 16] = {
+        let mut t = [0u8; 16];
+        let mut i = 0;
+        while i < 16 {
+            let (neg_x, neg_y, steep, half) = (i & 1 != 0, i & 2 != 0, i & 4 != 0, i & 8 != 0);
+            let q = if steep { 3 - half as u8 } else { half as u8 };
+            t[i] = match (neg_x, neg_y) {
+                (false, false) => q,
+                (true, false) => 7 - q,
+                (true, true) => 8 + q,
+                (false, true) => 15 - q,
+            };
+            i += 1;
+        }
+        t
+    };
     let (ax, ay) = (dx.abs(), dy.abs());
-    // Within the first quadrant (angle of (ax, ay)): 0..4 in steps of 22.5 degrees.
     let steep = ay > ax;
-    let (lo, hi) = if steep { (ax, ay) } else { (ay, ax) };
+    let (lo, hi) = (ax.min(ay), ax.max(ay));
     let half = lo > TAN_22_5 * hi;
-    let q = if steep { 3 - usize::from(half) } else { usize::from(half) };
-    // Mirror into the quadrant of (dx, dy).
-    match (dx < 0.0, dy < 0.0) {
-        (false, false) => q,
-        (true, false) => 7 - q,
-        (true, true) => 8 + q,
-        (false, true) => 15 - q,
-    }
+    let i =
+        usize::from(dx < 0.0) | usize::from(dy < 0.0) << 1 | usize::from(steep) << 2 | usize::from(half) << 3;
+    TABLE[i] as usize
 }
 
 /// Whether a point with visibility `mask` at `p` can be seen from a sensor at `sensor`.
