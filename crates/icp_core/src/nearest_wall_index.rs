@@ -91,7 +91,12 @@ pub struct NearestWallIndex {
     /// `sites.len() - 1` when none), or `[LIST | length, offset]` of a list in `lists`; then the
     /// cell's alternative: the site nearest to the cell among those seen from a direction the
     /// nearest one is hidden from (the near face of a wall whose far face is nearest).
-    slots: Vec<[u32; 3]>,
+    /// (While building: the three slots of every cell; split into `slots` and `alternatives`.)
+    building: Vec<[u32; 3]>,
+    /// The first two slots of every cell.
+    slots: Vec<[u32; 2]>,
+    /// The third: read only when the nearest point is hidden.
+    alternatives: Vec<u32>,
     lists: Vec<u32>,
     /// The wall points in the order cells first name them (neighbours in the plan are
     /// neighbours in memory), and, last, the sentinel. Slots and lists index into it.
@@ -187,7 +192,9 @@ impl NearestWallIndex {
             rows: block_rows * BLOCK,
             block_cols,
             blocks: vec![EMPTY; block_cols * block_rows],
+            building: Vec::new(),
             slots: Vec::new(),
+            alternatives: Vec::new(),
             lists: Vec::new(),
             sites,
             plan_index: Vec::new(),
@@ -209,7 +216,7 @@ impl NearestWallIndex {
         let block_rows = self.blocks.len() / self.block_cols;
         let sentinel = points.len() as u32;
         // Block 0: every cell empty.
-        self.slots.resize(BLOCK_CELLS, [sentinel, sentinel, sentinel]);
+        self.building.resize(BLOCK_CELLS, [sentinel, sentinel, sentinel]);
         // Blocks within reach of some point, found point by point: free space costs nothing.
         let mut near = vec![false; self.blocks.len()];
         let pad = self.reach + half_diagonal + block_half_diagonal;
@@ -247,7 +254,7 @@ impl NearestWallIndex {
                     nearby.push((n.distance, n.item));
                 }
                 nearby.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                let stored = (self.slots.len() / BLOCK_CELLS) as u32;
+                let stored = (self.building.len() / BLOCK_CELLS) as u32;
                 self.blocks[brow * self.block_cols + bcol] = stored;
                 for r in 0..BLOCK {
                     for c in 0..BLOCK {
@@ -337,7 +344,7 @@ impl NearestWallIndex {
                                 }
                             };
                         }
-                        self.slots.push(slot);
+                        self.building.push(slot);
                     }
                 }
             }
@@ -348,7 +355,9 @@ impl NearestWallIndex {
             }
         }
         self.renumber();
-        self.slots.shrink_to_fit();
+        self.slots = self.building.iter().map(|&[a, b, _]| [a, b]).collect();
+        self.alternatives = self.building.iter().map(|c| c[2]).collect();
+        self.building = Vec::new();
         self.lists.shrink_to_fit();
         Ok(())
     }
@@ -368,7 +377,7 @@ impl NearestWallIndex {
                 *i = rank[*i as usize];
             }
         };
-        for slot in &mut self.slots {
+        for slot in &mut self.building {
             if slot[0] & LIST != 0 {
                 let (len, at) = ((slot[0] & !LIST) as usize, slot[1] as usize);
                 for i in &mut self.lists[at..at + len] {
@@ -380,11 +389,11 @@ impl NearestWallIndex {
                 visit(b);
             }
         }
-        for slot in &mut self.slots {
+        for slot in &mut self.building {
             visit(&mut slot[2]);
         }
         let new_sentinel = order.len() as u32;
-        for slot in &mut self.slots {
+        for slot in &mut self.building {
             let singles = if slot[0] & LIST == 0 { 0..3 } else { 2..3 };
             for i in &mut slot[singles] {
                 if *i == sentinel {
@@ -424,9 +433,9 @@ impl NearestWallIndex {
         let candidates = self.slots[BLOCK_CELLS..]
             .iter()
             .map(|s| match *s {
-                [a, _, _] if a & LIST != 0 => (a & !LIST) as usize,
-                [a, _, _] if a == sentinel => 0,
-                [a, b, _] => 1 + usize::from(a != b),
+                [a, _] if a & LIST != 0 => (a & !LIST) as usize,
+                [a, _] if a == sentinel => 0,
+                [a, b] => 1 + usize::from(a != b),
             })
             .sum();
         IndexStats {
@@ -442,7 +451,8 @@ impl NearestWallIndex {
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
             + self.blocks.len() * 4
-            + self.slots.len() * 12
+            + self.slots.len() * 8
+            + self.alternatives.len() * 4
             + self.lists.len() * 4
             + self.sites.len() * std::mem::size_of::<Site>()
             + self.plan_index.len() * 4
@@ -472,20 +482,21 @@ impl NearestWallIndex {
         out.resize(transformed.len(), Pair { source: 0, target: 0, sq_dist: 0.0 });
         let mut kept = 0usize;
         for (i, q) in transformed.iter().enumerate() {
-            let (mut t, mut d2, alt) = self.lookup(*q);
+            let (mut t, mut d2, cell) = self.lookup(*q);
             let facing = match view {
                 Some(v) => {
                     let bit = 1u16 << v.sector(i);
                     let seen = self.sites[t as usize].seen & bit != 0;
                     if !seen {
                         // Hidden: the cell's alternative, when the sensor sees it.
+                        let alt = self.alternatives[cell];
                         let a = &self.sites[alt as usize];
                         if a.seen & bit != 0 {
                             t = alt;
                             d2 = (a.x - q[0]).powi(2) + (a.y - q[1]).powi(2);
                         }
                     }
-                    t == alt || seen
+                    seen || self.sites[t as usize].seen & bit != 0
                 }
                 None => true,
             };
@@ -500,17 +511,18 @@ impl NearestWallIndex {
 
     /// The nearest candidate of `q`'s cell and its squared distance (infinite: none).
     #[inline]
-    fn lookup(&self, q: [f64; 2]) -> (u32, f64, u32) {
+    fn lookup(&self, q: [f64; 2]) -> (u32, f64, usize) {
         let fx = (q[0] - self.origin[0]) * self.inv_cell;
         let fy = (q[1] - self.origin[1]) * self.inv_cell;
         let sentinel = (self.sites.len() - 1) as u32;
         // Also false for NaN.
         if !(fx >= 0.0 && fy >= 0.0 && fx < self.cols as f64 && fy < self.rows as f64) {
-            return (sentinel, f64::INFINITY, sentinel);
+            return (sentinel, f64::INFINITY, 0);
         }
         let (col, row) = (cell_index(fx), cell_index(fy));
         let stored = self.blocks[(row / BLOCK) * self.block_cols + col / BLOCK] as usize;
-        let [a, b, alt] = self.slots[stored * BLOCK_CELLS + (row % BLOCK) * BLOCK + col % BLOCK];
+        let cell = stored * BLOCK_CELLS + (row % BLOCK) * BLOCK + col % BLOCK;
+        let [a, b] = self.slots[cell];
         let sq = |i: u32| {
             let s = &self.sites[i as usize];
             (s.x - q[0]) * (s.x - q[0]) + (s.y - q[1]) * (s.y - q[1])
@@ -524,13 +536,13 @@ impl NearestWallIndex {
                     best
                 }
             });
-            return (i, d2, alt);
+            return (i, d2, cell);
         }
         // Selected without a branch: which of two neighbouring points wins is a coin toss for
         // the branch predictor. (Equidistant points tie to the first; either is exact.)
         let (da, db) = (sq(a), sq(b));
         let take_b = db < da;
-        (select(take_b, b, a), if take_b { db } else { da }, alt)
+        (select(take_b, b, a), if take_b { db } else { da }, cell)
     }
 }
 
