@@ -245,7 +245,7 @@ class PlanMap:
 
     def prepare_index(self) -> WallIndexStats:
         """Builds the plan's nearest-wall index now (the first alignment builds it otherwise; it
-        is kept with the plan) and returns its sizes. About 1.8 s and 70 MB for a 100 x 100 m
+        is kept with the plan) and returns its sizes. About 3.2 s and 90 MB for a 100 x 100 m
         floor sampled every 2 cm (README, "Performance")."""
         return WallIndexStats(*self._native.wall_index_stats())
 

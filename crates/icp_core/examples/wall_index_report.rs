@@ -3,7 +3,7 @@
 //! The floor is 100 x 100 m of 5 x 10 m rooms with 0.2 m walls, sampled every 2 cm (a plan drawn
 //! at 2 cm per pixel). For each (cell, reach) the index is built once from the plan's points and
 //! KD-tree and reported; the default settings are also built through `PointMap::wall_index`
-//! (outward normals included). Run:
+//! (visibility masks included). Run:
 //!
 //!     cargo run --release -p icp_core --example wall_index_report
 #[path = "../benches/common/mod.rs"]
@@ -42,7 +42,7 @@ fn main() {
     let t = Instant::now();
     let index = map.wall_index().unwrap();
     println!(
-        "default (cell {DEFAULT_INDEX_CELL} m, reach {DEFAULT_INDEX_REACH} m) with outward normals: {:.2} s, {:.1} MB",
+        "default (cell {DEFAULT_INDEX_CELL} m, reach {DEFAULT_INDEX_REACH} m) with visibility masks: {:.2} s, {:.1} MB",
         t.elapsed().as_secs_f64(),
         index.memory_bytes() as f64 / 1e6
     );

@@ -29,7 +29,7 @@ pub const DEFAULT_INDEX_REACH: f64 = 0.5;
 pub const DEFAULT_INDEX_CELL: f64 = 0.03;
 
 /// Wall points, their KD-tree, their wall normals and their visibility raster; the nearest-wall
-/// index with the outward normals is built at first use.
+/// index with the visibility masks of the points is built at first use.
 #[derive(Debug, Clone)]
 pub struct PointMap {
     points: Vec<[f64; 2]>,
