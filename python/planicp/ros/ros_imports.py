@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import importlib
+import sys
+from collections.abc import Sequence
 from types import ModuleType
+from typing import Any
 
 ROS_INSTALL_HINT = (
     "planicp's ROS nodes need ROS 1's rospy and message packages. On Debian: apt-get install ros-base "
@@ -28,3 +31,16 @@ def import_ros() -> dict[str, ModuleType]:
         except ImportError as exc:
             raise ImportError(f"cannot import {name} ({exc}). {ROS_INSTALL_HINT}") from exc
     return modules
+
+
+def start_node(name: str, argv: Sequence[str] | None) -> tuple[dict[str, ModuleType], Any] | None:
+    """Imports ROS and registers the node `name` with the master: `(modules, rospy)`, or None when
+    ROS is missing (the reason and how to install it are printed to stderr)."""
+    try:
+        ros = import_ros()
+    except ImportError as exc:
+        print(f"{name}: {exc}", file=sys.stderr)
+        return None
+    rospy = ros["rospy"]
+    rospy.init_node(name, argv=list(argv) if argv is not None else sys.argv)
+    return ros, rospy

@@ -41,7 +41,7 @@ from .node_diagnostics import NodeDiagnostics
 from .node_io import PoseOutput
 from .node_logic import PlanicpNodeCore
 from .node_settings import NodeSettings
-from .ros_imports import import_ros
+from .ros_imports import import_ros, start_node
 
 NODE_NAME = "planicp_node"
 LASER_LOOKUP_TIMEOUT = 0.5
@@ -272,13 +272,10 @@ class PlanicpRosNode:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs `planicp_node` until ROS shuts down. Returns the exit code (2: bad parameters or plan)."""
-    try:
-        ros = import_ros()
-    except ImportError as exc:
-        print(f"{NODE_NAME}: {exc}", file=sys.stderr)
+    started = start_node(NODE_NAME, argv)
+    if started is None:
         return 2
-    rospy = ros["rospy"]
-    rospy.init_node(NODE_NAME, argv=list(argv) if argv is not None else sys.argv)
+    ros, rospy = started
     try:
         settings = NodeSettings.from_params(rospy.get_param("~", {}))
         core = PlanicpNodeCore.from_settings(settings)

@@ -34,7 +34,7 @@ from ..se2 import between
 from ..sim.experiment import ExperimentConfig, Recording, run_experiment
 from .message_layout import covariance_to_6x6, yaw_to_quaternion
 from .node_settings import NodeSettings
-from .ros_imports import import_ros
+from .ros_imports import import_ros, start_node
 
 NODE_NAME = "planicp_sim_drive"
 
@@ -159,13 +159,10 @@ def _set_transform(msg: Any, pose: Sequence[float]) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Runs `planicp_sim_drive`: records the drive, then plays it. Returns the exit code."""
-    try:
-        ros = import_ros()
-    except ImportError as exc:
-        print(f"{NODE_NAME}: {exc}", file=sys.stderr)
+    started = start_node(NODE_NAME, argv)
+    if started is None:
         return 2
-    rospy = ros["rospy"]
-    rospy.init_node(NODE_NAME, argv=list(argv) if argv is not None else sys.argv)
+    ros, rospy = started
     params = rospy.get_param("~", {})
     try:
         began = time.monotonic()

@@ -128,14 +128,15 @@ class SensorSetting:
         mount: (x, y, yaw) of the laser in the robot's base frame (m, m, rad).
     """
 
-    fov_deg: float = 270.0
-    beams: int = 1081
-    range_min: float = 0.05
-    range_max: float = 30.0
-    range_sigma: float = 0.01
-    dropout: float = 0.0
-    rate_hz: float = 10.0
-    mount: tuple[float, float, float] = (0.15, 0.0, 0.0)
+    # The defaults are LidarModel's (a Hokuyo UTM-30LX-like scanner), in study units.
+    fov_deg: float = math.degrees(LidarModel.fov)
+    beams: int = LidarModel.beams
+    range_min: float = LidarModel.range_min
+    range_max: float = LidarModel.range_max
+    range_sigma: float = LidarModel.range_sigma
+    dropout: float = LidarModel.dropout
+    rate_hz: float = LidarModel.rate_hz
+    mount: tuple[float, float, float] = LidarModel.mount
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
