@@ -541,6 +541,30 @@ mod tests {
     }
 
     #[test]
+    fn both_correspondence_searches_reach_the_same_pose() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        for (truth, guess) in [
+            (Pose2::new(5.5, 2.2, 0.4), Pose2::new(5.7, 2.05, 0.45)),
+            (Pose2::new(1.5, 2.5, -2.0), Pose2::new(1.4, 2.6, -2.05)),
+            (Pose2::new(6.7, 3.9, 2.9), Pose2::new(6.6, 4.0, 2.95)),
+        ] {
+            let scan = scan_from(&map, truth, &mut rng, 0.01);
+            let fast = align(&map, &scan, guess, &IcpConfig::default()).unwrap();
+            let kd = IcpConfig { search: CorrespondenceSearch::KdTree, ..IcpConfig::default() };
+            let exact = align(&map, &scan, guess, &kd).unwrap();
+            for res in [&fast, &exact] {
+                assert!((res.pose.x - truth.x).hypot(res.pose.y - truth.y) < 0.005, "{:?}", res.pose);
+            }
+            assert!((fast.pose.x - exact.pose.x).hypot(fast.pose.y - exact.pose.y) < 0.002);
+            assert!((fast.inlier_ratio - exact.inlier_ratio).abs() < 0.01);
+            // The index matches against the whole plan, the KD-tree against the visible subset.
+            assert_eq!(fast.num_target_points, map.len());
+            assert!(exact.num_target_points < map.len());
+        }
+    }
+
+    #[test]
     fn rejects_bad_input() {
         let map = PointMap::new(rooms(), None).unwrap();
         let cfg = IcpConfig::default();
