@@ -87,11 +87,14 @@ def main() -> None:
     }
     for extra in args.map:
         floors[Path(extra).name] = floor_from_map(Path(extra))
+    kd = planicp.IcpConfig(correspondence_search="kd_tree")
     configs = {
-        "0.25 m, visibility": planicp.IcpConfig(),
-        "0.25 m, no visibility": planicp.IcpConfig(use_visibility=False),
-        "0.4 m, visibility": planicp.IcpConfig(max_correspondence_distance=0.4),
-        "0.4 m, no visibility": planicp.IcpConfig(max_correspondence_distance=0.4, use_visibility=False),
+        "0.25 m, visibility": kd,
+        "0.25 m, no visibility": kd.replace(use_visibility=False),
+        "0.25 m, wall index": planicp.IcpConfig(),
+        "0.4 m, visibility": kd.replace(max_correspondence_distance=0.4),
+        "0.4 m, no visibility": kd.replace(max_correspondence_distance=0.4, use_visibility=False),
+        "0.4 m, wall index": planicp.IcpConfig(max_correspondence_distance=0.4),
     }
     print(f"{args.poses} poses per plan, {args.people} people not in the plan, guess 0.2 m / 3 deg off\n")
     print("| plan | wall points | " + " | ".join(configs) + " |")
