@@ -46,7 +46,7 @@ ABLATIONS: dict[str, tuple[IcpConfig, dict[str, Any]]] = {
     "without outlier rejection": (IcpConfig(max_correspondence_distance=50.0, use_visibility=False,
                                             correspondence_schedule=(1.0,)), {"occlusion": False}),
     # Every in-range pair counts: no automatic trimming of the clutter near the walls.
-    "without automatic trimming": (IcpConfig(), {}),
+    "without automatic trimming": (IcpConfig(correspondence_search="kd_tree"), {}),
 }
 
 
