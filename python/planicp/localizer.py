@@ -241,11 +241,12 @@ class Localizer:
             predicted_covariance = self.motion_noise.propagate(self._covariance, self._pose, motion)
             result: IcpResult | None = None
             kept: NDArray[np.bool_] | None = None
+            beyond: NDArray[np.bool_] | None = None
             usable = -(-len(points) // self.config.subsample)
             if usable < _core.MIN_SCAN_POINTS:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
-                kept = self._unoccluded(points, predicted, predicted_covariance)
+                kept, beyond = self._unoccluded(points, predicted, predicted_covariance)
                 used = points if kept is None else points[kept]
                 result = localize(used, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
@@ -269,6 +270,17 @@ class Localizer:
             # How much of the WHOLE scan the plan explains: returns the occlusion rule left out count
             # as unexplained, so that a wrong prediction cannot hide the evidence against it.
             score = result.num_inliers / len(points) if result is not None else 0.0
+            if (result is not None and beyond is not None and not searched
+                    and self.config.correspondence_search == "wall_index"):
+                # The index's masks see occluders within 0.6 m only: from a wrong place (a
+                # kidnapped robot) it pairs returns that came through walls the prediction would
+                # have stopped. Those count as unexplained, as the ray-cast visibility leaves them.
+                inliers = np.zeros(len(points), dtype=bool)
+                if kept is None:
+                    inliers[:] = result.inlier_mask
+                else:
+                    inliers[kept] = result.inlier_mask
+                score = float(np.count_nonzero(inliers & ~beyond)) / len(points)
             poor = result is not None and self._poor_fit(result, reason, len(points))
             if poor and result is not None and not self._detector.lost and self._anchor is not None:
                 continues = self.continuity.continues(points, self._anchor[0], between(self._anchor[1], odom))
@@ -318,19 +330,22 @@ class Localizer:
             reason == "" and score < self._detector.rule.min_score)
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
-                    predicted_covariance: NDArray[np.float64]) -> NDArray[np.bool_] | None:
-        """The points not in front of the plan's walls, when the occlusion rule applies (a trusted
-        prediction, not lost, enough points left); else None (align them all)."""
+                    predicted_covariance: NDArray[np.float64]) -> tuple[NDArray[np.bool_] | None,
+                                                                         NDArray[np.bool_] | None]:
+        """(kept, beyond) when the occlusion rule applies (a trusted prediction, not lost): the points
+        not in front of the plan's walls (None when too few would remain, or all: align them all),
+        and the points beyond the walls seen from the prediction. (None, None) otherwise."""
         if self._occlusion is None or self._detector.lost:
-            return None
+            return None, None
         rule = self._occlusion.rule
         sigma_xy = math.sqrt(max(float(np.linalg.eigvalsh(predicted_covariance[:2, :2]).max()), 0.0))
         if 3.0 * sigma_xy >= rule.margin:
-            return None
-        kept: NDArray[np.bool_] = ~self._occlusion.in_front(points, predicted)
+            return None, None
+        in_front, beyond = self._occlusion.classify(points, predicted)
+        kept: NDArray[np.bool_] = ~in_front
         if int(kept.sum()) < rule.min_points or kept.all():
-            return None
-        return kept
+            return None, beyond
+        return kept, beyond
 
     def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
         """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a

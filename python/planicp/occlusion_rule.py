@@ -64,6 +64,13 @@ class OcclusionFilter:
         their direction from `pose` (T_map_base). Directions are measured from the base origin: a
         return on a wall lies on the wall whatever the ray's origin, so the laser's mount does not
         matter."""
+        return self.classify(points, pose)[0]
+
+    def classify(self, points: NDArray[np.float64], pose: Pose) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """(in front, beyond): which base-frame `points` lie more than `margin` short of the plan's
+        wall in their direction from `pose` (see `in_front`), and which lie more than `margin`
+        beyond it: returns a beam could not give from `pose`, since the wall would have stopped it.
+        One cast serves both."""
         rule = self.rule
         step = 2.0 * math.pi / rule.beams
         # The yaw as the beams' angle_min offset, so that beam k looks along base angle -pi + k step.
@@ -71,7 +78,9 @@ class OcclusionFilter:
         expected = np.where(np.isfinite(expected), expected, np.inf)
         ranges = np.hypot(points[:, 0], points[:, 1])
         k = np.round((np.arctan2(points[:, 1], points[:, 0]) + math.pi) / step).astype(np.int64) % rule.beams
-        # The farthest of the three nearest beams: at a wall's edge a return may belong to either.
-        wall = np.maximum.reduce([expected[(k - 1) % rule.beams], expected[k], expected[(k + 1) % rule.beams]])
-        short: NDArray[np.bool_] = ranges < wall - rule.margin
-        return short
+        # At a wall's edge a return may belong to either neighbouring beam: in front of the farthest
+        # of the three nearest beams' walls, beyond the nearest.
+        around = [expected[(k - 1) % rule.beams], expected[k], expected[(k + 1) % rule.beams]]
+        short: NDArray[np.bool_] = ranges < np.maximum.reduce(around) - rule.margin
+        beyond: NDArray[np.bool_] = ranges > np.minimum.reduce(around) + rule.margin
+        return short, beyond
