@@ -593,3 +593,8 @@ def test_both_correspondence_searches_agree(office: Any, office_plan: PlanMap) -
 def test_correspondence_search_is_checked() -> None:
     with pytest.raises(ValueError, match="correspondence_search"):
         IcpConfig(correspondence_search="octree")  # type: ignore[arg-type]
+    # The native settings check it too (a PlanicpError is a ValueError).
+    from planicp import _core
+
+    with pytest.raises(ValueError, match='correspondence_search = "octree": must be "wall_index" or "kd_tree"'):
+        _core.IcpSettings(0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None, False, "octree")

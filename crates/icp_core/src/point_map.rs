@@ -37,7 +37,8 @@ pub struct PointMap {
     raster: WallRaster,
     normals: Vec<[f64; 2]>,
     spacing: f64,
-    index_cell: f64,
+    /// The index's cell; `None`: [`DEFAULT_INDEX_CELL`], coarsened if the plan is too large for it.
+    index_cell: Option<f64>,
     index_reach: f64,
     wall_index: OnceLock<Result<NearestWallIndex>>,
 }
@@ -96,7 +97,7 @@ impl PointMap {
             raster,
             normals,
             spacing,
-            index_cell: DEFAULT_INDEX_CELL,
+            index_cell: None,
             index_reach: DEFAULT_INDEX_REACH,
             wall_index: OnceLock::new(),
         })
@@ -110,7 +111,7 @@ impl PointMap {
                 return Err(crate::error::invalid(name, v, "must be a positive finite number of metres"));
             }
         }
-        self.index_cell = cell;
+        self.index_cell = Some(cell);
         self.index_reach = reach;
         self.wall_index = OnceLock::new();
         Ok(self)
@@ -122,7 +123,9 @@ impl PointMap {
     pub fn wall_index(&self) -> Result<&NearestWallIndex> {
         self.wall_index
             .get_or_init(|| {
-                let cell = if self.index_cell == DEFAULT_INDEX_CELL {
+                let cell = if let Some(cell) = self.index_cell {
+                    cell
+                } else {
                     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
                     for p in &self.points {
                         for k in 0..2 {
@@ -130,9 +133,7 @@ impl PointMap {
                             hi[k] = hi[k].max(p[k]);
                         }
                     }
-                    cell_within_budget(self.index_cell, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
-                } else {
-                    self.index_cell
+                    cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
                 };
                 let seen = visibility_masks(&self.points, &self.normals, &self.raster);
                 NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach)
