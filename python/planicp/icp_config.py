@@ -11,7 +11,7 @@ from typing import Any, Literal
 CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
 from . import _core
-from ._validation import positive, real_number, whole_number
+from ._validation import positive, real_number, unknown_fields, whole_number
 
 
 @dataclass(frozen=True)
@@ -159,10 +159,9 @@ class IcpConfig:
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> IcpConfig:
         """The inverse of `to_dict`; unknown keys are an error naming them."""
-        known = {f.name for f in dataclasses.fields(cls) if f.init}
-        unknown = sorted(set(values) - known)
+        unknown, known = unknown_fields(cls, values)
         if unknown:
-            raise ValueError(f"unknown IcpConfig keys: {unknown}; known: {sorted(known)}")
+            raise ValueError(f"unknown IcpConfig keys: {unknown}; known: {known}")
         kwargs = dict(values)
         if "correspondence_schedule" in kwargs:
             kwargs["correspondence_schedule"] = tuple(kwargs["correspondence_schedule"])

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from .._validation import Pose, as_pose, positive, real_number
+from .._validation import Pose, as_pose, positive, real_number, unknown_fields
 from ..acceptance_gate import AcceptanceGate
 from ..icp_config import IcpConfig
 from ..plan_loading import load_plan
@@ -134,10 +133,9 @@ class NodeSettings:
         """
         if not isinstance(params, Mapping):
             raise TypeError(f"params must be a mapping, got {type(params).__name__}")
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(str(k) for k in params if k not in known)
+        unknown, known = unknown_fields(cls, params)
         if unknown:
-            raise ValueError(f"unknown planicp_node parameters {unknown}; known: {sorted(known)}")
+            raise ValueError(f"unknown planicp_node parameters {unknown}; known: {known}")
         values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in params.items()}
         return cls(**values)
 
@@ -147,10 +145,9 @@ class NodeSettings:
 
     def acceptance_gate(self) -> AcceptanceGate:
         """`AcceptanceGate()` with the `gate` overrides (unknown fields: ValueError)."""
-        known = {f.name for f in dataclasses.fields(AcceptanceGate)}
-        unknown = sorted(str(k) for k in self.gate if k not in known)
+        unknown, known = unknown_fields(AcceptanceGate, self.gate)
         if unknown:
-            raise ValueError(f"unknown gate fields {unknown}; known: {sorted(known)}")
+            raise ValueError(f"unknown gate fields {unknown}; known: {known}")
         return AcceptanceGate(**dict(self.gate))
 
     def initial_covariance(self) -> list[list[float]]:

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .._validation import unknown_fields
 from ..icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
@@ -340,10 +341,9 @@ class Study:
         """
         if not isinstance(data, Mapping):
             raise StudyError(f"a study must be a mapping of keys, got {type(data).__name__}")
-        known = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(str(k) for k in data if k not in known)
+        unknown, known = unknown_fields(cls, data)
         if unknown:
-            raise StudyError(f"unknown key(s) {unknown}; known: {sorted(known)}")
+            raise StudyError(f"unknown key(s) {unknown}; known: {known}")
         for key in ("name", "plans"):
             if key not in data:
                 raise StudyError(f"missing key {key!r}")
