@@ -546,13 +546,14 @@ def test_readers_on_garbled_text(reader: str) -> None:
 @FUZZ
 @given(st.data())
 def test_robustness_api(data: Any) -> None:
-    """DegeneracyRule, LostRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize and
+    """DegeneracyRule, LostRule, FusionRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize and
     Localizer.relocalize/covariance with random settings, scans and poses."""
     number = st.one_of(values, anything, st.integers(-3, 100))
     call(planicp.DegeneracyRule, data.draw(number))
     call(planicp.ContinuityRule, data.draw(number), data.draw(number), data.draw(number))
     call(planicp.OcclusionRule, data.draw(number), data.draw(number), data.draw(number))
     call(planicp.LostRule, data.draw(number), data.draw(number), data.draw(number))
+    fusion_ok, fusion = call(planicp.FusionRule, data.draw(number))
     ok, noise = call(planicp.MotionNoise, *[data.draw(number) for _ in range(5)])
     if ok:
         ok, cov = call(noise.propagate, np.diag([0.01, 0.01, 0.001]), data.draw(poses), data.draw(poses))
@@ -569,8 +570,13 @@ def test_robustness_api(data: Any) -> None:
             check_pose(c.pose)
             assert 0.0 <= c.inlier_ratio <= 1.0
     ok, loc = call(Localizer, plan, data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)), None,
-                   initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)))
+                   initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)),
+                   fusion=fusion if fusion_ok else data.draw(st.one_of(st.none(), anything)))
     if ok:
+        ok, estimate = call(loc.update, data.draw(scans()), data.draw(poses))
+        if ok:
+            check_pose(estimate.pose)
+            assert np.isfinite(estimate.covariance).all()
         before = loc.pose
         ok, _ = call(loc.relocalize, data.draw(scans()))
         if not ok:
@@ -585,7 +591,7 @@ def test_every_public_name_is_fuzzed() -> None:
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
                "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
                "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize",
-               "ContinuityRule", "OcclusionRule"}
+               "ContinuityRule", "OcclusionRule", "FusionRule"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
     elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp import AcceptanceGate, IcpConfig, Localizer, PlanMap, se2
+from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
+from planicp.prediction_fusion import finite_covariance
 from planicp.recovery import RecoveryConfig
 from planicp import synthetic as syn
 
@@ -134,7 +135,12 @@ def test_estimates_are_consistent(path: list[Pose], tracking: Any) -> None:
         assert est.odom_pose == o
         assert est.result is not None
         if est.accepted:
-            assert est.pose == est.result.pose
+            # fused with the prediction, the pose stays within the fit's covariance: the fused
+            # offset from the fit has a Mahalanobis distance at most the innovation's, which the
+            # fusion rule bounds (otherwise the fit is taken alone)
+            offset = np.array(est.pose) - np.array(est.result.pose)
+            offset[2] = se2.wrap_angle(offset[2])
+            assert offset @ np.linalg.solve(finite_covariance(est.result), offset) <= FusionRule().max_innovation + 1e-9
             assert est.reason == ""
         else:
             assert est.pose == est.predicted_pose
@@ -234,6 +240,9 @@ def test_gate_rejects_non_convergence_only_when_required(
     assert est.result is not None and not est.result.converged
     assert not est.accepted and "did not converge in 1 iterations" in est.reason
     est = Localizer(plan, off, cfg).update(scans[0], (0.0, 0.0, 0.0))  # the default gate does not require it
+    assert est.accepted and math.dist(est.pose[:2], est.result.pose[:2]) < 0.001  # type: ignore[union-attr]
+    # without fusion (a wide start prior pulls the fit by a fraction of a millimetre) it is the fit
+    est = Localizer(plan, off, cfg, fusion=FusionRule(max_innovation=0.0)).update(scans[0], (0.0, 0.0, 0.0))
     assert est.accepted and est.pose == est.result.pose  # type: ignore[union-attr]
 
 

@@ -3,6 +3,7 @@ lost detection, the covariance propagation, and their errors."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,6 +12,7 @@ from numpy.typing import NDArray
 
 from planicp import (
     DegeneracyRule,
+    FusionRule,
     IcpConfig,
     Localizer,
     LostRule,
@@ -21,8 +23,11 @@ from planicp import (
     localize,
 )
 from planicp.default_plan import load_default_plan
+from planicp import se2
 from planicp.lost_detection import LostDetector
+from planicp.prediction_fusion import fuse_with_prediction
 from planicp.se2 import between, compose
+from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, LidarModel, Recording, run_experiment
 from planicp.sim.world import Furnishing
 
@@ -76,7 +81,9 @@ def test_corridor_keeps_odometry_along_the_axis_and_corrects_the_rest(seed: int)
     assert len(flagged) > 0.5 * len(estimates)
     for e in flagged:
         assert abs(e.degeneracy.axis[0]) > 0.99  # type: ignore[attr-defined]
-    sliding, _ = _track(plan, recording, degeneracy=DegeneracyRule(min_constraint=0.0))
+    # the fit alone (no fusion with the prediction, no degeneracy handling) slides along the axis
+    sliding, _ = _track(plan, recording, degeneracy=DegeneracyRule(min_constraint=0.0),
+                        fusion=FusionRule(max_innovation=0.0))
     assert _rms(sliding[:, 0] - recording.truth[:, 0]) > 3 * along_planicp
 
 
@@ -137,11 +144,11 @@ def test_kidnapped_robot_is_found_again() -> None:
     assert sum(good) >= 9, outcomes
 
 
-def test_a_kidnap_is_noticed_when_tracking_with_the_wall_index() -> None:
-    """Tracking through the nearest-wall index: its visibility masks see occluders within 0.6 m
-    only, so from the wrong room it pairs returns that came through walls. The lost rule counts
-    those as unexplained; without that, this run (seed 1) was never found again."""
-    lost, back = _kidnap(1, IcpConfig.for_tracking(correspondence_search="wall_index"))
+def test_a_kidnap_is_noticed_when_tracking_with_the_kd_tree() -> None:
+    """The same with the KD-tree search (the default is the nearest-wall index, whose masks see
+    occluders within 0.6 m only; the lost rule counts returns beyond the walls seen from the
+    prediction as unexplained in both modes)."""
+    lost, back = _kidnap(1, IcpConfig.for_tracking(correspondence_search="kd_tree"))
     assert lost is not None and lost < 5 and back is not None and back < 20, (lost, back)
 
 
@@ -221,6 +228,51 @@ def test_motion_noise_propagation() -> None:
         MotionNoise(translation_fraction=-0.1)
 
 
+def test_fusion_with_the_prediction() -> None:
+    """The Kalman update of the prediction by a fit: equal covariances meet halfway and halve; a
+    fit that does not constrain the corridor's axis keeps the prediction along it; an innovation
+    over the rule's bound (odometry faulted) leaves the fit alone in the localizer."""
+    corridor = _corridor(length=60.0)
+    x = np.linspace(-8.0, 8.0, 400)
+    scan = np.concatenate([np.column_stack([x, np.full_like(x, 1.0)]), np.column_stack([x, np.full_like(x, -1.0)])])
+    fit = localize(scan, corridor, (30.0, 1.02, 0.01))
+    assert not np.isfinite(fit.covariance).all()  # nothing fixes x
+    covariance = np.diag([1e-4, 1e-4, 1e-4])
+    boxed = dataclasses.replace(fit, covariance=covariance)
+    predicted = (fit.pose[0] + 0.02, fit.pose[1] - 0.01, se2.wrap_angle(fit.pose[2] + 0.004))
+    pose, fused = fuse_with_prediction(boxed, predicted, covariance)
+    np.testing.assert_allclose(pose, np.add(fit.pose, predicted) / 2, atol=1e-12)
+    np.testing.assert_allclose(fused, covariance / 2, atol=1e-15)
+    assert FusionRule().innovation(boxed, predicted, covariance) == pytest.approx((4 + 1 + 0.16) * 1e-4 / 2e-4)
+    # Across the corridor and in heading the fit is far more precise than the prediction, so it
+    # decides; along it the fit says nothing and the prediction is kept.
+    pose, fused = fuse_with_prediction(fit, predicted, covariance)
+    assert pose[0] == pytest.approx(predicted[0], abs=1e-5)
+    assert pose[1] == pytest.approx(fit.pose[1], abs=1e-4) and pose[2] == pytest.approx(fit.pose[2], abs=1e-4)
+    assert fused[0, 0] == pytest.approx(1e-4, rel=1e-3) and fused[1, 1] < 1e-5
+    with pytest.raises(ValueError, match="max_innovation must be a number >= 0"):
+        FusionRule(max_innovation=-1.0)
+    with pytest.raises(TypeError, match="fusion must be a planicp.FusionRule"):
+        Localizer(corridor, (30.0, 1.0, 0.0), fusion=16.0)  # type: ignore[arg-type]
+
+
+def test_an_odometry_fault_is_not_fused() -> None:
+    """A 10-degree odometry step: the fit and the prediction disagree far beyond their covariances,
+    so the accepted pose is the fit's; a plausible prediction is fused (the pose moves off the fit)."""
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=3.0, seed=4, furnishing=Furnishing(0, 0, 0, 0)))
+    localizer = Localizer(plan, tuple(recording.truth[0]))
+    for scan, odom in zip(recording.scans[:-1], recording.odometry_in_odom[:-1]):
+        estimate = localizer.update(scan, tuple(odom))
+    assert estimate.accepted and estimate.pose != estimate.result.pose  # type: ignore[union-attr]
+    step = compose(tuple(recording.odometry_in_odom[-1]), (0.0, 0.0, math.radians(10.0)))
+    faulted = localizer.update(recording.scans[-1], step)
+    assert faulted.accepted and faulted.result is not None
+    assert localizer.fusion.innovation(faulted.result, faulted.predicted_pose, np.diag([1e-4, 1e-4, 1e-5])) > 100
+    assert faulted.pose == faulted.result.pose
+    assert math.dist(faulted.pose[:2], recording.truth[-1, :2]) < 0.02
+
+
 def test_translation_constraint_and_degeneracy_rule() -> None:
     corridor = _corridor(length=60.0)
     x = np.linspace(-8.0, 8.0, 400)
@@ -266,51 +318,31 @@ def test_localizer_covariance_and_reset_validation() -> None:
 
 def test_a_crowd_taking_half_of_the_returns() -> None:
     """People standing 0.7-3 m around the robot block about half of the beams. The Localizer's
-    defaults (automatic trimming, the occlusion rule) keep the error near twice the empty floor's;
-    plain ICP without them is dragged by the crowd near the walls."""
-    from planicp import _core, scan_to_points
-
+    defaults (automatic trimming, the occlusion rule, fusion with the prediction) keep the error
+    near twice the empty floor's, without ever declaring themselves lost; plain ICP without them is
+    dragged by the crowd near the walls."""
     plan = load_default_plan()
     config = ExperimentConfig(duration_s=30.0, seed=2, furnishing=Furnishing(0, 0, 0, 0))
     recording, world = run_experiment(plan, config)
-    lidar, floor = config.lidar, world.floor
-    grid = _core.OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
-    free = ~floor.occupied()
-    rng = np.random.default_rng(0)
-
-    def crowd(pose: NDArray[np.float64], count: int) -> NDArray[np.float64]:
-        discs: list[tuple[float, float, float]] = []
-        while len(discs) < count:
-            r, a = rng.uniform(0.7, 3.0), rng.uniform(-math.pi, math.pi)
-            x, y = pose[0] + r * math.cos(a), pose[1] + r * math.sin(a)
-            col, row = int((x - floor.origin[0]) / floor.resolution), int((y - floor.origin[1]) / floor.resolution)
-            if 0 <= row < free.shape[0] and 0 <= col < free.shape[1] and free[row, col]:
-                discs.append((x, y, rng.uniform(0.18, 0.25)))
-        return np.array(discs)
-
-    scans: dict[str, list[NDArray[np.float64]]] = {"empty": [], "crowd": []}
-    blocked = []
-    for k, truth in enumerate(recording.truth):
-        sensor = compose(tuple(truth), lidar.mount)
-        args = (sensor, lidar.angle_min, lidar.angle_increment, lidar.beams, lidar.range_min, lidar.range_max)
-        clear = grid.cast(*args, lidar.range_sigma, 0.0, k)
-        crowded = grid.cast(*args, lidar.range_sigma, 0.0, k, crowd(truth, 25))
-        blocked.append(np.mean(crowded < clear - 0.05))
-        for name, ranges in (("empty", clear), ("crowd", crowded)):
-            scans[name].append(scan_to_points(ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min,
-                                              lidar.range_max, sensor_pose=lidar.mount))
+    empty_scans, _ = crowded_scans(recording, world.floor, config.lidar, Crowd(0), seed=2)
+    crowd_scans, blocked = crowded_scans(recording, world.floor, config.lidar, Crowd(25), seed=2)
     assert 0.45 < np.mean(blocked) < 0.6
 
-    def rms_error(name: str, options: dict[str, object]) -> float:
+    def track(scans: list[NDArray[np.float64]], **options: object) -> tuple[float, int]:
         localizer = Localizer(plan, tuple(recording.truth[0]), **options)  # type: ignore[arg-type]
-        poses = np.array([localizer.update(s, tuple(o)).pose for s, o in zip(scans[name], recording.odometry_in_odom)])
-        return _rms(np.hypot(*(poses[:, :2] - recording.truth[:, :2]).T))
+        estimates = [localizer.update(s, tuple(o)) for s, o in zip(scans, recording.odometry_in_odom)]
+        poses = np.array([e.pose for e in estimates])
+        return _rms(np.hypot(*(poses[:, :2] - recording.truth[:, :2]).T)), sum(e.lost for e in estimates)
 
-    empty = rms_error("empty", {})
-    crowded = rms_error("crowd", {})
-    plain = rms_error("crowd", {"config": IcpConfig(), "occlusion": False})
-    assert empty < 0.005 and crowded < 2.5 * empty, (empty, crowded)
-    assert plain > 5 * crowded, (plain, crowded)
+    empty, _ = track(empty_scans)
+    crowded, lost = track(crowd_scans)
+    plain, _ = track(crowd_scans, config=IcpConfig(), occlusion=False, fusion=FusionRule(max_innovation=0.0))
+    assert empty < 0.003 and crowded < 2.2 * empty and lost == 0, (empty, crowded, lost)
+    assert plain > 10 * crowded, (plain, crowded)
+    with pytest.raises(ValueError, match="people"):
+        Crowd(-1)
+    with pytest.raises(ValueError, match="need min_distance <= max_distance"):
+        Crowd(3, min_distance=2.0, max_distance=1.0)
 
 
 def test_clutter_is_not_mistaken_for_a_kidnap() -> None:

@@ -28,6 +28,7 @@ from .acceptance_gate import AcceptanceGate
 from .localizer import Estimate, Localizer
 from .lost_detection import LostRule
 from .motion_noise import MotionNoise
+from .prediction_fusion import FusionRule
 from .occlusion_rule import OcclusionRule
 from .plan_map import PlanMap
 from .recovery import RecoveryConfig
@@ -49,6 +50,7 @@ __all__ = [
     "OccupancyModel",
     "OcclusionRule",
     "Estimate",
+    "FusionRule",
     "IcpConfig",
     "IcpResult",
     "Localizer",

@@ -2,9 +2,11 @@
 
 Point-to-point ICP in a corridor slides along it on noise, furniture and people; its covariance
 grows along the axis but its pose is still moved. `DegeneracyRule` detects the case from the fit's
-wall-normal constraint (`IcpResult.translation_constraint`) and `fuse_along_weak_axis` takes ICP's
-correction in full only across the weak axis: along it the odometry prediction is kept, corrected
-by ICP only as much as their variances say.
+wall-normal constraint (`IcpResult.translation_constraint`). The `Localizer` fuses every accepted
+fit with the odometry prediction (`prediction_fusion`), which keeps the prediction along a
+direction the fit does not constrain; when odometry faulted and the two are not fused,
+`fuse_along_weak_axis` still takes ICP's correction in full only across the weak axis: along it the
+odometry prediction is kept, corrected by ICP only as much as their variances say.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from numpy.typing import NDArray
 
 from ._validation import Pose, real_number
 from .icp_result import IcpResult
+from .prediction_fusion import finite_covariance
 from .se2 import wrap_angle
 
 
@@ -67,7 +70,7 @@ def fuse_along_weak_axis(degeneracy: Degeneracy, result: IcpResult, predicted: P
     and the fused variance along it."""
     u = np.array(degeneracy.axis)
     across = np.eye(2) - np.outer(u, u)
-    icp_cov = _finite_covariance(result)
+    icp_cov = finite_covariance(result)
     var_pred = float(u @ predicted_covariance[:2, :2] @ u)
     var_icp = float(u @ icp_cov[:2, :2] @ u)
     gain = var_pred / (var_pred + var_icp) if var_pred + var_icp > 0.0 else 0.0
@@ -78,20 +81,3 @@ def fuse_along_weak_axis(degeneracy: Degeneracy, result: IcpResult, predicted: P
     cross = across @ icp_cov[:2, 2]
     cov = np.array([[t[0, 0], t[0, 1], cross[0]], [t[1, 0], t[1, 1], cross[1]], [cross[0], cross[1], icp_cov[2, 2]]])
     return pose, (cov + cov.T) / 2.0
-
-
-UNCONSTRAINED_VARIANCE = 1e6
-"""Variance (m^2) given to a direction no inlier constrains at all."""
-
-
-def _finite_covariance(result: IcpResult) -> NDArray[np.float64]:
-    """`result.covariance`, or, where the fit left a direction with no constraint at all (an
-    infinite covariance), one rebuilt from its constraint with `UNCONSTRAINED_VARIANCE` there."""
-    cov = np.asarray(result.covariance, dtype=np.float64)
-    if np.isfinite(cov).all():
-        return cov
-    sigma2 = result.rmse**2 if math.isfinite(result.rmse) and result.rmse > 0.0 else 1e-4
-    information = np.asarray(result.constraint, dtype=np.float64) / sigma2 + np.eye(3) / UNCONSTRAINED_VARIANCE
-    inverse = np.asarray(np.linalg.inv(information), dtype=np.float64)
-    symmetric: NDArray[np.float64] = (inverse + inverse.T) / 2.0
-    return symmetric

@@ -22,6 +22,7 @@ from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
+from .prediction_fusion import FusionRule, fuse_with_prediction
 from .scan_continuity import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
@@ -33,19 +34,23 @@ class Estimate:
 
     Attributes:
         pose: (x, y, yaw) of the robot in the map (T_map_base) after this update.
-        accepted: the ICP result passed the gate; otherwise `pose` is the odometry prediction.
+        accepted: the ICP result passed the gate, and `pose` is its fusion with the odometry
+            prediction (see `FusionRule`); otherwise `pose` is the odometry prediction.
         result: the ICP result (None when the scan had too few points to align at all).
         predicted_pose: last pose plus the odometry motion since then: ICP's initial guess.
         odom_pose: the odometry pose (T_odom_base) this update received.
         reason: why the result was not accepted ("" when it was).
-        covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): ICP's when accepted, the
-            odometry prediction's otherwise, and along the weak axis of a degenerate fit.
+        covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): the fusion of ICP's and
+            the odometry prediction's when accepted (ICP's alone after an odometry fault), the
+            prediction's otherwise.
         degeneracy: the weak axis of an accepted fit that does not fix the position along it
             (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
-            there allows), or None.
+            there allows: the fusion does so), or None.
         lost: the plan no longer explains the scans (see `LostRule`); while lost, the
             `Recovery` searches the plan for the robot.
-        score: mean match score (inlier ratio) over the `LostRule` window.
+        score: mean match score over the `LostRule` window: the share of the returns that could
+            confirm the pose which the plan explains (returns the occlusion rule left out as
+            people and furniture are not counted; those beyond the plan's walls count against).
         kept: (N,) bool over the scan's points: those aligned to the plan, after `OcclusionRule`
             left out the returns in front of the plan's walls (people, furniture); None when every
             point was aligned. `result.inlier_mask` is over the kept points.
@@ -123,6 +128,7 @@ class Localizer:
         recovery: RecoveryConfig | None = None,
         continuity: ContinuityRule | None = None,
         occlusion: OcclusionRule | Literal[False] | None = None,
+        fusion: FusionRule | None = None,
     ) -> None:
         """
         Args:
@@ -140,6 +146,8 @@ class Localizer:
                 `ContinuityRule()`).
             occlusion: which returns stand in front of the plan's walls and are left out of the
                 alignment (None: `OcclusionRule()`; False: align every return).
+            fusion: when an accepted fit is fused with the odometry prediction (a Kalman update;
+                None: `FusionRule()`).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -153,6 +161,9 @@ class Localizer:
         self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
         self.continuity = continuity if continuity is not None else ContinuityRule()
+        if fusion is not None and not isinstance(fusion, FusionRule):
+            raise TypeError(f"fusion must be a planicp.FusionRule or None, got {type(fusion).__name__}")
+        self.fusion = fusion if fusion is not None else FusionRule()
         if occlusion is not False and occlusion is not None and not isinstance(occlusion, OcclusionRule):
             raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
         self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
@@ -250,7 +261,11 @@ class Localizer:
                 used = points if kept is None else points[kept]
                 result = localize(used, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
-                if self._poor_fit(result, reason, len(points)) and self.config.correspondence_search == "wall_index":
+                # A fit that explains little of the whole scan may have started outside the index's
+                # narrower basin (a bad odometry step also misleads the occlusion rule): the
+                # KD-tree tries again.
+                if (self._poor_fit(result.num_inliers / len(points), reason, result)
+                        and self.config.correspondence_search == "wall_index"):
                     wide = localize(used, self.plan, predicted, self._wide_config)
                     if wide.num_inliers > result.num_inliers:
                         result, reason = wide, self.gate.rejection(wide, predicted)
@@ -267,30 +282,25 @@ class Localizer:
             # scan, not simply the previous one: after a kidnap the second scan continues the first
             # one elsewhere.)
             continues: bool | None = None
-            # How much of the WHOLE scan the plan explains: returns the occlusion rule left out count
-            # as unexplained, so that a wrong prediction cannot hide the evidence against it.
-            score = result.num_inliers / len(points) if result is not None else 0.0
-            if (result is not None and beyond is not None and not searched
-                    and self.config.correspondence_search == "wall_index"):
-                # The index's masks see occluders within 0.6 m only: from a wrong place (a
-                # kidnapped robot) it pairs returns that came through walls the prediction would
-                # have stopped. Those count as unexplained, as the ray-cast visibility leaves them.
-                inliers = np.zeros(len(points), dtype=bool)
-                if kept is None:
-                    inliers[:] = result.inlier_mask
-                else:
-                    inliers[kept] = result.inlier_mask
-                score = float(np.count_nonzero(inliers & ~beyond)) / len(points)
-            poor = result is not None and self._poor_fit(result, reason, len(points))
+            score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
+                                                self._score(result, kept, beyond, len(points)))
+            poor = result is not None and self._poor_fit(score, reason, result)
             if poor and result is not None and not self._detector.lost and self._anchor is not None:
-                continues = self.continuity.continues(points, self._anchor[0], between(self._anchor[1], odom))
+                # Only the returns the occlusion rule did not leave out need to continue it: people
+                # who moved since then stand elsewhere, and a return short of the plan's walls says
+                # nothing about where the robot is.
+                continuing = points if kept is None else points[kept]
+                continues = self.continuity.continues(continuing, self._anchor[0], between(self._anchor[1], odom))
                 if not continues and reason == "":
                     reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
                               f"continue the last scan the plan explained")
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
                 degeneracy = self.degeneracy.check(result)
-                if degeneracy is not None:
+                if not searched and self.fusion.innovation(result, predicted, predicted_covariance) <= \
+                        self.fusion.max_innovation:
+                    pose, covariance = fuse_with_prediction(result, predicted, predicted_covariance)
+                elif degeneracy is not None:
                     pose, covariance = fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
                 else:
                     pose, covariance = result.pose, _finite_or(result.covariance, predicted_covariance)
@@ -322,12 +332,38 @@ class Localizer:
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses, kept)
 
-    def _poor_fit(self, result: IcpResult, reason: str, scan_points: int) -> bool:
-        """Whether the plan explains `result` poorly: rejected for its fit, or accepted with a score
-        (inliers over the whole scan of `scan_points`) below the lost rule's."""
-        score = result.num_inliers / scan_points
+    def _poor_fit(self, score: float, reason: str, result: IcpResult) -> bool:
+        """Whether the plan explains `result` poorly: rejected for its fit, or accepted with a
+        `score` (see `_score`) below the lost rule's."""
         return (reason != "" and self.gate.fit_rejection(result) != "") or (
             reason == "" and score < self._detector.rule.min_score)
+
+    @staticmethod
+    def _score(result: IcpResult, kept: NDArray[np.bool_] | None, beyond: NDArray[np.bool_] | None,
+               scan_points: int) -> float:
+        """The share of the returns that could confirm the pose which the plan explains.
+
+        Returns the occlusion rule left out (`kept` False: short of the plan's walls, people and
+        furniture) neither confirm nor contradict the pose and are not counted: with most of the
+        scan on a crowd that moves between scans the pose is still sound. Returns `beyond` the walls
+        seen from the prediction contradict it and count as unexplained even when paired (the
+        nearest-wall index's masks see occluders within 0.6 m only, so from a wrong place, a
+        kidnapped robot, it pairs returns that came through walls). At most half of the scan is
+        left uncounted: a robot carried into a smaller room sees every wall short of the
+        prediction's, as a crowd would (a kidnap test lost track for 8 scans instead of 2 without
+        the bound). Without the occlusion rule (`kept` and `beyond` None) this is the inlier ratio
+        over the whole scan of `scan_points`."""
+        if kept is None and beyond is None:
+            return result.num_inliers / scan_points
+        inliers = np.zeros(scan_points, dtype=bool)
+        if kept is None:
+            inliers[:] = result.inlier_mask
+        else:
+            inliers[kept] = result.inlier_mask
+        if beyond is not None:
+            inliers &= ~beyond
+        aligned = scan_points if kept is None else int(np.count_nonzero(kept))
+        return float(np.count_nonzero(inliers)) / max(aligned, scan_points * 0.5)
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
                     predicted_covariance: NDArray[np.float64]) -> tuple[NDArray[np.bool_] | None,

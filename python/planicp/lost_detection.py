@@ -14,7 +14,11 @@ class LostRule:
     """When the `Localizer` declares itself lost.
 
     The match score of a scan is the share of its points within `max_correspondence_distance` of
-    the plan after alignment (the inlier ratio; 0 for a scan too small to align). The localizer is
+    the plan after alignment (the inlier ratio; 0 for a scan too small to align). When the
+    `OcclusionRule` applies, the returns it left out (short of the plan's walls: people, furniture)
+    neither confirm nor contradict the pose and are not counted, up to half of the scan (a robot
+    carried into a smaller room looks like a crowd at first); returns beyond the walls seen from the
+    prediction count as unexplained. The localizer is
     lost when the mean score over the last `window` scans falls below `min_score`, or when
     `max_rejections` scans in a row were rejected by the acceptance gate.
 

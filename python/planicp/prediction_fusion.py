@@ -1,0 +1,97 @@
+"""Fusing an accepted fit with the odometry prediction: a Kalman update over (x, y, yaw).
+
+ICP's pose is a measurement of the robot's pose against the plan; the odometry prediction (the last
+estimate moved by the odometry motion) carries what the previous scans said. Taking ICP's pose alone
+throws that away: when people hide half of the walls, or the walls seen leave a direction weak, one
+scan's fit wanders by a centimetre or two that the prediction knew better. `fuse_with_prediction`
+weighs the two by their covariances: where the fit is precise it decides, where it is weak (a
+degenerate direction, a crowded scan) the prediction does. On the shipped plan with 25 people around
+the robot this cut the position error RMS by a quarter to a half over five drives, and by about 10 %
+on the empty floor (`benches/crowd.py`).
+
+Odometry can fault (a wheel slips, a 10-degree step): then the fit and the prediction disagree far
+beyond their covariances. An innovation over `FusionRule.max_innovation` (a chi-square over 3
+degrees of freedom) takes the fit alone, except along a degenerate direction where nothing else
+exists.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validation import Pose, real_number
+from .icp_result import IcpResult
+from .se2 import wrap_angle
+
+CHI2_3_999 = 16.266
+"""The 99.9 % quantile of a chi-square with 3 degrees of freedom."""
+
+UNCONSTRAINED_VARIANCE = 1e6
+"""Variance (m^2) given to a direction no inlier constrains at all."""
+
+
+@dataclass(frozen=True)
+class FusionRule:
+    """When a fit is fused with the prediction.
+
+    Attributes:
+        max_innovation: largest squared Mahalanobis distance between the fit and the prediction
+            (over their summed covariances, 3 degrees of freedom) for the two to be fused; above
+            it the odometry is taken to have faulted and the fit is used alone. The default is the
+            chi-square's 99.9 % quantile. 0 never fuses: the fit alone, as plain ICP trackers do
+            (a degenerate direction still keeps the prediction, see `fuse_along_weak_axis`).
+    """
+
+    max_innovation: float = CHI2_3_999
+
+    def __post_init__(self) -> None:
+        value = real_number(self.max_innovation, "max_innovation")
+        if not value >= 0.0:
+            raise ValueError(f"max_innovation must be a number >= 0 (0 never fuses), got {value!r}")
+
+    def innovation(self, result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]) -> float:
+        """The squared Mahalanobis distance between `result.pose` and `predicted` (inf when
+        their summed covariance is singular)."""
+        innovation = _difference(result.pose, predicted)
+        summed = predicted_covariance + finite_covariance(result)
+        try:
+            return float(innovation @ np.linalg.solve(summed, innovation))
+        except np.linalg.LinAlgError:
+            return math.inf
+
+
+def fuse_with_prediction(result: IcpResult, predicted: Pose,
+                         predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+    """The Kalman update of the prediction (covariance `predicted_covariance`, 3x3 over map-frame
+    x, y, yaw in m and rad) by the fit's pose (covariance `result.covariance`, with a direction the
+    fit does not constrain at all given `UNCONSTRAINED_VARIANCE`). Returns the fused pose and its
+    covariance."""
+    measured = finite_covariance(result)
+    summed = predicted_covariance + measured
+    gain = predicted_covariance @ np.linalg.inv(summed)
+    x = np.array(predicted) + gain @ _difference(result.pose, predicted)
+    covariance = (np.eye(3) - gain) @ predicted_covariance
+    pose: Pose = (float(x[0]), float(x[1]), wrap_angle(float(x[2])))
+    return pose, (covariance + covariance.T) / 2.0
+
+
+def finite_covariance(result: IcpResult) -> NDArray[np.float64]:
+    """`result.covariance`, or, where the fit left a direction with no constraint at all (an
+    infinite covariance), one rebuilt from its constraint with `UNCONSTRAINED_VARIANCE` there."""
+    cov = np.asarray(result.covariance, dtype=np.float64)
+    if np.isfinite(cov).all():
+        return cov
+    sigma2 = result.rmse**2 if math.isfinite(result.rmse) and result.rmse > 0.0 else 1e-4
+    information = np.asarray(result.constraint, dtype=np.float64) / sigma2 + np.eye(3) / UNCONSTRAINED_VARIANCE
+    inverse = np.asarray(np.linalg.inv(information), dtype=np.float64)
+    symmetric: NDArray[np.float64] = (inverse + inverse.T) / 2.0
+    return symmetric
+
+
+def _difference(pose: Pose, reference: Pose) -> NDArray[np.float64]:
+    """`pose - reference` over (x, y, yaw), the yaw wrapped to (-pi, pi]."""
+    return np.array([pose[0] - reference[0], pose[1] - reference[1], wrap_angle(pose[2] - reference[2])])
