@@ -19,6 +19,7 @@ use crate::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
 use crate::termination::{pair_fingerprint, stage_end, Tolerances};
+use crate::visible_through_index::VisibleThroughIndex;
 use nalgebra::Matrix3;
 
 /// Candidates are fetched within this many times a stage's distance, so a scan point may move
@@ -225,6 +226,13 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
         TargetSet::Full(map)
     };
 
+    // Matching against the visible subset: the plan's index still answers every look-up whose
+    // nearest wall point is visible (the same pairs, at a fraction of the cost).
+    let through_index = match indexed {
+        None => map.wall_index().ok().and_then(|w| VisibleThroughIndex::new(w, &target, largest_distance)),
+        Some(_) => None,
+    };
+
     let tolerances = config.tolerances();
     // Lever arm that turns a rotation into metres for the extrapolation: RMS range of the scan.
     let scan_radius =
@@ -238,7 +246,7 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     let mut moved = Vec::with_capacity(used.len());
     let mut pairs: Vec<Pair> = Vec::with_capacity(used.len());
     // Beyond a metre a candidate list holds whole rooms: plain KD-tree queries are cheaper.
-    let use_cache = indexed.is_none() && largest_distance <= MAX_CACHED_DISTANCE;
+    let use_cache = indexed.is_none() && through_index.is_none() && largest_distance <= MAX_CACHED_DISTANCE;
     let mut cache = CandidateCache::new(CACHE_RADIUS_FACTOR * largest_distance);
     let bearings = if indexed.is_some() { SensorView::bearings_of(&used) } else { Vec::new() };
     'stages: for (stage, factor) in config.correspondence_schedule.iter().enumerate() {
@@ -255,6 +263,8 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
             if let Some(wall) = indexed {
                 let view = config.use_visibility.then(|| SensorView::new(&bearings, pose.yaw));
                 wall.find_pairs(&moved, distance, view, &mut pairs);
+            } else if let Some(through) = &through_index {
+                through.find_pairs(&target, &moved, distance, &mut pairs);
             } else if use_cache {
                 cache.find_pairs(&target, &moved, distance, &mut pairs);
             } else {
@@ -315,10 +325,11 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
             last_update = Some(update);
         }
     }
-    let search = match indexed {
-        Some(wall) => Search::Indexed(wall),
-        None if use_cache && config.subsample == 1 => Search::Cached(&mut cache),
-        None => Search::Plain,
+    let search = match (indexed, &through_index) {
+        (Some(wall), _) => Search::Indexed(wall),
+        (None, Some(through)) => Search::ThroughIndex(through),
+        (None, None) if use_cache && config.subsample == 1 => Search::Cached(&mut cache),
+        (None, None) => Search::Plain,
     };
     let outcome = LoopOutcome { pose, converged, iterations };
     Ok(score(map, &target, search, scan, config, outcome))
@@ -327,6 +338,8 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
 /// How the final scoring finds its pairs.
 enum Search<'a> {
     Indexed(&'a NearestWallIndex),
+    /// The visible subset, through the plan's index.
+    ThroughIndex(&'a VisibleThroughIndex<'a>),
     /// The iterations ran on every scan point, so the cache holds candidates for all of them.
     Cached(&'a mut CandidateCache),
     Plain,
@@ -358,6 +371,7 @@ fn score(
             let view = config.use_visibility.then(|| SensorView::new(&bearings, pose.yaw));
             wall.find_pairs(&moved, d, view, &mut pairs)
         }
+        Search::ThroughIndex(through) => through.find_pairs(target, &moved, d, &mut pairs),
         Search::Cached(cache) if d <= cache.radius() => cache.find_pairs(target, &moved, d, &mut pairs),
         _ => find_pairs(target, &moved, d, &mut pairs),
     }

@@ -45,6 +45,7 @@ pub mod relocalization;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;
+pub mod visible_through_index;
 pub mod wall_facing;
 pub mod wall_raster;
 
