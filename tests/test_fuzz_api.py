@@ -560,7 +560,7 @@ def test_robustness_api(data: Any) -> None:
         if ok:
             assert cov.shape == (3, 3) and not np.isnan(cov).any()
     call(planicp.RecoveryConfig, min_inlier_ratio=data.draw(number), confirmations=data.draw(number),
-         margin=data.draw(number), local_radius=data.draw(number))
+         margin=data.draw(number), local_radius=data.draw(number), max_beyond=data.draw(number))
     ok, region = call(planicp.SearchRegion, data.draw(poses), data.draw(number), data.draw(number))
     plan = box_plan()
     ok_found, found = call(planicp.relocalize, data.draw(scans()), plan, region=region if ok else None,

@@ -22,7 +22,7 @@ from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
-from .prediction_fusion import FusionRule, fuse_with_prediction
+from .prediction_fusion import FusionRule
 from .scan_continuity import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
@@ -48,9 +48,8 @@ class Estimate:
             there allows: the fusion does so), or None.
         lost: the plan no longer explains the scans (see `LostRule`); while lost, the
             `Recovery` searches the plan for the robot.
-        score: mean match score over the `LostRule` window: the share of the returns that could
-            confirm the pose which the plan explains (returns the occlusion rule left out as
-            people and furniture are not counted; those beyond the plan's walls count against).
+        score: mean match score over the `LostRule` window: the share of the scan the plan
+            explains (see `LostRule`).
         kept: (N,) bool over the scan's points: those aligned to the plan, after `OcclusionRule`
             left out the returns in front of the plan's walls (people, furniture); None when every
             point was aligned. `result.inlier_mask` is over the kept points.
@@ -174,7 +173,7 @@ class Localizer:
         # recovery refines its candidates with it.
         self._wide_config = self.config.replace(correspondence_search="kd_tree")
         self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self._wide_config,
-                                  self.gate)
+                                  self.gate, self._occlusion)
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
@@ -247,17 +246,19 @@ class Localizer:
         points = as_points(scan_xy, "scan_xy", allow_empty=True)
         odom = as_pose(odom_pose, "odom_pose")
         with self._lock:
+            was_lost = self._detector.lost
             motion = (0.0, 0.0, 0.0) if self._last_odom is None else between(self._last_odom, odom)
             predicted = compose(self._pose, motion)
             predicted_covariance = self.motion_noise.propagate(self._covariance, self._pose, motion)
             result: IcpResult | None = None
             kept: NDArray[np.bool_] | None = None
             beyond: NDArray[np.bool_] | None = None
+            occluded = False
             usable = -(-len(points) // self.config.subsample)
             if usable < _core.MIN_SCAN_POINTS:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
-                kept, beyond = self._unoccluded(points, predicted, predicted_covariance)
+                kept, beyond, occluded = self._unoccluded(points, predicted, predicted_covariance)
                 used = points if kept is None else points[kept]
                 result = localize(used, self.plan, predicted, self.config)
                 reason = self.gate.rejection(result, predicted)
@@ -285,21 +286,28 @@ class Localizer:
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
                                                 self._score(result, kept, beyond, len(points)))
             poor = result is not None and self._poor_fit(score, reason, result)
-            if poor and result is not None and not self._detector.lost and self._anchor is not None:
-                # Only the returns the occlusion rule did not leave out need to continue it: people
-                # who moved since then stand elsewhere, and a return short of the plan's walls says
-                # nothing about where the robot is.
-                continuing = points if kept is None else points[kept]
-                continues = self.continuity.continues(continuing, self._anchor[0], between(self._anchor[1], odom))
-                if not continues and reason == "":
-                    reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
-                              f"continue the last scan the plan explained")
+            if poor and result is not None and not self._detector.lost:
+                # A crowd hides most walls, and its people move between scans: the plan explains
+                # little of the scan and the scan does not continue the last one. If the plan
+                # explains the returns the occlusion rule kept (those on or beyond its walls) as
+                # well as a continuation must overlap, the scan is sound where it sees the plan;
+                # if the rule kept too few to align, the scan says nothing either way. Otherwise
+                # only the kept returns need to continue the last scan: a return short of the
+                # plan's walls says nothing about where the robot is.
+                continues = occluded or (kept is not None and not searched and reason == ""
+                                         and result.inlier_ratio >= self.continuity.min_overlap)
+                if not continues and self._anchor is not None:
+                    continues = self.continuity.continues(points if kept is None else points[kept], self._anchor[0],
+                                                          between(self._anchor[1], odom))
+                    if not continues and reason == "":
+                        reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
+                                  f"continue the last scan the plan explained")
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
                 degeneracy = self.degeneracy.check(result)
-                if not searched and self.fusion.innovation(result, predicted, predicted_covariance) <= \
-                        self.fusion.max_innovation:
-                    pose, covariance = fuse_with_prediction(result, predicted, predicted_covariance)
+                fused = None if searched else self.fusion.fuse(result, predicted, predicted_covariance)
+                if fused is not None:
+                    pose, covariance = fused
                 elif degeneracy is not None:
                     pose, covariance = fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
                 else:
@@ -310,7 +318,11 @@ class Localizer:
             if continues:
                 lost = self._detector.hold()
             else:
-                lost = self._detector.update(score, accepted)
+                # While lost, a fit from the prediction (the place the localizer lost track at)
+                # does not end the lost state, however well the gate takes it: a wrong place may
+                # explain a third of the scan. The recovery ends it, by adopting a place it
+                # confirmed over several scans (the prediction's among them) or a search's result.
+                lost = self._detector.update(score, accepted and not (was_lost and not searched))
             relocalized = searched
             if lost and usable >= _core.MIN_SCAN_POINTS:
                 found = self._recovery.step(points, motion, predicted)
@@ -341,47 +353,40 @@ class Localizer:
     @staticmethod
     def _score(result: IcpResult, kept: NDArray[np.bool_] | None, beyond: NDArray[np.bool_] | None,
                scan_points: int) -> float:
-        """The share of the returns that could confirm the pose which the plan explains.
-
-        Returns the occlusion rule left out (`kept` False: short of the plan's walls, people and
-        furniture) neither confirm nor contradict the pose and are not counted: with most of the
-        scan on a crowd that moves between scans the pose is still sound. Returns `beyond` the walls
-        seen from the prediction contradict it and count as unexplained even when paired (the
-        nearest-wall index's masks see occluders within 0.6 m only, so from a wrong place, a
-        kidnapped robot, it pairs returns that came through walls). At most half of the scan is
-        left uncounted: a robot carried into a smaller room sees every wall short of the
-        prediction's, as a crowd would (a kidnap test lost track for 8 scans instead of 2 without
-        the bound). Without the occlusion rule (`kept` and `beyond` None) this is the inlier ratio
-        over the whole scan of `scan_points`."""
-        if kept is None and beyond is None:
+        """How much of the WHOLE scan of `scan_points` the plan explains: returns the occlusion rule
+        left out (`kept` False) count as unexplained, so that a wrong prediction cannot hide the
+        evidence against it, and so do returns `beyond` the walls seen from the prediction even
+        when paired (the nearest-wall index's masks see occluders within 0.6 m only, so from a
+        wrong place, a kidnapped robot, it pairs returns that came through walls)."""
+        if beyond is None:
             return result.num_inliers / scan_points
         inliers = np.zeros(scan_points, dtype=bool)
         if kept is None:
             inliers[:] = result.inlier_mask
         else:
             inliers[kept] = result.inlier_mask
-        if beyond is not None:
-            inliers &= ~beyond
-        aligned = scan_points if kept is None else int(np.count_nonzero(kept))
-        return float(np.count_nonzero(inliers)) / max(aligned, scan_points * 0.5)
+        return float(np.count_nonzero(inliers & ~beyond)) / scan_points
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
                     predicted_covariance: NDArray[np.float64]) -> tuple[NDArray[np.bool_] | None,
-                                                                         NDArray[np.bool_] | None]:
-        """(kept, beyond) when the occlusion rule applies (a trusted prediction, not lost): the points
-        not in front of the plan's walls (None when too few would remain, or all: align them all),
-        and the points beyond the walls seen from the prediction. (None, None) otherwise."""
+                                                                         NDArray[np.bool_] | None, bool]:
+        """(kept, beyond, occluded) when the occlusion rule applies (a trusted prediction, not
+        lost): the points not in front of the plan's walls (None when too few would remain, or
+        all: align them all), the points beyond the walls seen from the prediction, and whether
+        fewer than the rule's `min_points` remain. (None, None, False) otherwise."""
         if self._occlusion is None or self._detector.lost:
-            return None, None
+            return None, None, False
         rule = self._occlusion.rule
-        sigma_xy = math.sqrt(max(float(np.linalg.eigvalsh(predicted_covariance[:2, :2]).max()), 0.0))
-        if 3.0 * sigma_xy >= rule.margin:
-            return None, None
+        if 3.0 * _largest_position_std(predicted_covariance) >= rule.margin:
+            return None, None, False
         in_front, beyond = self._occlusion.classify(points, predicted)
         kept: NDArray[np.bool_] = ~in_front
-        if int(kept.sum()) < rule.min_points or kept.all():
-            return None, beyond
-        return kept, beyond
+        remaining = int(np.count_nonzero(kept))
+        if remaining < rule.min_points:
+            return None, beyond, True
+        if remaining == len(points):
+            return None, beyond, False
+        return kept, beyond, False
 
     def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
         """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a
@@ -390,8 +395,7 @@ class Localizer:
             return False
         if reason != "" and self.gate.fit_rejection(result) == "":
             return True
-        sigma_xy = math.sqrt(max(float(np.linalg.eigvalsh(predicted_covariance[:2, :2]).max()), 0.0))
-        return 3.0 * sigma_xy > self.gate.max_translation_jump
+        return 3.0 * _largest_position_std(predicted_covariance) > self.gate.max_translation_jump
 
     def _search_near(self, points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None) -> IcpResult | None:
         """The fit at the unambiguous best place around `predicted`, when it explains at least the
@@ -409,6 +413,14 @@ class Localizer:
         if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
             return None
         return refined
+
+
+def _largest_position_std(covariance: NDArray[np.float64]) -> float:
+    """Square root of the largest eigenvalue of the position block of a 3x3 covariance, metres
+    (closed form for a symmetric 2x2)."""
+    a, b, c = float(covariance[0, 0]), float(covariance[0, 1]), float(covariance[1, 1])
+    largest = (a + c) / 2.0 + math.hypot((a - c) / 2.0, b)
+    return math.sqrt(largest) if largest > 0.0 else 0.0
 
 
 DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))

@@ -14,11 +14,9 @@ class LostRule:
     """When the `Localizer` declares itself lost.
 
     The match score of a scan is the share of its points within `max_correspondence_distance` of
-    the plan after alignment (the inlier ratio; 0 for a scan too small to align). When the
-    `OcclusionRule` applies, the returns it left out (short of the plan's walls: people, furniture)
-    neither confirm nor contradict the pose and are not counted, up to half of the scan (a robot
-    carried into a smaller room looks like a crowd at first); returns beyond the walls seen from the
-    prediction count as unexplained. The localizer is
+    the plan after alignment, over the whole scan (0 for a scan too small to align): returns the
+    `OcclusionRule` left out and returns beyond the walls seen from the prediction count as
+    unexplained. The localizer is
     lost when the mean score over the last `window` scans falls below `min_score`, or when
     `max_rejections` scans in a row were rejected by the acceptance gate.
 
@@ -28,7 +26,9 @@ class LostRule:
             scoring below it against the last well explained scan (`ContinuityRule`): a scan
             that continues it is clutter and does not count (in a cluttered room the plan may
             explain only a third of the scans while every fit is sound); one that does not is
-            not trusted.
+            not trusted. A scan whose returns on or beyond the plan's walls (those the occlusion
+            rule kept) the plan explains at least as well as a continuation must overlap
+            (`ContinuityRule.min_overlap`) counts as clutter too: a crowd hides most walls.
         max_rejections: rejections in a row that mean lost (>= 1).
     """
 

@@ -56,12 +56,23 @@ class FusionRule:
     def innovation(self, result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]) -> float:
         """The squared Mahalanobis distance between `result.pose` and `predicted` (inf when
         their summed covariance is singular)."""
-        innovation = _difference(result.pose, predicted)
-        summed = predicted_covariance + finite_covariance(result)
-        try:
-            return float(innovation @ np.linalg.solve(summed, innovation))
-        except np.linalg.LinAlgError:
+        inverse = _summed_inverse(result, predicted_covariance)
+        if inverse is None:
             return math.inf
+        innovation = _difference(result.pose, predicted)
+        return float(innovation @ inverse @ innovation)
+
+    def fuse(self, result: IcpResult, predicted: Pose,
+             predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]] | None:
+        """`fuse_with_prediction`, or None when the innovation exceeds `max_innovation` (the
+        odometry faulted) or the summed covariance is singular."""
+        inverse = _summed_inverse(result, predicted_covariance)
+        if inverse is None:
+            return None
+        innovation = _difference(result.pose, predicted)
+        if not float(innovation @ inverse @ innovation) <= self.max_innovation:
+            return None
+        return _update(predicted, predicted_covariance, innovation, inverse)
 
 
 def fuse_with_prediction(result: IcpResult, predicted: Pose,
@@ -69,11 +80,29 @@ def fuse_with_prediction(result: IcpResult, predicted: Pose,
     """The Kalman update of the prediction (covariance `predicted_covariance`, 3x3 over map-frame
     x, y, yaw in m and rad) by the fit's pose (covariance `result.covariance`, with a direction the
     fit does not constrain at all given `UNCONSTRAINED_VARIANCE`). Returns the fused pose and its
-    covariance."""
-    measured = finite_covariance(result)
-    summed = predicted_covariance + measured
-    gain = predicted_covariance @ np.linalg.inv(summed)
-    x = np.array(predicted) + gain @ _difference(result.pose, predicted)
+    covariance.
+
+    Raises:
+        numpy.linalg.LinAlgError: the summed covariance is singular.
+    """
+    inverse = np.asarray(np.linalg.inv(predicted_covariance + finite_covariance(result)), dtype=np.float64)
+    return _update(predicted, predicted_covariance, _difference(result.pose, predicted), inverse)
+
+
+def _summed_inverse(result: IcpResult, predicted_covariance: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """The inverse of the prediction's covariance plus the fit's, None when singular."""
+    try:
+        inverse = np.asarray(np.linalg.inv(predicted_covariance + finite_covariance(result)), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        return None
+    return inverse
+
+
+def _update(predicted: Pose, predicted_covariance: NDArray[np.float64], innovation: NDArray[np.float64],
+            summed_inverse: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+    """The Kalman update: gain = P S^-1, pose = predicted + gain innovation, covariance = (I - gain) P."""
+    gain = predicted_covariance @ summed_inverse
+    x = np.array(predicted) + gain @ innovation
     covariance = (np.eye(3) - gain) @ predicted_covariance
     pose: Pose = (float(x[0]), float(x[1]), wrap_angle(float(x[2])))
     return pose, (covariance + covariance.T) / 2.0
