@@ -249,7 +249,7 @@ class Localizer:
             was_lost = self._detector.lost
             motion = (0.0, 0.0, 0.0) if self._last_odom is None else between(self._last_odom, odom)
             predicted = compose(self._pose, motion)
-            predicted_covariance = self.motion_noise.propagate(self._covariance, self._pose, motion)
+            predicted_covariance = self.motion_noise.propagate_checked(self._covariance, self._pose, motion)
             result: IcpResult | None = None
             kept: NDArray[np.bool_] | None = None
             beyond: NDArray[np.bool_] | None = None

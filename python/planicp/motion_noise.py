@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, real_number
+from ._validation import Pose, as_pose, real_number
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,20 @@ class MotionNoise:
 
     def propagate(self, covariance: NDArray[np.float64], pose: Pose, motion: Pose) -> NDArray[np.float64]:
         """The covariance (3x3 over map-frame x, y, yaw) of `pose * motion` given that of `pose`:
-        first-order propagation through the composition plus this motion's own noise."""
+        first-order propagation through the composition plus this motion's own noise.
+
+        Raises:
+            TypeError, ValueError: a malformed pose, motion or covariance, or a motion so large
+                that the covariance overflows.
+        """
+        covariance = np.asarray(covariance, dtype=np.float64)
+        if covariance.shape != (3, 3):
+            raise ValueError(f"covariance must be 3x3, got shape {covariance.shape}")
+        return self.propagate_checked(covariance, as_pose(pose, "pose"), as_pose(motion, "motion"))
+
+    def propagate_checked(self, covariance: NDArray[np.float64], pose: Pose, motion: Pose) -> NDArray[np.float64]:
+        """`propagate` for arguments already known well formed (the `Localizer`'s own state):
+        a 3x3 float covariance and finite poses. Raises ValueError when the result is not finite."""
         dx, dy, dyaw = motion
         c, s = math.cos(pose[2]), math.sin(pose[2])
         # d(pose * motion) / d(pose) and / d(motion).
@@ -52,6 +65,10 @@ class MotionNoise:
         step = math.hypot(dx, dy)
         sigma_t = self.translation_fraction * step + self.translation_floor
         sigma_r = self.rotation_fraction * abs(dyaw) + self.rotation_per_metre * step + self.rotation_floor
-        q = np.diag([sigma_t**2, sigma_t**2, sigma_r**2])
-        out: NDArray[np.float64] = f @ covariance @ f.T + g @ q @ g.T
+        q = np.diag(np.square([sigma_t, sigma_t, sigma_r]))
+        with np.errstate(over="ignore", invalid="ignore"):
+            out: NDArray[np.float64] = f @ covariance @ f.T + g @ q @ g.T
+        if not np.isfinite(out).all():
+            raise ValueError(f"the covariance propagated over motion {(dx, dy, dyaw)} from {pose} is not finite "
+                             f"(motion or covariance too large, or not finite)")
         return (out + out.T) / 2.0
