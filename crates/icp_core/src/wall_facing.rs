@@ -62,8 +62,13 @@ fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool 
     // Distance from p's own wall line within which a wall cell is that wall.
     let own_band = 1.5 * res;
     let across = (d[0] * n[0] + d[1] * n[1]).abs();
-    let mut t = step;
-    while t <= limit {
+    // Counted steps: at a denormal resolution `step` rounds to zero and `t += step` would never
+    // reach the limit (a hang the fuzz target found).
+    for i in 1..=MARCH_STEPS {
+        let t = i as f64 * step;
+        if t > limit {
+            break;
+        }
         let x = ((p[0] + t * d[0] - origin[0]) / res).floor() as i64;
         let y = ((p[1] + t * d[1] - origin[1]) / res).floor() as i64;
         let own_line = n != [0.0, 0.0] && t * across < own_band;
@@ -73,7 +78,6 @@ fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool 
         } else if wall {
             return true;
         }
-        t += step;
     }
     false
 }
@@ -119,6 +123,14 @@ pub fn seen_from(mask: u16, p: [f64; 2], sensor: [f64; 2]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_denormal_raster_resolution_does_not_hang_the_march() {
+        // Found by the fuzz target: half of 5e-324 rounds to 0, and the march never advanced.
+        let map = crate::PointMap::with_normals(vec![[0.3, -0.2]; 54], None, Some(5e-324)).unwrap();
+        let masks = visibility_masks(map.points(), map.normals(), map.raster());
+        assert_eq!(masks.len(), 54);
+    }
 
     fn sample(pts: &mut Vec<[f64; 2]>, a: [f64; 2], b: [f64; 2]) {
         let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.05).round() as usize;
