@@ -404,6 +404,36 @@ def test_continuity_rule() -> None:
         ContinuityRule(max_correction=-1.0)
 
 
+def test_the_occlusion_rule_casts_only_the_arc_the_returns_span() -> None:
+    """Casting only the beams around the returns gives what casting the full circle gives, for
+    scans that face any way, wrap past +-pi, or hold a single return."""
+    from planicp.occlusion_rule import OcclusionFilter, OcclusionRule, _spanned_arc
+
+    plan = load_default_plan()
+    rule = OcclusionRule()
+    occlusion = OcclusionFilter(plan, rule)
+    step = 2 * math.pi / rule.beams
+    rng = np.random.default_rng(5)
+    for trial in range(30):
+        pose = (rng.uniform(2.0, 28.0), rng.uniform(2.0, 18.0), rng.uniform(-math.pi, math.pi))
+        centre, width = rng.uniform(-math.pi, math.pi), rng.choice([0.0, 0.3, math.radians(270), 2 * math.pi])
+        bearings = centre + rng.uniform(-width / 2, width / 2, size=1 if width == 0.0 else 500)
+        r = rng.uniform(0.3, 12.0, size=len(bearings))
+        points = np.column_stack([r * np.cos(bearings), r * np.sin(bearings)])
+        short, beyond = occlusion.classify(points, pose)
+        expected = occlusion._grid.cast(pose, -math.pi, step, rule.beams, 0.0, 1e6)
+        expected = np.where(np.isfinite(expected), expected, np.inf)
+        k = np.round((np.arctan2(points[:, 1], points[:, 0]) + math.pi) / step).astype(np.int64) % rule.beams
+        around = [expected[(k - 1) % rule.beams], expected[k], expected[(k + 1) % rule.beams]]
+        np.testing.assert_array_equal(short, r < np.maximum.reduce(around) - rule.margin, err_msg=str(trial))
+        np.testing.assert_array_equal(beyond, r > np.minimum.reduce(around) + rule.margin, err_msg=str(trial))
+    assert _spanned_arc(np.array([1400, 10, 30]), 1440) == (1399, 73)
+    assert _spanned_arc(np.array([180, 181, 1259, 1260]), 1440) == (1258, 365)
+    assert _spanned_arc(np.arange(180, 1261), 1440) == (179, 1083)
+    assert _spanned_arc(np.arange(0, 1440, 3), 1440) == (0, 1440)
+    assert occlusion.classify(np.zeros((0, 2)), (5.0, 5.0, 0.0))[0].shape == (0,)
+
+
 def test_occlusion_rule_leaves_out_returns_in_front_of_walls() -> None:
     from planicp import OcclusionRule
     from planicp.occlusion_rule import OcclusionFilter

@@ -84,15 +84,24 @@ class IcpResult:
         along it and across it (the eigenvalues of the translation block of `constraint` after
         the heading is marginalised out). In a long featureless corridor `weak_axis` is the
         corridor's axis and `weak` is close to 0."""
-        h = np.asarray(self.constraint, dtype=np.float64)
-        block = h[:2, :2].copy()
+        h = self.constraint
+        a, b, c = float(h[0, 0]), (float(h[0, 1]) + float(h[1, 0])) / 2.0, float(h[1, 1])
         if h[2, 2] > 0.0:
-            block -= np.outer(h[:2, 2], h[2, :2]) / h[2, 2]
-        values, vectors = np.linalg.eigh((block + block.T) / 2.0)
-        axis = vectors[:, 0]
-        if axis[0] < 0.0 or (axis[0] == 0.0 and axis[1] < 0.0):
-            axis = -axis
-        return (float(axis[0]), float(axis[1])), max(float(values[0]), 0.0), max(float(values[1]), 0.0)
+            hz = float(h[2, 2])
+            a -= float(h[0, 2]) * float(h[2, 0]) / hz
+            b -= (float(h[0, 2]) * float(h[2, 1]) + float(h[1, 2]) * float(h[2, 0])) / (2.0 * hz)
+            c -= float(h[1, 2]) * float(h[2, 1]) / hz
+        # Eigen-decomposition of the symmetric 2x2 [[a, b], [b, c]] in closed form.
+        mean, radius = (a + c) / 2.0, math.hypot((a - c) / 2.0, b)
+        weak, strong = mean - radius, mean + radius
+        # The eigenvector of `weak`: the longer of the two forms, for accuracy.
+        u, v = (b, weak - a), (weak - c, b)
+        x, y = u if u[0] * u[0] + u[1] * u[1] >= v[0] * v[0] + v[1] * v[1] else v
+        norm = math.hypot(x, y)
+        x, y = (x / norm, y / norm) if norm > 0.0 else ((1.0, 0.0) if a <= c else (0.0, 1.0))
+        if x < 0.0 or (x == 0.0 and y < 0.0):
+            x, y = -x, -y
+        return (x, y), max(weak, 0.0), max(strong, 0.0)
 
     def __repr__(self) -> str:
         x, y, yaw = self.pose

@@ -72,15 +72,37 @@ class OcclusionFilter:
         beyond it: returns a beam could not give from `pose`, since the wall would have stopped it.
         One cast serves both."""
         rule = self.rule
+        if len(points) == 0:
+            return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
         step = 2.0 * math.pi / rule.beams
-        # The yaw as the beams' angle_min offset, so that beam k looks along base angle -pi + k step.
-        expected = self._grid.cast((pose[0], pose[1], pose[2]), -math.pi, step, rule.beams, 0.0, 1e6)
-        expected = np.where(np.isfinite(expected), expected, np.inf)
         ranges = np.hypot(points[:, 0], points[:, 1])
         k = np.round((np.arctan2(points[:, 1], points[:, 0]) + math.pi) / step).astype(np.int64) % rule.beams
+        # Beam j looks along base angle -pi + j step. Only the arc the returns span (and one beam on
+        # either side) is cast: from the end of the widest gap between the returns' beams round to
+        # its start, a quarter less for a 270-degree scan.
+        first, count = _spanned_arc(k, rule.beams)
+        expected = np.full(rule.beams, np.inf)
+        # The yaw as the beams' angle_min offset; the arc may wrap past +pi.
+        cast = self._grid.cast((pose[0], pose[1], pose[2]), -math.pi + first * step, step, count, 0.0, 1e6)
+        expected[(first + np.arange(count)) % rule.beams] = np.where(np.isfinite(cast), cast, np.inf)
         # At a wall's edge a return may belong to either neighbouring beam: in front of the farthest
         # of the three nearest beams' walls, beyond the nearest.
         around = [expected[(k - 1) % rule.beams], expected[k], expected[(k + 1) % rule.beams]]
         short: NDArray[np.bool_] = ranges < np.maximum.reduce(around) - rule.margin
         beyond: NDArray[np.bool_] = ranges > np.minimum.reduce(around) + rule.margin
         return short, beyond
+
+
+def _spanned_arc(beams_used: NDArray[np.int64], beams: int) -> tuple[int, int]:
+    """(first beam, count): the shortest arc of beams (indices mod `beams`) that covers every
+    index in `beams_used` and one beam on either side."""
+    used = np.flatnonzero(np.bincount(beams_used, minlength=beams))
+    if len(used) == 0:
+        return 0, 0
+    gaps = np.diff(np.append(used, used[0] + beams))
+    widest = int(np.argmax(gaps))
+    if gaps[widest] <= 3:
+        return 0, beams
+    first = int(used[(widest + 1) % len(used)]) - 1
+    count = beams - int(gaps[widest]) + 3
+    return first % beams, min(count, beams)

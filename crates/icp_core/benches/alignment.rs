@@ -13,6 +13,7 @@ use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::icp::CorrespondenceSearch;
 use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
 use icp_core::point_map::{Tree2, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
+use icp_core::visible_through_index::VisibleThroughIndex;
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -70,6 +71,11 @@ fn benches(c: &mut Criterion) {
     let visible = TargetSet::subset(&map, map.visible_from(guess, 30.0).unwrap()).unwrap();
     g.bench_function("kdtree_visible_subset", |b| {
         b.iter(|| find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
+    });
+    // The KD-tree search as `align` runs it: the plan's index first, the subset's tree for hidden ones.
+    let through = VisibleThroughIndex::new(wall, &visible, 0.4).expect("within the index's reach");
+    g.bench_function("kdtree_visible_through_index", |b| {
+        b.iter(|| through.find_pairs(&visible, black_box(&moved), 0.4, &mut pairs))
     });
     // The cached path ICP iterations take once the pose has settled: candidates fetched once.
     let mut cache = CandidateCache::new(0.8);
