@@ -319,10 +319,12 @@ class Localizer:
                 lost = self._detector.hold()
             else:
                 # While lost, a fit from the prediction (the place the localizer lost track at)
-                # does not end the lost state, however well the gate takes it: a wrong place may
-                # explain a third of the scan. The recovery ends it, by adopting a place it
-                # confirmed over several scans (the prediction's among them) or a search's result.
-                lost = self._detector.update(score, accepted and not (was_lost and not searched))
+                # ends the lost state only when it explains as much of the scan as the recovery
+                # asks of a place it adopts: a wrong place may explain a third of the scan and
+                # pass the gate. (Otherwise the recovery ends it; in a symmetric room it cannot
+                # choose, and a sound track would stay lost.)
+                clears = not was_lost or searched or score >= self._recovery.config.min_inlier_ratio
+                lost = self._detector.update(score, accepted and clears)
             relocalized = searched
             if lost and usable >= _core.MIN_SCAN_POINTS:
                 found = self._recovery.step(points, motion, predicted)
