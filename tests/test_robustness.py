@@ -227,6 +227,15 @@ def test_motion_noise_propagation() -> None:
     assert p2[0, 0] == pytest.approx(0.04) and p2[1, 1] == pytest.approx(0.04) and p2[2, 2] == 0.0
     with pytest.raises(ValueError, match="translation_fraction must be a finite number >= 0"):
         MotionNoise(translation_fraction=-0.1)
+    # Malformed arguments are refused by name; a motion so large that the covariance overflows too.
+    with pytest.raises(ValueError, match="covariance must be 3x3"):
+        noisy.propagate(np.eye(2), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="pose must be"):
+        noisy.propagate(np.eye(3), (0.0, 0.0), (1.0, 0.0, 0.0))
+    with pytest.raises(TypeError, match="motion must hold real numbers"):
+        noisy.propagate(np.eye(3), (0.0, 0.0, 0.0), "abc")
+    with pytest.raises(ValueError, match="is not finite"):
+        noisy.propagate(np.eye(3), (0.0, 0.0, 0.0), (1e300, 1e300, 0.0))
 
 
 def test_fusion_with_the_prediction() -> None:
@@ -344,6 +353,11 @@ def test_a_crowd_taking_half_of_the_returns() -> None:
         Crowd(-1)
     with pytest.raises(ValueError, match="need min_distance <= max_distance"):
         Crowd(3, min_distance=2.0, max_distance=1.0)
+    with pytest.raises(ValueError, match="need min_radius <= max_radius"):
+        Crowd(3, min_radius=0.3, max_radius=0.2)
+    # Nowhere free around a place far outside the floor: refused, not an endless search.
+    with pytest.raises(ValueError, match="found free places for only 0 of 3 people"):
+        Crowd(3).place(np.random.default_rng(0), (1000.0, 1000.0), world.floor)
 
 
 def test_the_recovery_refuses_places_the_scan_sees_through() -> None:

@@ -65,8 +65,8 @@ class MotionNoise:
         step = math.hypot(dx, dy)
         sigma_t = self.translation_fraction * step + self.translation_floor
         sigma_r = self.rotation_fraction * abs(dyaw) + self.rotation_per_metre * step + self.rotation_floor
-        q = np.diag(np.square([sigma_t, sigma_t, sigma_r]))
         with np.errstate(over="ignore", invalid="ignore"):
+            q = np.diag(np.square([sigma_t, sigma_t, sigma_r]))
             out: NDArray[np.float64] = f @ covariance @ f.T + g @ q @ g.T
         if not np.isfinite(out).all():
             raise ValueError(f"the covariance propagated over motion {(dx, dy, dyaw)} from {pose} is not finite "
