@@ -6,8 +6,8 @@ throws that away: when people hide half of the walls, or the walls seen leave a 
 scan's fit wanders by a centimetre or two that the prediction knew better. `fuse_with_prediction`
 weighs the two by their covariances: where the fit is precise it decides, where it is weak (a
 degenerate direction, a crowded scan) the prediction does. On the shipped plan with 25 people around
-the robot this cut the position error RMS by a quarter to a half over five drives, and by about 10 %
-on the empty floor (`benches/crowd.py`).
+the robot this cut the position error RMS by 13-44 % on four drives, and by 7-12 % on the empty
+floor (the scene of `benches/crowd.py`).
 
 Odometry can fault (a wheel slips, a 10-degree step): then the fit and the prediction disagree far
 beyond their covariances. An innovation over `FusionRule.max_innovation` (a chi-square over 3
