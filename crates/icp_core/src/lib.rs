@@ -10,6 +10,7 @@
 //! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
 //! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
+//! - [`clearance`]: each cell's distance to the nearest occupied one, so beams jump across empty space.
 //! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
 //! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
@@ -30,6 +31,7 @@ pub mod acceleration;
 pub mod bucket_grid;
 pub mod candidate_cache;
 pub mod cell_traversal;
+pub mod clearance;
 pub mod correspondence;
 pub mod covariance;
 pub mod error;

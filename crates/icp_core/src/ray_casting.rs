@@ -19,6 +19,7 @@
 //! Ranges follow ROS REP-117: `+inf` when nothing is hit within `range_max` (and for dropouts),
 //! `-inf` for a return closer than `range_min`.
 
+use crate::clearance::{chebyshev_clearance, BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::error::{invalid, Result, MAX_COORDINATE};
 use crate::pose::Pose2;
 use rand::{Rng, SeedableRng};
@@ -33,10 +34,6 @@ pub const MIN_RESOLUTION: f64 = 1e-6;
 pub const MAX_CELLS: usize = crate::wall_raster::MAX_RASTER_CELLS;
 /// Most beams one scan may have.
 pub const MAX_BEAMS: usize = 1 << 20;
-
-/// Clearance (cells) from which a beam jumps instead of stepping: a jump costs a few stepping
-/// iterations, so it only pays across wider empty space.
-const SKIP_MIN_CLEARANCE: u8 = 6;
 
 /// An occupancy grid to cast beams through.
 ///
@@ -141,59 +138,6 @@ impl OccupancyRaster {
         let (c, r) = (usize::try_from(col).ok()?, usize::try_from(row).ok()?);
         (c < self.cols && r < self.rows).then_some(r * self.cols + c)
     }
-}
-
-/// Chebyshev distance of every cell to the nearest occupied cell, capped at 255 (0 when occupied):
-/// the exact two-pass chessboard distance transform.
-fn chebyshev_clearance(cells: &[bool], rows: usize, cols: usize) -> Vec<u8> {
-    let mut d: Vec<u8> = cells.iter().map(|&o| if o { 0 } else { u8::MAX }).collect();
-    for r in 0..rows {
-        for c in 0..cols {
-            let k = r * cols + c;
-            if d[k] == 0 {
-                continue;
-            }
-            let mut m = d[k];
-            if c > 0 {
-                m = m.min(d[k - 1].saturating_add(1));
-            }
-            if r > 0 {
-                let up = k - cols;
-                m = m.min(d[up].saturating_add(1));
-                if c > 0 {
-                    m = m.min(d[up - 1].saturating_add(1));
-                }
-                if c + 1 < cols {
-                    m = m.min(d[up + 1].saturating_add(1));
-                }
-            }
-            d[k] = m;
-        }
-    }
-    for r in (0..rows).rev() {
-        for c in (0..cols).rev() {
-            let k = r * cols + c;
-            if d[k] == 0 {
-                continue;
-            }
-            let mut m = d[k];
-            if c + 1 < cols {
-                m = m.min(d[k + 1].saturating_add(1));
-            }
-            if r + 1 < rows {
-                let down = k + cols;
-                m = m.min(d[down].saturating_add(1));
-                if c > 0 {
-                    m = m.min(d[down - 1].saturating_add(1));
-                }
-                if c + 1 < cols {
-                    m = m.min(d[down + 1].saturating_add(1));
-                }
-            }
-            d[k] = m;
-        }
-    }
-    d
 }
 
 /// A moving round obstacle (a person, a robot), map frame, metres.
@@ -357,60 +301,13 @@ fn disc_distance((x, y): (f64, f64), (dx, dy): (f64, f64), d: &Disc) -> f64 {
     }
 }
 
-/// The crossings of one axis's grid lines along a beam, in cells: crossing `k` (0-based) is at
-/// parameter `(f + k) * inv` and moves the beam `step` cells along the axis.
-#[derive(Clone, Copy)]
-struct Axis {
-    f: f64,
-    inv: f64,
-    abs_dir: f64,
-    step: i64,
-}
-
-impl Axis {
-    /// The crossings from `g` (cell units) in start cell `c` along the direction component `d`.
-    #[inline]
-    fn new(g: f64, c: i64, d: f64) -> Self {
-        let abs_dir = d.abs();
-        if abs_dir > 0.0 {
-            let f = if d > 0.0 { (c + 1) as f64 - g } else { g - c as f64 };
-            Self { f, inv: 1.0 / abs_dir, abs_dir, step: if d > 0.0 { 1 } else { -1 } }
-        } else {
-            Self { f: 1.0, inv: f64::INFINITY, abs_dir, step: -1 }
-        }
-    }
-
-    /// Parameter of crossing `k`.
-    #[inline]
-    fn t(&self, k: i64) -> f64 {
-        (self.f + k as f64) * self.inv
-    }
-
-    /// How many crossings lie before parameter `t` (`t(k) < t`), computed with [`Axis::t`] itself so
-    /// that the count agrees with the parameters the walk compares.
-    #[inline]
-    fn crossings_before(&self, t: f64) -> i64 {
-        if self.abs_dir == 0.0 {
-            return 0;
-        }
-        let mut k = ((t * self.abs_dir - self.f).ceil() as i64).max(0);
-        while k > 0 && self.t(k - 1) >= t {
-            k -= 1;
-        }
-        while self.t(k) < t {
-            k += 1;
-        }
-        k
-    }
-}
-
 /// Parameter (cells along the beam) where the beam from `g` (cell units, inside the raster, in the
 /// free cell `start`) along the unit direction `(dx, dy)` enters its first occupied cell, or `inf`
 /// when it leaves the raster or passes `t_max` first.
 #[inline]
 fn walk(raster: &OccupancyRaster, g: (f64, f64), start: (i64, i64), (dx, dy): (f64, f64), t_max: f64) -> f64 {
-    let ax = Axis::new(g.0, start.0, dx);
-    let ay = Axis::new(g.1, start.1, dy);
+    let ax = BeamAxis::new(g.0, start.0, dx);
+    let ay = BeamAxis::new(g.1, start.1, dy);
     let (cols, rows) = (raster.cols, raster.rows);
     let (mut i, mut j) = (0i64, 0i64);
     let (mut tx, mut ty) = (ax.t(0), ay.t(0));
@@ -745,28 +642,6 @@ mod tests {
             };
             assert_eq!(cast(&raster, pose, &m, &[]), cast(&plain, pose, &m, &[]));
         }
-    }
-
-    #[test]
-    fn clearance_is_the_chebyshev_distance() {
-        let (rows, cols) = (37, 53);
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.01)).collect();
-        let d = chebyshev_clearance(&cells, rows, cols);
-        for r in 0..rows {
-            for c in 0..cols {
-                let mut best = 255usize;
-                for rr in 0..rows {
-                    for cc in 0..cols {
-                        if cells[rr * cols + cc] {
-                            best = best.min(r.abs_diff(rr).max(c.abs_diff(cc)));
-                        }
-                    }
-                }
-                assert_eq!(d[r * cols + c] as usize, best.min(255));
-            }
-        }
-        assert!(chebyshev_clearance(&[false; 6], 2, 3).iter().all(|&v| v == 255));
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! cell. The points in the cells where rays stop are the visible wall faces; the far face of a
 //! wall, a wall's thickness behind the near one, is hidden, so the ICP cannot lock onto it.
 
+use crate::clearance::{BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::error::{invalid, Result};
 use crate::wall_raster::WallRaster;
 use std::f64::consts::TAU;
@@ -29,10 +30,7 @@ pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -
     }
     let mut hit_cells = Vec::new();
     visible_cells(raster, position, max_range, &mut hit_cells);
-    let mut out: Vec<u32> =
-        hit_cells.iter().flat_map(|&cell| raster.points_in_cell(cell).iter().copied()).collect();
-    out.sort_unstable();
-    Ok(out)
+    Ok(raster.points_in_cells(&hit_cells))
 }
 
 /// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop.
@@ -161,61 +159,65 @@ impl RayCaster<'_> {
 
 /// Walks the cells along one ray (cell units) and returns the first wall cell after the start, with
 /// the free cell the ray left to enter it (None when that was the start cell, which may be a wall).
+/// The walk is 4-connected (a ray exactly through a cell corner steps along y first), so it cannot
+/// slip between the 8-connected cells of a diagonal wall. It crosses open space in jumps (see
+/// [`crate::clearance`]), landing in the cells the step-by-step walk reaches.
 #[inline]
 fn first_wall_cell(
     raster: &WallRaster,
     (ox, oy): (f64, f64),
-    (mut cx, mut cy): (i64, i64),
+    start: (i64, i64),
     (dx, dy): (f64, f64),
     max_t: f64,
     (cols, rows): (usize, usize),
 ) -> Hit {
-    let start = (cx, cy);
-    let step_x: i64 = if dx > 0.0 { 1 } else { -1 };
-    let step_y: i64 = if dy > 0.0 { 1 } else { -1 };
-    let t_delta_x = if dx != 0.0 { (1.0 / dx).abs() } else { f64::INFINITY };
-    let t_delta_y = if dy != 0.0 { (1.0 / dy).abs() } else { f64::INFINITY };
-    let mut t_max_x = if dx > 0.0 {
-        (cx as f64 + 1.0 - ox) * t_delta_x
-    } else if dx < 0.0 {
-        (ox - cx as f64) * t_delta_x
-    } else {
-        f64::INFINITY
-    };
-    let mut t_max_y = if dy > 0.0 {
-        (cy as f64 + 1.0 - oy) * t_delta_y
-    } else if dy < 0.0 {
-        (oy - cy as f64) * t_delta_y
-    } else {
-        f64::INFINITY
-    };
+    let ax = BeamAxis::new(ox, start.0, dx);
+    let ay = BeamAxis::new(oy, start.1, dy);
+    let (mut i, mut j) = (0i64, 0i64);
+    let (mut tx, mut ty) = (ax.t(0), ay.t(0));
+    let (mut cx, mut cy) = start;
+    let outside = |cx: i64, cy: i64| cx < 0 || cy < 0 || cx as usize >= cols || cy as usize >= rows;
+    let mut t_cur = 0.0;
+    let mut clearance = raster.clearance(start.0 as usize, start.1 as usize);
     // A ray crosses at most cols + rows cell borders inside the raster: a hard bound on the walk,
     // whatever rounding does to the crossing times.
     for _ in 0..cols + rows + 2 {
+        if clearance >= SKIP_MIN_CLEARANCE {
+            let t_jump = t_cur + f64::from(clearance - 2);
+            if t_jump > max_t {
+                return None;
+            }
+            i = ax.crossings_before(t_jump).max(i);
+            j = ay.crossings_before(t_jump).max(j);
+            (tx, ty) = (ax.t(i), ay.t(j));
+            (cx, cy) = (start.0 + ax.step * i, start.1 + ay.step * j);
+            if outside(cx, cy) {
+                return None;
+            }
+        }
         let before = (cx, cy);
-        let t = if t_max_x < t_max_y {
-            cx += step_x;
-            let t = t_max_x;
-            t_max_x += t_delta_x;
+        let t = if tx < ty {
+            let t = tx;
+            i += 1;
+            cx += ax.step;
+            tx = ax.t(i);
             t
         } else {
-            cy += step_y;
-            let t = t_max_y;
-            t_max_y += t_delta_y;
+            let t = ty;
+            j += 1;
+            cy += ay.step;
+            ty = ay.t(j);
             t
         };
-        if t > max_t {
+        if t > max_t || outside(cx, cy) {
             return None;
         }
-        let leaving_x = (cx < 0 && step_x < 0) || (cx >= cols as i64 && step_x > 0);
-        let leaving_y = (cy < 0 && step_y < 0) || (cy >= rows as i64 && step_y > 0);
-        if leaving_x || leaving_y {
-            return None;
-        }
-        if raster.is_wall(cx, cy) {
+        clearance = raster.clearance(cx as usize, cy as usize);
+        if clearance == 0 {
             let came_from = (before != start || !raster.is_wall(start.0, start.1)).then_some(before);
             return Some(((cx, cy), came_from));
         }
+        t_cur = t;
     }
     None
 }
@@ -310,6 +312,36 @@ mod tests {
         let far_near: Vec<u32> = far.iter().copied().filter(within).collect();
         let near_near: Vec<u32> = near.iter().copied().filter(within).collect();
         assert_eq!(far_near, near_near);
+    }
+
+    #[test]
+    fn jumps_across_open_space_do_not_change_what_is_seen() {
+        use rand::{Rng, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+        // Random walls, sampled every 5 cm, across a 30 x 20 m floor: wide open space to jump
+        // across, and walls at every angle to land next to.
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut pts = Vec::new();
+        for _ in 0..40 {
+            let a = [rng.random_range(0.0..30.0), rng.random_range(0.0..20.0)];
+            let (len, angle) = (rng.random_range(0.5..8.0), rng.random_range(0.0..TAU));
+            let n = (len / 0.05f64).ceil() as usize;
+            for k in 0..=n {
+                let t = len * k as f64 / n as f64;
+                pts.push([a[0] + t * angle.cos(), a[1] + t * angle.sin()]);
+            }
+        }
+        let raster = WallRaster::new(&pts, RES).unwrap();
+        let plain = raster.without_jumps();
+        let mut positions: Vec<[f64; 2]> =
+            (0..30).map(|_| [rng.random_range(-5.0..35.0), rng.random_range(-5.0..25.0)]).collect();
+        positions.push(pts[17]); // inside a wall cell
+        for position in positions {
+            for range in [3.0, 12.0, 40.0] {
+                let jumping = visible_points(&raster, position, range).unwrap();
+                assert_eq!(jumping, visible_points(&plain, position, range).unwrap(), "{position:?} {range}");
+            }
+        }
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! Wall points spaced no more than one cell apart along a wall give an 8-connected chain of wall
 //! cells, which a cell-by-cell ray traversal cannot slip through.
 
+use crate::clearance::chebyshev_clearance;
 use crate::error::{check_finite, invalid, IcpError, Result};
 
 /// Most cells a raster may have (one byte each plus the point index).
@@ -17,7 +18,9 @@ pub struct WallRaster {
     origin: [f64; 2],
     cols: usize,
     rows: usize,
-    occupied: Vec<bool>,
+    /// Per cell: 0 for a wall cell, else the Chebyshev distance in cells to the nearest wall cell
+    /// (see [`crate::clearance`]).
+    clearance: Vec<u8>,
     /// Cell index of every point, sorted ascending; `point_of_slot` holds the matching point index.
     cell_of_slot: Vec<u32>,
     point_of_slot: Vec<u32>,
@@ -61,7 +64,7 @@ impl WallRaster {
             origin,
             cols,
             rows,
-            occupied: vec![false; cols * rows],
+            clearance: Vec::new(),
             cell_of_slot: Vec::with_capacity(points.len()),
             point_of_slot: Vec::with_capacity(points.len()),
         };
@@ -74,11 +77,13 @@ impl WallRaster {
             })
             .collect();
         slots.sort_unstable();
+        let mut occupied = vec![false; cols * rows];
         for &(cell, point) in &slots {
-            raster.occupied[cell as usize] = true;
+            occupied[cell as usize] = true;
             raster.cell_of_slot.push(cell);
             raster.point_of_slot.push(point);
         }
+        raster.clearance = chebyshev_clearance(&occupied, rows, cols);
         Ok(raster)
     }
 
@@ -116,7 +121,25 @@ impl WallRaster {
             && row >= 0
             && (col as usize) < self.cols
             && (row as usize) < self.rows
-            && self.occupied[row as usize * self.cols + col as usize]
+            && self.clearance[row as usize * self.cols + col as usize] == 0
+    }
+
+    /// The clearance of cell `(col, row)`, which must lie inside the raster: 0 for a wall cell, else
+    /// its Chebyshev distance in cells to the nearest wall cell, capped at 255.
+    #[inline]
+    pub(crate) fn clearance(&self, col: usize, row: usize) -> u8 {
+        self.clearance[row * self.cols + col]
+    }
+
+    /// This raster with every clearance capped at 1: casts through it step cell by cell (tests
+    /// compare them with the jumping casts).
+    #[cfg(test)]
+    pub(crate) fn without_jumps(&self) -> Self {
+        let mut plain = self.clone();
+        for c in plain.clearance.iter_mut() {
+            *c = (*c).min(1);
+        }
+        plain
     }
 
     /// Indices of the plan points inside the cell with linear index `cell`.
@@ -127,9 +150,27 @@ impl WallRaster {
         &self.point_of_slot[start..end]
     }
 
+    /// Indices (ascending) of the plan points inside the cells with the linear indices `cells`
+    /// (ascending, unique).
+    pub fn points_in_cells(&self, cells: &[usize]) -> Vec<u32> {
+        let mut out = Vec::new();
+        // Both lists are sorted: each cell's slots are searched for after the previous cell's.
+        let mut from = 0usize;
+        for &cell in cells {
+            let cell = cell as u32;
+            let rest = &self.cell_of_slot[from..];
+            let start = from + rest.partition_point(|&c| c < cell);
+            let end = start + self.cell_of_slot[start..].iter().take_while(|&&c| c == cell).count();
+            out.extend_from_slice(&self.point_of_slot[start..end]);
+            from = end;
+        }
+        out.sort_unstable();
+        out
+    }
+
     /// Number of wall cells.
     pub fn wall_cells(&self) -> usize {
-        self.occupied.iter().filter(|&&o| o).count()
+        self.clearance.iter().filter(|&&c| c == 0).count()
     }
 }
 
