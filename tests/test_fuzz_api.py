@@ -261,6 +261,17 @@ def test_plan_from_points(data: Any) -> None:
         ok, idx = call(plan.visible_indices, pose, data.draw(st.one_of(st.sampled_from([1.0, 30.0]), values)))
         if ok:
             assert idx.ndim == 1 and (np.diff(idx.astype(np.int64)) > 0).all() and (idx < len(pts)).all()
+        directions = data.draw(st.one_of(st.sampled_from([8, 720]), st.integers(-1, 2**70), values, anything))
+        ok, view = call(plan.view_from, pose, data.draw(st.one_of(st.sampled_from([1.0, 30.0]), values)), directions)
+        if ok:
+            assert view.ranges.shape == (directions,) and not np.isnan(view.ranges).any()
+            assert (view.ranges >= 0).all() and (view.visible_indices < len(pts)).all()
+            ok, classes = call(view.classify, data.draw(arrays(50)), data.draw(st.one_of(st.just(0.2), values)))
+            if ok:
+                assert classes[0].dtype == np.bool_ and classes[0].shape == classes[1].shape
+            ok, res = call(localize, data.draw(scans()), plan, pose, view=view)
+            if ok:
+                assert all(math.isfinite(v) for v in res.pose)
 
 
 @FUZZ
@@ -340,6 +351,13 @@ def test_native_core(data: Any) -> None:
     ok, idx = call(pm.visible_indices, data.draw(values), data.draw(values), data.draw(values))
     if ok:
         assert (idx < len(pm)).all()
+    view_pose = data.draw(st.one_of(poses, st.tuples(values, values, values)))
+    ok, view = call(pm.view_from, view_pose, data.draw(values), data.draw(st.one_of(st.integers(-1, 2**70), anything)))
+    if ok:
+        assert (view.visible_indices < len(pm)).all() and len(view.ranges) >= 8
+        call(view.classify, data.draw(arrays(50)), data.draw(values))
+    else:
+        view = None
     kw = [
         data.draw(st.one_of(st.sampled_from([0.25]), values, anything)),
         data.draw(st.one_of(st.sampled_from([30]), st.integers(-1, 2**70), anything)),
@@ -356,7 +374,7 @@ def test_native_core(data: Any) -> None:
     if not ok:
         s = _core.IcpSettings(0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None)
     scan = data.draw(st.one_of(st.just(np.ascontiguousarray(box_scan()[::7])), arrays(100)))
-    ok, al = call(_core.align, pm, scan, data.draw(poses), s)
+    ok, al = call(_core.align, pm, scan, data.draw(poses), s, view if data.draw(st.booleans()) else None)
     if ok:
         assert all(math.isfinite(v) for v in al.pose)
         assert al.inlier_mask.sum() == al.num_inliers and not np.isnan(al.covariance).any()
@@ -591,7 +609,7 @@ def test_every_public_name_is_fuzzed() -> None:
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
                "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
                "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize",
-               "ContinuityRule", "OcclusionRule", "FusionRule"}
+               "ContinuityRule", "OcclusionRule", "FusionRule", "WallView"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
     elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",

@@ -15,7 +15,7 @@ Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_m
 from __future__ import annotations
 
 from . import se2, synthetic, vector_plan
-from ._core import PlanicpError, PlanicpInternalError
+from ._core import PlanicpError, PlanicpInternalError, WallView
 from ._core import __version__ as __version__
 from .degeneracy import Degeneracy, DegeneracyRule
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState, OccupancyGridMessage, OccupancyModel
@@ -65,6 +65,7 @@ __all__ = [
     "Relocalization",
     "RelocalizationConfig",
     "SearchRegion",
+    "WallView",
     "__version__",
     "compare_grids",
     "localize",

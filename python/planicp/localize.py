@@ -12,7 +12,8 @@ from .icp_result import IcpResult
 from .plan_map import PlanMap
 
 
-def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig | None = None) -> IcpResult:
+def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig | None = None, *,
+             view: _core.WallView | None = None) -> IcpResult:
     """Aligns a scan to the plan by trimmed, coarse-to-fine point-to-point ICP.
 
     Args:
@@ -21,6 +22,11 @@ def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig |
         initial_pose: (x, y, yaw) guess of the robot in the map frame (e.g. last pose plus
             odometry motion), metres and radians.
         config: ICP settings; None uses `IcpConfig()`.
+        view: the plan as seen from `initial_pose` (`plan.view_from(initial_pose, ...)`), cast
+            far enough for the scan (`max_range` at least the farthest scan point plus the
+            largest stage distance). The KD-tree search with visibility matches against its
+            visible points instead of casting them again; other searches ignore it. A view cast
+            from another pose is refused.
 
     Returns:
         The refined pose with its quality (inliers, RMSE, covariance, convergence).
@@ -39,7 +45,12 @@ def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig |
         raise TypeError(f"config must be a planicp.IcpConfig, got {type(config).__name__}")
     points = as_points(scan_xy, "scan_xy")
     pose = as_pose(initial_pose, "initial_pose")
-    raw = _core.align(plan._native, points, pose, config._native)
+    if view is not None:
+        if not isinstance(view, _core.WallView):
+            raise TypeError(f"view must be a planicp.WallView, got {type(view).__name__}")
+        if view.pose[:2] != pose[:2]:
+            raise ValueError(f"view was cast from {view.pose}, not from the initial pose {pose}")
+    raw = _core.align(plan._native, points, pose, config._native, view)
     return IcpResult.from_alignment(raw, config.covariance_scale)
 
 

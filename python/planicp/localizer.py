@@ -258,9 +258,9 @@ class Localizer:
             if usable < _core.MIN_SCAN_POINTS:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
-                kept, beyond, occluded = self._unoccluded(points, predicted, predicted_covariance)
+                kept, beyond, occluded, view = self._unoccluded(points, predicted, predicted_covariance)
                 used = points if kept is None else points[kept]
-                result = localize(used, self.plan, predicted, self.config)
+                result = localize(used, self.plan, predicted, self.config, view=view)
                 reason = self.gate.rejection(result, predicted)
                 # A fit that explains little of the whole scan may have started outside the index's
                 # narrower basin (a bad odometry step also misleads the occlusion rule): the
@@ -369,26 +369,28 @@ class Localizer:
             inliers[kept] = result.inlier_mask
         return float(np.count_nonzero(inliers & ~beyond)) / scan_points
 
-    def _unoccluded(self, points: NDArray[np.float64], predicted: Pose,
-                    predicted_covariance: NDArray[np.float64]) -> tuple[NDArray[np.bool_] | None,
-                                                                         NDArray[np.bool_] | None, bool]:
-        """(kept, beyond, occluded) when the occlusion rule applies (a trusted prediction, not
-        lost): the points not in front of the plan's walls (None when too few would remain, or
-        all: align them all), the points beyond the walls seen from the prediction, and whether
-        fewer than the rule's `min_points` remain. (None, None, False) otherwise."""
+    def _unoccluded(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]
+                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
+        """(kept, beyond, occluded, view) when the occlusion rule applies (a trusted prediction,
+        not lost): the points not in front of the plan's walls (None when too few would remain, or
+        all: align them all), the points beyond the walls seen from the prediction, whether fewer
+        than the rule's `min_points` remain, and the view from the prediction whose one ray cast
+        gave these and gives the alignment its visible points. (None, None, False, None)
+        otherwise."""
         if self._occlusion is None or self._detector.lost:
-            return None, None, False
+            return None, None, False, None
         rule = self._occlusion.rule
         if 3.0 * _largest_position_std(predicted_covariance) >= rule.margin:
-            return None, None, False
-        in_front, beyond = self._occlusion.classify(points, predicted)
+            return None, None, False, None
+        view = self._occlusion.view(points, predicted, self.config)
+        in_front, beyond = self._occlusion.classify(points, predicted, view)
         kept: NDArray[np.bool_] = ~in_front
         remaining = int(np.count_nonzero(kept))
         if remaining < rule.min_points:
-            return None, beyond, True
+            return None, beyond, True, view
         if remaining == len(points):
-            return None, beyond, False
-        return kept, beyond, False
+            return None, beyond, False, view
+        return kept, beyond, False, view
 
     def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
         """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a

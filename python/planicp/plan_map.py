@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import _core
-from ._validation import as_pose, as_points, positive
+from ._validation import as_pose, as_points, positive, whole_number
 from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
@@ -266,6 +266,26 @@ class PlanMap:
     def visible_from(self, pose: Any, max_range: float = 30.0) -> NDArray[np.float64]:
         """(M, 2) wall points visible from `pose` within `max_range` (see `visible_indices`)."""
         return self._points[self.visible_indices(pose, max_range)]
+
+    def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440) -> _core.WallView:
+        """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
+        `visible_indices`) and, in `directions` evenly spaced directions, the range to the first
+        wall (the expected ranges `OcclusionRule` compares returns with).
+
+        Args:
+            pose: (x, y, yaw) `T_map_base`, metres and radians; direction j looks along the
+                base-frame angle -pi + j 2 pi / directions.
+            max_range: how far the rays are cast, metres; beyond it a direction reads inf.
+            directions: 8 to 2**20.
+
+        Returns:
+            A `planicp.WallView`: `visible_indices`, `ranges` (metres, to about one raster
+            cell), `classify(points, margin)`. `localize(..., view=...)` reuses its visible
+            points instead of casting them again.
+        """
+        x, y, yaw = as_pose(pose, "pose")
+        return self._native.view_from((x, y, yaw), positive(max_range, "max_range", "metres"),
+                                      whole_number(directions, "directions", 8, 1 << 20))
 
     def __len__(self) -> int:
         return len(self._native)

@@ -30,6 +30,23 @@ pub const CACHE_RADIUS_FACTOR: f64 = 2.0;
 /// Largest stage distance (metres) for which the candidate cache is used.
 pub const MAX_CACHED_DISTANCE: f64 = 1.0;
 
+/// The range (metres) of the visibility cast for `scan` (robot frame): `config.visibility_range`,
+/// or the scan's farthest point plus the largest stage distance, so that every plan point a scan
+/// point could pair with is cast.
+pub fn visibility_range(scan: &[[f64; 2]], config: &IcpConfig) -> f64 {
+    let range = match config.visibility_range {
+        Some(r) => r,
+        None => {
+            let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
+            let farthest = scan.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+            farthest + largest_factor * config.max_correspondence_distance
+        }
+    };
+    // A huge correspondence distance can make the sum overflow; nothing lies beyond a few times
+    // the coordinate limit anyway (found by the fuzz target).
+    range.min(4.0 * crate::error::MAX_COORDINATE)
+}
+
 /// A stage's rejection distance: `factor * max_distance`, but never below `SPACING_FLOOR` plan
 /// point spacings (nor above `max_distance`): closer than that, correct pairs are lost to the
 /// plan's sampling (a scan point between two samples is half a spacing from both) plus noise.
@@ -181,6 +198,25 @@ pub struct IcpResult {
 /// Aligns `scan` (points in the robot frame, metres) to `map` starting from `initial`
 /// (`T_map_base` guess).
 pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConfig) -> Result<IcpResult> {
+    align_seen(map, scan, initial, config, None)
+}
+
+/// [`align`] with the plan points visible from `initial` already cast (for instance
+/// [`crate::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
+/// returns): the KD-tree search with `use_visibility` matches against them instead of casting its
+/// own. `None` casts them here. Other searches ignore them.
+///
+/// Errors: as [`align`], and a visible index that is not a plan point.
+pub fn align_seen(
+    map: &PointMap,
+    scan: &[[f64; 2]],
+    initial: Pose2,
+    config: &IcpConfig,
+    visible: Option<&[u32]>,
+) -> Result<IcpResult> {
+    if let Some(&bad) = visible.and_then(|v| v.iter().find(|&&i| i as usize >= map.len())) {
+        return Err(invalid("visible point index", bad, "must index a plan point"));
+    }
     config.validate()?;
     if scan.is_empty() {
         return Err(IcpError::Empty { what: "scan" });
@@ -207,16 +243,10 @@ pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConf
     let target = if indexed.is_some() {
         TargetSet::Full(map)
     } else if config.use_visibility {
-        let range = match config.visibility_range {
-            Some(r) => r,
-            None => {
-                let farthest = scan.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
-                farthest + largest_factor * config.max_correspondence_distance
-            }
+        let visible = match visible {
+            Some(given) => given.to_vec(),
+            None => map.visible_from(initial, visibility_range(scan, config))?,
         };
-        // A huge correspondence distance can make the sum overflow; nothing lies beyond a few
-        // times the coordinate limit anyway (found by the fuzz target).
-        let visible = map.visible_from(initial, range.min(4.0 * crate::error::MAX_COORDINATE))?;
         if visible.len() >= MIN_PAIRS {
             TargetSet::subset(map, visible).unwrap_or(TargetSet::Full(map))
         } else {
@@ -576,6 +606,38 @@ mod tests {
             assert_eq!(fast.num_target_points, map.len());
             assert!(exact.num_target_points < map.len());
         }
+    }
+
+    #[test]
+    fn a_given_visible_set_is_the_one_matched_against() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let (truth, guess) = (Pose2::new(5.5, 2.2, 0.4), Pose2::new(5.6, 2.1, 0.42));
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let kd = IcpConfig { search: CorrespondenceSearch::KdTree, ..IcpConfig::default() };
+        // The set the alignment would cast itself: the same result, bit for bit.
+        let cast = map.visible_from(guess, visibility_range(&scan, &kd)).unwrap();
+        assert_eq!(
+            align_seen(&map, &scan, guess, &kd, Some(&cast)).unwrap(),
+            align(&map, &scan, guess, &kd).unwrap()
+        );
+        // Only the right room's walls (x > 3.1): the scan points on the left room's walls (more
+        // than the largest pair distance, 0.25 m, from them) find nothing to pair with.
+        let right: Vec<u32> = cast.iter().copied().filter(|&i| map.points()[i as usize][0] > 3.1).collect();
+        let seen = align_seen(&map, &scan, guess, &kd, Some(&right)).unwrap();
+        assert_eq!(seen.num_target_points, right.len());
+        let left = scan.iter().filter(|p| truth.transform_point(**p)[0] < 2.8).count();
+        assert!(
+            left > 20 && seen.num_inliers <= scan.len() - left,
+            "{} inliers, {left} on the left",
+            seen.num_inliers
+        );
+        // An index that is not a plan point is refused.
+        let bad = [0, map.len() as u32];
+        assert!(matches!(
+            align_seen(&map, &scan, guess, &kd, Some(&bad)),
+            Err(IcpError::InvalidParameter { .. })
+        ));
     }
 
     #[test]

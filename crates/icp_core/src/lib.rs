@@ -9,6 +9,7 @@
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
 //! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
+//! - [`wall_view`]: one cast from a pose for both the visible points and each direction's wall range.
 //! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
 //! - [`clearance`]: each cell's distance to the nearest occupied one, so beams jump across empty space.
 //! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
@@ -50,6 +51,7 @@ pub mod visibility;
 pub mod visible_through_index;
 pub mod wall_facing;
 pub mod wall_raster;
+pub mod wall_view;
 
 pub use error::{IcpError, Result};
 pub use icp::{align, IcpConfig, IcpResult};

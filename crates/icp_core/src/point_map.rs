@@ -8,6 +8,7 @@ use crate::pose::Pose2;
 use crate::visibility;
 use crate::wall_facing::visibility_masks;
 use crate::wall_raster::WallRaster;
+use crate::wall_view::WallView;
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use kiddo::SquaredEuclidean;
 use std::sync::OnceLock;
@@ -188,6 +189,12 @@ impl PointMap {
     /// metres. See [`visibility::visible_points`].
     pub fn visible_from(&self, pose: Pose2, max_range: f64) -> Result<Vec<u32>> {
         visibility::visible_points(&self.raster, [pose.x, pose.y], max_range)
+    }
+
+    /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
+    /// the range to the first wall in `directions` evenly spaced directions. See [`WallView::cast`].
+    pub fn view_from(&self, pose: Pose2, max_range: f64, directions: usize) -> Result<WallView> {
+        WallView::cast(&self.raster, pose, max_range, directions)
     }
 }
 

@@ -22,19 +22,51 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 /// [`MAX_REFINEMENT_DEPTH`] halvings). The cell holding `position` itself is skipped, so a
 /// position that falls inside a wall (a poor guess) still sees the walls around it.
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
+    check_cast(position, max_range)?;
+    let mut hit_cells = Vec::new();
+    visible_cells(
+        raster,
+        position,
+        max_range,
+        RayFan { first_angle: 0.0, rays: BASE_RAYS },
+        &mut hit_cells,
+        None,
+    );
+    Ok(raster.points_in_cells(&hit_cells))
+}
+
+/// Refuses a position that is not finite and a range that is not a positive finite number.
+pub(crate) fn check_cast(position: [f64; 2], max_range: f64) -> Result<()> {
     if !(max_range.is_finite() && max_range > 0.0) {
         return Err(invalid("max_range", max_range, "must be a positive finite number of metres"));
     }
     if !(position[0].is_finite() && position[1].is_finite()) {
         return Err(invalid("position", format!("{position:?}"), "must be finite"));
     }
-    let mut hit_cells = Vec::new();
-    visible_cells(raster, position, max_range, &mut hit_cells);
-    Ok(raster.points_in_cells(&hit_cells))
+    Ok(())
 }
 
-/// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop.
-pub fn visible_cells(raster: &WallRaster, position: [f64; 2], max_range: f64, out: &mut Vec<usize>) {
+/// The base rays of a visibility cast: `rays` directions evenly over the full circle, ray `k` at
+/// map angle `first_angle + k * TAU / rays` (radians).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayFan {
+    /// Map angle of ray 0, radians.
+    pub first_angle: f64,
+    /// Number of base rays (at least 2).
+    pub rays: usize,
+}
+
+/// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop (see
+/// [`visible_points`]). With `ranges`, also the metres from `position` to the first wall cell
+/// along each base ray of `fan`, `inf` where no wall cell lies within `max_range`.
+pub fn visible_cells(
+    raster: &WallRaster,
+    position: [f64; 2],
+    max_range: f64,
+    fan: RayFan,
+    out: &mut Vec<usize>,
+    mut ranges: Option<&mut Vec<f64>>,
+) {
     out.clear();
     let res = raster.resolution();
     let origin = raster.origin();
@@ -45,19 +77,35 @@ pub fn visible_cells(raster: &WallRaster, position: [f64; 2], max_range: f64, ou
         max_t: max_range / res,
         shape: (cols, rows),
     };
+    let range_of = |hit: Hit| hit.map_or(f64::INFINITY, |stop| stop.t * res);
+    if let Some(r) = ranges.as_deref_mut() {
+        r.clear();
+        r.reserve(fan.rays);
+    }
     // Finest angle worth resolving: an eighth of a cell at the maximum range (walls seen at a
     // grazing angle need more than one ray per cell width).
     let min_gap = res / max_range / 8.0;
-    let step = TAU / BASE_RAYS as f64;
-    let first = caster.cast(0.0);
+    let rays = fan.rays.max(2);
+    let step = TAU / rays as f64;
+    let angle_of = |k: usize| fan.first_angle + k as f64 * step;
+    let first = caster.cast(angle_of(0));
     let mut previous = first;
     let mut stack: Vec<Bracket> = Vec::new();
-    for k in 1..=BASE_RAYS {
-        let angle = k as f64 * step;
-        let hit = if k == BASE_RAYS { first } else { caster.cast(angle) };
-        stack.push(((k - 1) as f64 * step, previous, angle, hit, 0));
+    // Neighbouring rays mostly stop in the same cell from the same free cell: its cells are
+    // recorded once (the sort below then has far fewer duplicates to remove).
+    let mut last_recorded: Option<(Cell, Option<Cell>)> = None;
+    for k in 1..=rays {
+        if let Some(r) = ranges.as_deref_mut() {
+            r.push(range_of(previous));
+        }
+        let angle = angle_of(k);
+        let hit = if k == rays { first } else { caster.cast(angle) };
+        stack.push((angle_of(k - 1), previous, angle, hit, 0));
         while let Some((a0, h0, a1, h1, depth)) = stack.pop() {
-            if let Some(((cx, cy), came_from)) = h0 {
+            if let Some(Stop { cell: (cx, cy), came_from, .. }) =
+                h0.filter(|s| last_recorded != Some((s.cell, s.came_from)))
+            {
+                last_recorded = Some(((cx, cy), came_from));
                 out.push(cy as usize * cols + cx as usize);
                 // Wall cells bordering the last free cell are seen too: an inner corner's cell
                 // can only be entered through its two wall neighbours, so no ray stops in it.
@@ -71,7 +119,7 @@ pub fn visible_cells(raster: &WallRaster, position: [f64; 2], max_range: f64, ou
                 }
             }
             let touching = match (h0, h1) {
-                (Some((p, _)), Some((q, _))) => adjacent(raster, p, q),
+                (Some(p), Some(q)) => adjacent(raster, p.cell, q.cell),
                 (None, None) => true,
                 _ => false,
             };
@@ -103,8 +151,22 @@ fn adjacent(raster: &WallRaster, p: (i64, i64), q: (i64, i64)) -> bool {
     }
 }
 
-/// The first wall cell (col, row) a ray reaches and the free cell it came from, if any.
-type Hit = Option<((i64, i64), Option<(i64, i64)>)>;
+/// A raster cell (col, row).
+type Cell = (i64, i64);
+
+/// Where a ray stops: the first wall cell it reaches.
+#[derive(Clone, Copy, Debug)]
+struct Stop {
+    /// The wall cell (col, row).
+    cell: (i64, i64),
+    /// The free cell the ray left to enter it; None when that was the start cell.
+    came_from: Option<(i64, i64)>,
+    /// Cells along the ray from the cast's position to where it enters the wall cell.
+    t: f64,
+}
+
+/// The stop of a ray, `None` when it meets no wall cell within range.
+type Hit = Option<Stop>;
 
 /// Two rays to refine between: (angle, hit) of each, and the refinement depth.
 type Bracket = (f64, Hit, f64, Hit, u32);
@@ -151,14 +213,16 @@ impl RayCaster<'_> {
             (entry.1.floor() as i64).clamp(0, self.shape.1 as i64 - 1),
         );
         if self.raster.is_wall(cell.0, cell.1) {
-            return Some((cell, None));
+            return Some(Stop { cell, came_from: None, t: t_in });
         }
         first_wall_cell(self.raster, entry, cell, (dx, dy), self.max_t - t_in, self.shape)
+            .map(|stop| Stop { t: t_in + stop.t, ..stop })
     }
 }
 
 /// Walks the cells along one ray (cell units) and returns the first wall cell after the start, with
-/// the free cell the ray left to enter it (None when that was the start cell, which may be a wall).
+/// the free cell the ray left to enter it (None when that was the start cell, which may be a wall)
+/// and the parameter from `(ox, oy)` where it entered.
 /// The walk is 4-connected (a ray exactly through a cell corner steps along y first), so it cannot
 /// slip between the 8-connected cells of a diagonal wall. It crosses open space in jumps (see
 /// [`crate::clearance`]), landing in the cells the step-by-step walk reaches.
@@ -215,7 +279,7 @@ fn first_wall_cell(
         clearance = raster.clearance(cx as usize, cy as usize);
         if clearance == 0 {
             let came_from = (before != start || !raster.is_wall(start.0, start.1)).then_some(before);
-            return Some(((cx, cy), came_from));
+            return Some(Stop { cell: (cx, cy), came_from, t });
         }
         t_cur = t;
     }

@@ -137,6 +137,74 @@ impl PyPointMap {
         let idx = py.detach(|| guarded(|| map.visible_from(Pose2::new(x, y, 0.0), max_range)))?;
         Ok(idx.into_pyarray(py))
     }
+
+    /// The plan as seen from pose (x, y, yaw), within max_range metres, in `directions` evenly
+    /// spaced directions: one ray cast for the visible points and each direction's wall range.
+    fn view_from(
+        &self,
+        py: Python<'_>,
+        pose: (f64, f64, f64),
+        max_range: f64,
+        directions: &Bound<'_, PyAny>,
+    ) -> PyResult<WallView> {
+        let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
+        let map = Arc::clone(&self.inner);
+        let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
+        let view = py.detach(|| guarded(|| map.view_from(pose, max_range, directions)))?;
+        Ok(WallView { inner: Arc::new(view) })
+    }
+}
+
+/// Two (N,) bool arrays.
+type BoolPair<'py> = (Bound<'py, PyArray1<bool>>, Bound<'py, PyArray1<bool>>);
+
+/// What a range sensor at a pose sees of the plan (`icp_core::wall_view::WallView`): the visible
+/// wall points and the range to the first wall in each of `directions` evenly spaced directions.
+#[pyclass(frozen, module = "planicp._core")]
+pub(crate) struct WallView {
+    inner: Arc<icp_core::wall_view::WallView>,
+}
+
+#[pymethods]
+impl WallView {
+    /// (x, y, yaw) the view was cast from, `T_map_base`.
+    #[getter]
+    fn pose(&self) -> (f64, f64, f64) {
+        let p = self.inner.pose;
+        (p.x, p.y, p.yaw)
+    }
+
+    /// (K,) uint32: indices (ascending) of the plan points visible from the pose.
+    #[getter]
+    fn visible_indices<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        self.inner.visible.clone().into_pyarray(py)
+    }
+
+    /// (directions,) float64: metres to the first wall along base-frame angle
+    /// -pi + j * 2 pi / directions, inf when none lies within the cast's range.
+    #[getter]
+    fn ranges<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner.ranges.clone().into_pyarray(py)
+    }
+
+    /// (in_front, beyond), each (N,) bool: which base-frame points lie more than margin metres
+    /// short of the wall in their direction, and which more than margin beyond it.
+    fn classify<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'_, f64>,
+        margin: f64,
+    ) -> PyResult<BoolPair<'py>> {
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(PlanicpError::new_err(format!(
+                "margin must be a finite number of metres >= 0, got {margin}"
+            )));
+        }
+        let pts = points_from("points", &points)?;
+        let view = Arc::clone(&self.inner);
+        let classes = py.detach(|| guarded(|| Ok(view.classify(&pts, margin))))?;
+        Ok((classes.in_front.into_pyarray(py), classes.beyond.into_pyarray(py)))
+    }
 }
 
 /// Validated ICP settings (see `planicp.IcpConfig` for their meaning).
@@ -259,21 +327,43 @@ impl Alignment {
     }
 }
 
-/// Aligns scan points (N, 2, robot frame, metres) to the map from initial (x, y, yaw).
+/// Aligns scan points (N, 2, robot frame, metres) to the map from initial (x, y, yaw); `view`, a
+/// WallView cast from `initial`, gives the visible plan points instead of casting them again.
 #[pyfunction]
+#[pyo3(signature = (map, scan, initial, settings, view=None))]
 fn align(
     py: Python<'_>,
     map: &PyPointMap,
     scan: PyReadonlyArray2<'_, f64>,
     initial: (f64, f64, f64),
     settings: &IcpSettings,
+    view: Option<&WallView>,
 ) -> PyResult<Alignment> {
     let pts = points_from("scan points", &scan)?;
     let map = Arc::clone(&map.inner);
     let config = settings.inner.clone();
     let initial = Pose2::new(initial.0, initial.1, initial.2);
-    let inner = py.detach(|| guarded(|| icp_core::align(&map, &pts, initial, &config)))?;
+    let view = view.map(|v| Arc::clone(&v.inner));
+    let inner = py.detach(|| {
+        guarded(|| {
+            icp_core::icp::align_seen(
+                &map,
+                &pts,
+                initial,
+                &config,
+                view.as_ref().map(|v| v.visible.as_slice()),
+            )
+        })
+    })?;
     Ok(Alignment { inner })
+}
+
+/// The range (metres) an alignment with `settings` casts its visibility to for `scan` (N, 2,
+/// robot frame): the farthest scan point plus the largest stage distance, or the settings' own.
+#[pyfunction]
+fn visibility_range(scan: PyReadonlyArray2<'_, f64>, settings: &IcpSettings) -> PyResult<f64> {
+    let pts = points_from("scan points", &scan)?;
+    Ok(icp_core::icp::visibility_range(&pts, &settings.inner))
 }
 
 /// Panics inside the guarded boundary, to prove that a panic surfaces as PlanicpInternalError.
@@ -291,6 +381,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPointMap>()?;
     m.add_class::<IcpSettings>()?;
     m.add_class::<Alignment>()?;
+    m.add_class::<WallView>()?;
     m.add_class::<OccupancyGrid>()?;
     m.add_class::<log_odds_grid::LogOddsGrid>()?;
     m.add_class::<global_search::GlobalMatcher>()?;
@@ -298,6 +389,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<global_search::RelocalizationCandidate>()?;
     m.add_function(wrap_pyfunction!(global_search::relocalize, m)?)?;
     m.add_function(wrap_pyfunction!(align, m)?)?;
+    m.add_function(wrap_pyfunction!(visibility_range, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
 }

@@ -1,0 +1,181 @@
+//! What a range sensor at one pose sees of the plan, cast once and used twice.
+//!
+//! A tracking step asks two questions of the walls seen from the predicted pose: which plan points
+//! the alignment may pair with (the visible wall faces, [`crate::visibility`]), and how far each
+//! direction's first wall is, so that returns far short of it (people, furniture) or far beyond it
+//! (a wrong prediction) can be told apart. One visibility cast answers both: its base rays are the
+//! directions, and the distance at which each one enters its first wall cell is that direction's
+//! expected range.
+
+use crate::error::{invalid, Result};
+use crate::pose::Pose2;
+use crate::visibility::{check_cast, visible_cells, RayFan};
+use crate::wall_raster::WallRaster;
+use std::f64::consts::{PI, TAU};
+
+/// Fewest directions a view may have.
+pub const MIN_DIRECTIONS: usize = 8;
+/// Most directions a view may have.
+pub const MAX_DIRECTIONS: usize = 1 << 20;
+
+/// The plan as seen from one pose: its visible wall points and the range to the first wall in
+/// `directions` evenly spaced directions, direction `j` at base-frame angle `-pi + j * TAU /
+/// directions` (the first one points backwards).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WallView {
+    /// `T_map_base` the view was cast from.
+    pub pose: Pose2,
+    /// Plan point indices (ascending, unique) in the wall cells the rays reach first.
+    pub visible: Vec<u32>,
+    /// Per direction: metres from the pose's position to the first wall cell, `inf` when none lies
+    /// within the cast's range. Accurate to about one raster cell.
+    pub ranges: Vec<f64>,
+}
+
+/// Which returns of a scan disagree with the walls of a [`WallView`] (see [`WallView::classify`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReturnClasses {
+    /// Per return: more than the margin short of the wall in its direction.
+    pub in_front: Vec<bool>,
+    /// Per return: more than the margin beyond the wall in its direction.
+    pub beyond: Vec<bool>,
+}
+
+impl WallView {
+    /// Casts the view from `pose` (`T_map_base`) through `raster` within `max_range` metres.
+    ///
+    /// Errors: a pose that is not finite, a range that is not positive and finite, a number of
+    /// directions outside [[`MIN_DIRECTIONS`], [`MAX_DIRECTIONS`]].
+    pub fn cast(raster: &WallRaster, pose: Pose2, max_range: f64, directions: usize) -> Result<Self> {
+        check_cast([pose.x, pose.y], max_range)?;
+        if !pose.yaw.is_finite() {
+            return Err(invalid("pose yaw", pose.yaw, "must be finite"));
+        }
+        if !(MIN_DIRECTIONS..=MAX_DIRECTIONS).contains(&directions) {
+            return Err(invalid("directions", directions, "must be between 8 and 2^20"));
+        }
+        let mut cells = Vec::new();
+        let mut ranges = Vec::with_capacity(directions);
+        let fan = RayFan { first_angle: pose.yaw - PI, rays: directions };
+        visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(&mut ranges));
+        Ok(Self { pose, visible: raster.points_in_cells(&cells), ranges })
+    }
+
+    /// Which of `points` (base frame, metres) lie more than `margin` metres short of the wall in
+    /// their direction (something the plan does not show stands in front of it), and which lie more
+    /// than `margin` beyond it (a beam from this pose could not have returned them). Directions are
+    /// measured from the base origin: a return on a wall lies on it whatever the ray's origin, so
+    /// the laser's mount does not matter. At a wall's edge a return may belong to either
+    /// neighbouring direction, so it is in front only of the farthest of the three nearest
+    /// directions' walls, and beyond only the nearest. A direction with no wall in range reads
+    /// `inf`: every return near it is in front, none beyond.
+    pub fn classify(&self, points: &[[f64; 2]], margin: f64) -> ReturnClasses {
+        let n = self.ranges.len();
+        let step = TAU / n as f64;
+        let mut classes = ReturnClasses {
+            in_front: Vec::with_capacity(points.len()),
+            beyond: Vec::with_capacity(points.len()),
+        };
+        for p in points {
+            let range = p[0].hypot(p[1]);
+            let k = ((p[1].atan2(p[0]) + PI) / step).round();
+            // atan2 lies in [-pi, pi]: k in [0, n]; n is direction 0 again.
+            let k = if k.is_finite() { (k as usize) % n } else { 0 };
+            let around = [self.ranges[(k + n - 1) % n], self.ranges[k], self.ranges[(k + 1) % n]];
+            let farthest = around.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let nearest = around.iter().copied().fold(f64::INFINITY, f64::min);
+            classes.in_front.push(range < farthest - margin);
+            classes.beyond.push(range > nearest + margin);
+        }
+        classes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 x 4 m room with 0.2 m walls, points every 5 cm on both faces, and a 1 m doorway in the
+    /// east wall (x = 4) at y in [1.5, 2.5].
+    fn room() -> WallRaster {
+        let mut pts = Vec::new();
+        for i in 0..=80 {
+            let t = i as f64 * 0.05;
+            pts.extend([[t, 0.0], [t, 4.0], [0.0, t]]);
+            if !(1.5..=2.5).contains(&t) {
+                pts.push([4.0, t]);
+            }
+        }
+        for i in 0..=88 {
+            let t = -0.2 + i as f64 * 0.05;
+            pts.extend([[t, -0.2], [t, 4.2], [-0.2, t]]);
+            if !(1.3..=2.7).contains(&t) {
+                pts.push([4.2, t]);
+            }
+        }
+        WallRaster::new(&pts, 0.075).unwrap()
+    }
+
+    #[test]
+    fn ranges_are_the_distances_to_the_first_walls() {
+        let raster = room();
+        // Facing +y from (1, 1.2): direction j looks along base angle -pi + j * 2 pi / 16.
+        let view = WallView::cast(&raster, Pose2::new(1.0, 1.2, PI / 2.0), 10.0, 16).unwrap();
+        assert_eq!(view.ranges.len(), 16);
+        let cell = 0.075;
+        // Base angle 0 (j = 8) is map +y: the north wall at y = 4, 2.8 m away.
+        assert!((view.ranges[8] - 2.8).abs() <= cell, "{}", view.ranges[8]);
+        // Base angle -pi/2 (j = 4) is map +x: the east wall at x = 4, 3 m away.
+        assert!((view.ranges[4] - 3.0).abs() <= cell, "{}", view.ranges[4]);
+        // Base angle pi/2 (j = 12) is map -x: the west wall at x = 0, 1 m away.
+        assert!((view.ranges[12] - 1.0).abs() <= cell, "{}", view.ranges[12]);
+        // Backwards (j = 0) is map -y: the south wall at y = 0.
+        assert!((view.ranges[0] - 1.2).abs() <= cell, "{}", view.ranges[0]);
+        assert!(!view.visible.is_empty());
+    }
+
+    #[test]
+    fn the_visible_points_are_the_visibility_casts() {
+        let raster = room();
+        // Facing pi, the first direction is map angle 0, as the visibility cast's first ray.
+        let pose = Pose2 { x: 2.3, y: 1.7, yaw: PI };
+        let view = WallView::cast(&raster, pose, 8.0, crate::visibility::BASE_RAYS).unwrap();
+        let seen = crate::visibility::visible_points(&raster, [2.3, 1.7], 8.0).unwrap();
+        assert_eq!(view.visible, seen);
+    }
+
+    #[test]
+    fn a_doorway_reads_inf_within_range_and_returns_are_classified() {
+        let raster = room();
+        // At (2, 2) facing +x: base angle 0 (direction 360 of 720) looks through the doorway.
+        let view = WallView::cast(&raster, Pose2::new(2.0, 2.0, 0.0), 3.0, 720).unwrap();
+        assert_eq!(view.ranges[360], f64::INFINITY);
+        let ahead_left = view.ranges[540]; // base angle pi/2: the north wall, 2 m
+        assert!((ahead_left - 2.0).abs() <= 0.075, "{ahead_left}");
+        let margin = 0.2;
+        let classes = view.classify(
+            &[
+                [0.0, 2.0],  // on the north wall
+                [0.0, 1.0],  // a person 1 m short of it
+                [0.0, 2.5],  // 0.5 m beyond it: through the wall
+                [1.0, 0.0],  // through the doorway, where the plan shows nothing in range
+                [-2.0, 0.0], // on the west wall
+            ],
+            margin,
+        );
+        assert_eq!(classes.in_front, vec![false, true, false, true, false]);
+        assert_eq!(classes.beyond, vec![false, false, true, false, false]);
+    }
+
+    #[test]
+    fn bad_casts_are_refused() {
+        let raster = room();
+        let ok = Pose2::new(1.0, 1.0, 0.0);
+        assert!(WallView::cast(&raster, ok, 0.0, 16).is_err());
+        assert!(WallView::cast(&raster, ok, f64::NAN, 16).is_err());
+        assert!(WallView::cast(&raster, ok, 5.0, 7).is_err());
+        assert!(WallView::cast(&raster, ok, 5.0, MAX_DIRECTIONS + 1).is_err());
+        assert!(WallView::cast(&raster, Pose2 { x: f64::NAN, y: 1.0, yaw: 0.0 }, 5.0, 16).is_err());
+        assert!(WallView::cast(&raster, Pose2 { x: 1.0, y: 1.0, yaw: f64::INFINITY }, 5.0, 16).is_err());
+    }
+}
