@@ -88,6 +88,10 @@ fn benches(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("visibility");
     g.bench_function("visible_from_30m", |b| b.iter(|| map.visible_from(black_box(guess), 30.0).unwrap()));
+    // The tracking step's one cast: visible points and the occlusion rule's 1440 wall ranges.
+    g.bench_function("view_from_30m_1440", |b| {
+        b.iter(|| map.view_from(black_box(guess), 30.0, 1440).unwrap())
+    });
     g.finish();
 
     let mut g = c.benchmark_group("align_1080");

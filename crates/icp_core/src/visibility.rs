@@ -58,7 +58,12 @@ pub struct RayFan {
 
 /// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop (see
 /// [`visible_points`]). With `ranges`, also the metres from `position` to the first wall cell
-/// along each base ray of `fan`, `inf` where no wall cell lies within `max_range`.
+/// in `2 * fan.rays` directions: each base ray of `fan`, then the direction halfway to the next
+/// one, `inf` where no wall cell lies within `max_range`. A halfway direction takes the range of
+/// the refinement's ray there when one was cast (the two base rays stopped in cells that are not
+/// adjacent), else the mean of the two base rays' ranges: they stopped in the same or adjacent
+/// cells, so the ray between them stops there too, and its range lies within about a cell of
+/// that mean.
 pub fn visible_cells(
     raster: &WallRaster,
     position: [f64; 2],
@@ -78,32 +83,46 @@ pub fn visible_cells(
         shape: (cols, rows),
     };
     let range_of = |hit: Hit| hit.map_or(f64::INFINITY, |stop| stop.t * res);
+    let rays = fan.rays.max(2);
     if let Some(r) = ranges.as_deref_mut() {
         r.clear();
-        r.reserve(fan.rays);
+        r.reserve(2 * rays);
     }
     // Finest angle worth resolving: an eighth of a cell at the maximum range (walls seen at a
     // grazing angle need more than one ray per cell width).
     let min_gap = res / max_range / 8.0;
-    let rays = fan.rays.max(2);
     let step = TAU / rays as f64;
-    let angle_of = |k: usize| fan.first_angle + k as f64 * step;
-    let first = caster.cast(angle_of(0));
+    // Base ray k's direction turns ray k - 1's by `step` (a rotation, no trigonometry), and is
+    // taken from sin_cos afresh every RESEED rays so that rounding cannot accumulate.
+    const RESEED: usize = 32;
+    let (turn_sin, turn_cos) = step.sin_cos();
+    let base = |k: usize, before: &Ray| {
+        let angle = fan.first_angle + k as f64 * step;
+        let dir = if k % RESEED == 0 {
+            let (dy, dx) = angle.sin_cos();
+            (dx, dy)
+        } else {
+            let (x, y) = before.dir;
+            (turn_cos * x - turn_sin * y, turn_sin * x + turn_cos * y)
+        };
+        Ray { angle, dir, hit: None }
+    };
+    let cast = |ray: Ray| Ray { hit: caster.cast(ray.dir), ..ray };
+    let first = cast(base(0, &Ray { angle: 0.0, dir: (1.0, 0.0), hit: None }));
     let mut previous = first;
     let mut stack: Vec<Bracket> = Vec::new();
     // Neighbouring rays mostly stop in the same cell from the same free cell: its cells are
     // recorded once (the sort below then has far fewer duplicates to remove).
     let mut last_recorded: Option<(Cell, Option<Cell>)> = None;
     for k in 1..=rays {
-        if let Some(r) = ranges.as_deref_mut() {
-            r.push(range_of(previous));
-        }
-        let angle = angle_of(k);
-        let hit = if k == rays { first } else { caster.cast(angle) };
-        stack.push((angle_of(k - 1), previous, angle, hit, 0));
-        while let Some((a0, h0, a1, h1, depth)) = stack.pop() {
+        // The last bracket closes the circle: its end is ray 0, one turn on.
+        let next =
+            if k == rays { Ray { angle: first.angle + TAU, ..first } } else { cast(base(k, &previous)) };
+        let mut halfway: Option<Hit> = None;
+        stack.push((previous, next, 0));
+        while let Some((r0, r1, depth)) = stack.pop() {
             if let Some(Stop { cell: (cx, cy), came_from, .. }) =
-                h0.filter(|s| last_recorded != Some((s.cell, s.came_from)))
+                r0.hit.filter(|s| last_recorded != Some((s.cell, s.came_from)))
             {
                 last_recorded = Some(((cx, cy), came_from));
                 out.push(cy as usize * cols + cx as usize);
@@ -118,25 +137,45 @@ pub fn visible_cells(
                     }
                 }
             }
-            let touching = match (h0, h1) {
-                (Some(p), Some(q)) => adjacent(raster, p.cell, q.cell),
-                (None, None) => true,
-                _ => false,
-            };
-            if touching || depth >= MAX_REFINEMENT_DEPTH || a1 - a0 <= min_gap {
+            if touching(raster, r0.hit, r1.hit)
+                || depth >= MAX_REFINEMENT_DEPTH
+                || r1.angle - r0.angle <= min_gap
+            {
                 continue;
             }
-            let mid = 0.5 * (a0 + a1);
-            let hm = caster.cast(mid);
+            let mid = cast(Ray::between(&r0, &r1));
+            if depth == 0 {
+                halfway = Some(mid.hit);
+            }
             // Right half first onto the stack so the left half is handled next; the left half
-            // records `h0` again, which the final dedup removes.
-            stack.push((mid, hm, a1, h1, depth + 1));
-            stack.push((a0, h0, mid, hm, depth + 1));
+            // records `r0` again, which the final dedup removes.
+            stack.push((mid, r1, depth + 1));
+            stack.push((r0, mid, depth + 1));
         }
-        previous = hit;
+        if let Some(r) = ranges.as_deref_mut() {
+            r.push(range_of(previous.hit));
+            r.push(match (halfway, previous.hit, next.hit) {
+                (Some(hit), _, _) => range_of(hit),
+                (None, Some(p), Some(q)) if adjacent(raster, p.cell, q.cell) => 0.5 * (p.t + q.t) * res,
+                (None, None, None) => f64::INFINITY,
+                // Not refined for want of angle (a range of kilometres): cast it for its range.
+                _ => range_of(caster.cast(Ray::between(&previous, &next).dir)),
+            });
+        }
+        previous = next;
     }
     out.sort_unstable();
     out.dedup();
+}
+
+/// Whether no wall cell can lie between the stops of two neighbouring rays: both stopped in the
+/// same or [`adjacent`] cells, or neither stopped.
+fn touching(raster: &WallRaster, h0: Hit, h1: Hit) -> bool {
+    match (h0, h1) {
+        (Some(p), Some(q)) => adjacent(raster, p.cell, q.cell),
+        (None, None) => true,
+        _ => false,
+    }
 }
 
 /// Whether rays between two that stopped in cells `p` and `q` can only stop in `p` or `q`: the
@@ -168,8 +207,26 @@ struct Stop {
 /// The stop of a ray, `None` when it meets no wall cell within range.
 type Hit = Option<Stop>;
 
-/// Two rays to refine between: (angle, hit) of each, and the refinement depth.
-type Bracket = (f64, Hit, f64, Hit, u32);
+/// One ray of a cast: its map angle (radians), unit direction and stop.
+#[derive(Clone, Copy, Debug)]
+struct Ray {
+    angle: f64,
+    dir: (f64, f64),
+    hit: Hit,
+}
+
+impl Ray {
+    /// The ray halfway between `a` and `b` (less than half a turn apart), not yet cast: its
+    /// direction is the normalised sum of theirs, with no trigonometry.
+    fn between(a: &Ray, b: &Ray) -> Ray {
+        let (x, y) = (a.dir.0 + b.dir.0, a.dir.1 + b.dir.1);
+        let norm = x.hypot(y);
+        Ray { angle: 0.5 * (a.angle + b.angle), dir: (x / norm, y / norm), hit: None }
+    }
+}
+
+/// Two neighbouring rays to refine between, and the refinement depth.
+type Bracket = (Ray, Ray, u32);
 
 /// Casts single rays from one position through the raster, in cell units.
 struct RayCaster<'a> {
@@ -180,11 +237,11 @@ struct RayCaster<'a> {
 }
 
 impl RayCaster<'_> {
-    /// The first wall cell (col, row) along `angle` (radians), if any: after the start cell when
-    /// the position is inside the raster, from the cell where the ray enters it otherwise.
+    /// The first wall cell (col, row) along the unit direction `(dx, dy)`, if any: after the
+    /// start cell when the position is inside the raster, from the cell where the ray enters it
+    /// otherwise.
     #[inline]
-    fn cast(&self, angle: f64) -> Hit {
-        let (dy, dx) = angle.sin_cos();
+    fn cast(&self, (dx, dy): (f64, f64)) -> Hit {
         let (cols, rows) = (self.shape.0 as f64, self.shape.1 as f64);
         let (ox, oy) = self.origin;
         if (0.0..cols).contains(&ox) && (0.0..rows).contains(&oy) {

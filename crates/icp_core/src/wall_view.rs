@@ -3,9 +3,10 @@
 //! A tracking step asks two questions of the walls seen from the predicted pose: which plan points
 //! the alignment may pair with (the visible wall faces, [`crate::visibility`]), and how far each
 //! direction's first wall is, so that returns far short of it (people, furniture) or far beyond it
-//! (a wrong prediction) can be told apart. One visibility cast answers both: its base rays are the
-//! directions, and the distance at which each one enters its first wall cell is that direction's
-//! expected range.
+//! (a wrong prediction) can be told apart. One visibility cast answers both: its base rays are
+//! every other direction, the rays it adds where neighbouring rays stop in cells that are not
+//! adjacent give most directions between them, and the distance at which a ray enters its first
+//! wall cell is that direction's expected range.
 
 use crate::error::{invalid, Result};
 use crate::pose::Pose2;
@@ -54,10 +55,17 @@ impl WallView {
         if !(MIN_DIRECTIONS..=MAX_DIRECTIONS).contains(&directions) {
             return Err(invalid("directions", directions, "must be between 8 and 2^20"));
         }
+        // An even number of directions: half of them are base rays and the cast gives the range
+        // halfway between neighbours too (see `visible_cells`). An odd number: every direction
+        // is a base ray and the halfway ranges are dropped.
+        let (rays, every) = if directions % 2 == 0 { (directions / 2, 1) } else { (directions, 2) };
         let mut cells = Vec::new();
-        let mut ranges = Vec::with_capacity(directions);
-        let fan = RayFan { first_angle: pose.yaw - PI, rays: directions };
+        let mut ranges = Vec::with_capacity(2 * rays);
+        let fan = RayFan { first_angle: pose.yaw - PI, rays };
         visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(&mut ranges));
+        if every > 1 {
+            ranges = ranges.into_iter().step_by(every).collect();
+        }
         Ok(Self { pose, visible: raster.points_in_cells(&cells), ranges })
     }
 
@@ -77,8 +85,8 @@ impl WallView {
             beyond: Vec::with_capacity(points.len()),
         };
         for p in points {
-            let range = p[0].hypot(p[1]);
-            let k = ((p[1].atan2(p[0]) + PI) / step).round();
+            let range = (p[0] * p[0] + p[1] * p[1]).sqrt();
+            let k = ((bearing(p[1], p[0]) + PI) / step).round();
             // atan2 lies in [-pi, pi]: k in [0, n]; n is direction 0 again.
             let k = if k.is_finite() { (k as usize) % n } else { 0 };
             let around = [self.ranges[(k + n - 1) % n], self.ranges[k], self.ranges[(k + 1) % n]];
@@ -88,6 +96,46 @@ impl WallView {
             classes.beyond.push(range > nearest + margin);
         }
         classes
+    }
+}
+
+/// `y.atan2(x)` to within 1e-7 rad (a return's direction only picks the nearest of directions
+/// thousandths of a radian apart), three times faster than the library's: Abramowitz and Stegun's
+/// 4.4.49 polynomial on the octant, mirrored. 0 for (0, 0); NaN for a NaN coordinate.
+#[inline]
+fn bearing(y: f64, x: f64) -> f64 {
+    const A: [f64; 8] = [
+        0.999_999_332_9,
+        -0.333_298_560_5,
+        0.199_465_359_9,
+        -0.139_085_335_1,
+        0.096_420_044_1,
+        -0.055_909_886_1,
+        0.021_861_228_8,
+        -0.004_054_058_0,
+    ];
+    let (ax, ay) = (x.abs(), y.abs());
+    let (small, large) = if ay > ax { (ax, ay) } else { (ay, ax) };
+    if large == 0.0 {
+        return 0.0;
+    }
+    let z = small / large;
+    let z2 = z * z;
+    let mut a = A[7];
+    for c in A[..7].iter().rev() {
+        a = a * z2 + c;
+    }
+    let mut angle = a * z;
+    if ay > ax {
+        angle = std::f64::consts::FRAC_PI_2 - angle;
+    }
+    if x < 0.0 {
+        angle = PI - angle;
+    }
+    if y < 0.0 {
+        -angle
+    } else {
+        angle
     }
 }
 
@@ -139,7 +187,7 @@ mod tests {
         let raster = room();
         // Facing pi, the first direction is map angle 0, as the visibility cast's first ray.
         let pose = Pose2 { x: 2.3, y: 1.7, yaw: PI };
-        let view = WallView::cast(&raster, pose, 8.0, crate::visibility::BASE_RAYS).unwrap();
+        let view = WallView::cast(&raster, pose, 8.0, 2 * crate::visibility::BASE_RAYS).unwrap();
         let seen = crate::visibility::visible_points(&raster, [2.3, 1.7], 8.0).unwrap();
         assert_eq!(view.visible, seen);
     }
@@ -165,6 +213,45 @@ mod tests {
         );
         assert_eq!(classes.in_front, vec![false, true, false, true, false]);
         assert_eq!(classes.beyond, vec![false, false, true, false, false]);
+    }
+
+    #[test]
+    fn halfway_ranges_match_casting_every_direction() {
+        let raster = room();
+        for (x, y, yaw) in [(1.0, 1.2, 0.3), (2.0, 2.0, 0.0), (3.7, 0.4, -2.0), (6.0, 2.0, 1.0)] {
+            let pose = Pose2::new(x, y, yaw);
+            // 1441 directions: every one a base ray. 1440: every other one, the rest halfway.
+            let exact = WallView::cast(&raster, pose, 12.0, 1441).unwrap();
+            let halved = WallView::cast(&raster, pose, 12.0, 1440).unwrap();
+            assert_eq!((exact.ranges.len(), halved.ranges.len()), (1441, 1440));
+            let reference = WallView::cast(&raster, pose, 12.0, 2881).unwrap();
+            // Direction j of 1440 is direction 2j of 2880; the 2881-direction cast is within
+            // 1/2881 of a turn of it, compare with the nearer of its neighbours.
+            for (j, r) in halved.ranges.iter().enumerate() {
+                let near = [reference.ranges[(2 * j) % 2881], reference.ranges[(2 * j + 1) % 2881]];
+                let off =
+                    near.iter().map(|e| if e.is_infinite() && r.is_infinite() { 0.0 } else { (e - r).abs() });
+                assert!(off.fold(f64::INFINITY, f64::min) <= 0.11, "{pose:?} direction {j}: {r} vs {near:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn bearings_agree_with_atan2() {
+        let mut worst = 0.0f64;
+        for i in 0..200_000 {
+            let angle = -PI + TAU * i as f64 / 200_000.0;
+            for r in [1e-3, 1.0, 37.0] {
+                let (y, x) = (r * angle.sin(), r * angle.cos());
+                worst = worst.max((bearing(y, x) - y.atan2(x)).abs());
+            }
+        }
+        assert!(worst < 1e-7, "{worst}");
+        for (y, x) in [(0.0, 1.0), (1.0, 0.0), (0.0, -1.0), (-1.0, 0.0), (2.0, 2.0), (-3.0, -3.0)] {
+            assert!((bearing(y, x) - f64::atan2(y, x)).abs() < 1e-7, "({y}, {x})");
+        }
+        assert_eq!(bearing(0.0, 0.0), 0.0);
+        assert!(bearing(f64::NAN, 1.0).is_nan());
     }
 
     #[test]
