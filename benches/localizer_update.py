@@ -6,7 +6,10 @@ LIDAR, 100 Hz odometry with the thesis drift; `planicp.sim.run_experiment`) is r
 scans are then fed to a fresh `Localizer` exactly as a robot stack would: ranges to points
 (`scan_to_points`, the laser mount included) and the odometry pose. Each update is timed with
 `time.perf_counter`; the table gives the median and 90th percentile over all updates, per
-correspondence search, with the share spent in the conversion.
+correspondence search, with the share spent in the conversion. Then, for the same scans and
+predictions, the two native steps are timed on their own: the one ray cast from the prediction
+(`PlanMap.view_from`: the visible wall points and the occlusion rule's expected ranges) and the
+alignment given it (`localize(..., view=...)`); the rest of an update is Python.
 
     python benches/localizer_update.py               # 60 s drive (600 scans)
     python benches/localizer_update.py --duration 20
@@ -38,10 +41,12 @@ def main() -> None:
     print("| correspondence search | update p50 | update p90 | of which scan_to_points | RMS error |")
     print("|---|---|---|---|---|")
     truth = recording.poses("truth")
+    steps: dict[str, tuple[float, float]] = {}
     for search in ("wall_index", "kd_tree"):
         config = IcpConfig.for_tracking(correspondence_search=search)
         localizer = Localizer(plan, truth[0], config)
         update_s, convert_s, errors = [], [], []
+        replay: list[tuple[np.ndarray, tuple[float, float, float]]] = []
         for k, frame in enumerate(frames):
             assert frame.odometry is not None
             t0 = time.perf_counter()
@@ -53,10 +58,32 @@ def main() -> None:
             update_s.append(t2 - t0)
             convert_s.append(t1 - t0)
             errors.append(np.hypot(estimate.pose[0] - truth[k][0], estimate.pose[1] - truth[k][1]))
+            replay.append((points, estimate.predicted_pose))
         p50, p90 = np.percentile(update_s, [50, 90]) * 1e3
         rms = float(np.sqrt(np.mean(np.square(errors))))
         print(f"| {search} | {p50:.3f} ms | {p90:.3f} ms | {np.median(convert_s) * 1e3:.3f} ms "
               f"| {rms * 100:.2f} cm |")
+        steps[search] = _native_steps(plan, config, localizer, replay)
+    for search, (view_ms, align_ms) in steps.items():
+        print(f"# {search}: median view_from {view_ms:.3f} ms, alignment given the view {align_ms:.3f} ms")
+
+
+def _native_steps(plan: planicp.PlanMap, config: IcpConfig, localizer: Localizer,
+                  replay: list[tuple[np.ndarray, tuple[float, float, float]]]) -> tuple[float, float]:
+    """Median milliseconds of the view cast and of the alignment given it, per update, cast as the
+    localizer casts (its occlusion rule's directions and range)."""
+    occlusion = localizer._occlusion
+    assert occlusion is not None
+    view_s, align_s = [], []
+    for points, predicted in replay:
+        t0 = time.perf_counter()
+        view = occlusion.view(points, predicted, config)
+        t1 = time.perf_counter()
+        planicp.localize(points, plan, predicted, config, view=view)
+        t2 = time.perf_counter()
+        view_s.append(t1 - t0)
+        align_s.append(t2 - t1)
+    return float(np.median(view_s)) * 1e3, float(np.median(align_s)) * 1e3
 
 
 if __name__ == "__main__":

@@ -418,9 +418,9 @@ def test_continuity_rule() -> None:
         ContinuityRule(max_correction=-1.0)
 
 
-def test_the_shared_view_classifies_returns_as_an_exact_cast_does() -> None:
-    """The occlusion rule's expected ranges come from the alignment's visibility cast (the plan's
-    wall points rastered at 7.5 cm) instead of an exact cast through the plan image (5 cm). Over
+def test_a_views_ranges_classify_returns_almost_as_an_exact_cast_does() -> None:
+    """A `WallView`'s ranges come from the visibility cast (the plan's wall points rastered at
+    7.5 cm), not from an exact cast through the plan image (5 cm) as the occlusion rule's. Over
     random poses and scans that face any way, wrap past +-pi or hold a single return, the two
     classify all but a few returns alike. The rest are returns whose direction passes within a
     visibility cell (0.11 m) of a wall's end, where the coarser raster lengthens the wall: the
@@ -445,7 +445,10 @@ def test_the_shared_view_classifies_returns_as_an_exact_cast_does() -> None:
         bearings = centre + rng.uniform(-width / 2, width / 2, size=1 if width == 0.0 else 500)
         r = rng.uniform(0.3, 12.0, size=len(bearings))
         points = np.column_stack([r * np.cos(bearings), r * np.sin(bearings)])
-        short, beyond = occlusion.classify(points, pose)
+        # The occlusion rule's native classification is the exact one, bit for bit.
+        exact = occlusion.classify(points, pose)
+        view = plan.view_from(pose, float(r.max()) + 1.0, rule.beams)
+        short, beyond = view.classify(points, rule.margin)
         expected = exact_grid.cast(pose, -math.pi, step, rule.beams, 0.0, 1e6)
         expected = np.where(np.isfinite(expected), expected, np.inf)
         if not np.any(expected > 0.0):
@@ -457,11 +460,13 @@ def test_the_shared_view_classifies_returns_as_an_exact_cast_does() -> None:
         around = [expected[(k - 1) % rule.beams], expected[k], expected[(k + 1) % rule.beams]]
         exact_short = r < np.maximum.reduce(around) - rule.margin
         exact_beyond = r > np.minimum.reduce(around) + rule.margin
+        np.testing.assert_array_equal(exact[0], exact_short, err_msg=str(trial))
+        np.testing.assert_array_equal(exact[1], exact_beyond, err_msg=str(trial))
         differ = np.flatnonzero((short != exact_short) | (beyond != exact_beyond))
         for i in differ:
             # The exact ranges of the directions within a cell of the return's line of sight, at
             # the nearest wall either cast sees there.
-            view_ranges = occlusion.view(points, pose).ranges[(k[i] + np.arange(-1, 2)) % rule.beams]
+            view_ranges = view.ranges[(k[i] + np.arange(-1, 2)) % rule.beams]
             distance = max(min(r[i], expected[k[i]], *view_ranges), 0.3)
             half = int(math.ceil(cell / distance / step)) + 2
             window = expected[(k[i] + np.arange(-half, half + 1)) % rule.beams]
@@ -474,7 +479,7 @@ def test_the_shared_view_classifies_returns_as_an_exact_cast_does() -> None:
     assert occlusion.classify(np.zeros((0, 2)), (5.0, 5.0, 0.0))[0].shape == (0,)
 
 
-def test_a_view_is_one_cast_for_the_rule_and_the_alignment() -> None:
+def test_a_view_gives_the_alignment_its_visible_points() -> None:
     """`PlanMap.view_from` gives the visible points and the wall ranges; `localize(view=...)`
     aligns against exactly those points, and refuses a view from elsewhere or of another type."""
     plan = _corridor(length=10.0)  # interior x 0..10, y 0..2
@@ -491,6 +496,13 @@ def test_a_view_is_one_cast_for_the_rule_and_the_alignment() -> None:
     shared = localize(scan, plan, pose, config, view=view)
     assert shared.num_target_points == len(view.visible_indices)
     assert shared.pose == localize(scan, plan, pose, config).pose
+    # Over the arc a scan spans (returns ahead only): the other directions read NaN, and the
+    # scan's returns are judged as over the full circle.
+    ahead = scan[scan[:, 0] > 0.5]
+    arc = plan.view_from(pose, 8.0, 720, scan=ahead)
+    assert 0.3 < np.mean(np.isnan(arc.ranges)) < 0.75
+    for got, want in zip(arc.classify(ahead, 0.2), view.classify(ahead, 0.2)):
+        np.testing.assert_array_equal(got, want)
     with pytest.raises(ValueError, match="was cast from"):
         localize(scan, plan, (5.5, 1.0, 0.0), config, view=view)
     with pytest.raises(TypeError, match="view must be a planicp.WallView"):

@@ -258,9 +258,8 @@ class Localizer:
             if usable < _core.MIN_SCAN_POINTS:
                 reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
             else:
-                kept, beyond, occluded, view = self._unoccluded(points, predicted, predicted_covariance)
+                result, kept, beyond, occluded = self._aligned(points, predicted, predicted_covariance)
                 used = points if kept is None else points[kept]
-                result = localize(used, self.plan, predicted, self.config, view=view)
                 reason = self.gate.rejection(result, predicted)
                 # A fit that explains little of the whole scan may have started outside the index's
                 # narrower basin (a bad odometry step also misleads the occlusion rule): the
@@ -369,21 +368,43 @@ class Localizer:
             inliers[kept] = result.inlier_mask
         return float(np.count_nonzero(inliers & ~beyond)) / scan_points
 
+    def _aligned(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]
+                 ) -> tuple[IcpResult, NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool]:
+        """The fit of the scan from `predicted`, with the occlusion rule's (kept, beyond,
+        occluded) (see `_unoccluded`). The rule judges the returns from the prediction. When the
+        fit lands more than a quarter of the rule's margin away, the prediction was off by a good
+        part of the margin, which makes returns on the plan's walls look short of them (a
+        prediction 25 cm off left 400 of 1080 returns out, and the fit stopped 15 cm from the
+        truth): the returns are judged again from the fit and aligned again from there, once."""
+        kept, beyond, occluded, view = self._unoccluded(points, predicted, predicted_covariance)
+        result = localize(points if kept is None else points[kept], self.plan, predicted, self.config, view=view)
+        if view is not None and self._occlusion is not None:
+            shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
+            if shift > self._occlusion.rule.margin / 4.0:
+                kept, occluded = None, False
+                result = localize(points, self.plan, predicted, self.config, view=view)
+        return result, kept, beyond, occluded
+
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]
                     ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
-        """(kept, beyond, occluded, view) when the occlusion rule applies (a trusted prediction,
-        not lost): the points not in front of the plan's walls (None when too few would remain, or
-        all: align them all), the points beyond the walls seen from the prediction, whether fewer
-        than the rule's `min_points` remain, and the view from the prediction whose one ray cast
-        gave these and gives the alignment its visible points. (None, None, False, None)
-        otherwise."""
+        """`_classified` from the prediction when the occlusion rule applies (a trusted
+        prediction, not lost); (None, None, False, None) otherwise."""
         if self._occlusion is None or self._detector.lost:
             return None, None, False, None
-        rule = self._occlusion.rule
-        if 3.0 * _largest_position_std(predicted_covariance) >= rule.margin:
+        if 3.0 * _largest_position_std(predicted_covariance) >= self._occlusion.rule.margin:
             return None, None, False, None
-        view = self._occlusion.view(points, predicted, self.config)
-        in_front, beyond = self._occlusion.classify(points, predicted, view)
+        return self._classified(points, predicted)
+
+    def _classified(self, points: NDArray[np.float64], pose: Pose
+                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView]:
+        """(kept, beyond, occluded, view) of the occlusion rule seen from `pose`: the points not in
+        front of the plan's walls (None when too few would remain, or all: align them all), the
+        points beyond them, whether fewer than the rule's `min_points` remain, and the view whose
+        one ray cast gave these and gives the alignment its visible points."""
+        assert self._occlusion is not None
+        rule = self._occlusion.rule
+        view = self._occlusion.view(points, pose, self.config)
+        in_front, beyond = self._occlusion.classify(points, pose)
         kept: NDArray[np.bool_] = ~in_front
         remaining = int(np.count_nonzero(kept))
         if remaining < rule.min_points:

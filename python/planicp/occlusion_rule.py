@@ -1,8 +1,8 @@
 """Returns in front of the plan's walls: people, furniture and robots between the sensor and a wall.
 
 Each return is compared with the range at which a beam from the predicted pose, in the same
-direction, meets the plan's walls (one ray cast through the plan's visibility raster, which also
-gives the alignment the wall points visible from the prediction). A return more than
+direction, meets the plan's walls (ray cast through the plan's raster, natively, over the arc the
+scan spans). A return more than
 `margin` metres short of that expected range is something the plan does not show, standing in
 front of a wall, and is left out of the alignment. Nearest-neighbour outlier rejection cannot do
 this when the obstacle stands near a wall, or when obstacles are most of the scan: with 63 % of
@@ -24,6 +24,7 @@ from . import _core
 from ._validation import Pose, positive, whole_number
 from .icp_config import IcpConfig
 from .plan_map import PlanMap
+from .plan_raster import PlanRaster
 
 
 @dataclass(frozen=True)
@@ -48,24 +49,31 @@ class OcclusionRule:
 
 
 class OcclusionFilter:
-    """`OcclusionRule` applied to a plan: the expected ranges come from one ray cast through the
-    plan's visibility raster (`PlanMap.view_from`), which also gives the alignment its visible
-    wall points."""
+    """`OcclusionRule` applied to a plan. The expected ranges are cast exactly through the plan's
+    raster (the plan image, or the wall points rastered), over the arc the returns span. The
+    alignment's visible wall points come from one visibility cast from the same pose (`view`).
+
+    (A `WallView`'s own ranges, from the coarser visibility raster, would save this cast, but its
+    cells lengthen walls at their ends and put the wall up to half a cell deeper. With them the
+    crowd bench at 66 % of the returns blocked went from 0.28 to 0.81 cm RMS over two drives.)
+    """
 
     def __init__(self, plan: PlanMap, rule: OcclusionRule) -> None:
+        raster = plan.raster
+        if raster is None or raster.origin[2] != 0.0:
+            raster = PlanRaster.from_points(plan.points, plan.raster_resolution)
         self.rule = rule
         self._plan = plan
+        # Rows of the native grid grow with +y; images put the top row first.
+        self._grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
+                                         (raster.origin[0], raster.origin[1]))
 
-    def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig | None = None) -> _core.WallView:
-        """The plan as seen from `pose` (T_map_base), cast in the rule's `beams` directions far
-        enough to classify the base-frame `points` (the farthest plus the margin: a direction
-        with no wall that near reads inf, which classifies as an uncapped cast would) and, with
-        `config`, to align them (`localize(..., view=...)`)."""
-        farthest = float(np.sqrt(np.max(np.einsum("ij,ij->i", points, points)))) if len(points) else 0.0
-        reach = farthest + self.rule.margin
-        if config is not None and len(points):
-            reach = max(reach, _core.visibility_range(points, config._native))
-        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams)
+    def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig) -> _core.WallView:
+        """The plan as seen from `pose` (T_map_base) over the arc the base-frame `points` span
+        (see `PlanMap.view_from`), far enough to align them with `config`: its visible points
+        serve `localize(..., view=...)`."""
+        reach = _core.visibility_range(points, config._native) if len(points) else 1.0
+        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points)
 
     def in_front(self, points: NDArray[np.float64], pose: Pose) -> NDArray[np.bool_]:
         """(N,) bool: which base-frame `points` lie more than `margin` short of the plan's wall in
@@ -74,16 +82,13 @@ class OcclusionFilter:
         matter."""
         return self.classify(points, pose)[0]
 
-    def classify(self, points: NDArray[np.float64], pose: Pose,
-                 view: _core.WallView | None = None) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    def classify(self, points: NDArray[np.float64], pose: Pose) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """(in front, beyond): which base-frame `points` lie more than `margin` short of the plan's
         wall in their direction from `pose` (see `in_front`), and which lie more than `margin`
         beyond it: returns a beam could not give from `pose`, since the wall would have stopped it.
         At a wall's edge a return may belong to either neighbouring direction: it is in front of
-        the farthest of the three nearest directions' walls, beyond the nearest. `view`: a view
-        from `pose` (see `view`) to reuse instead of casting one."""
+        the farthest of the three nearest directions' walls, beyond the nearest. One native call
+        casts the arc the returns span (and one direction either side) and classifies them."""
         if len(points) == 0:
             return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
-        if view is None:
-            view = self.view(points, pose)
-        return view.classify(points, self.rule.margin)
+        return self._grid.classify_returns((pose[0], pose[1], pose[2]), points, self.rule.margin, self.rule.beams)

@@ -267,7 +267,8 @@ class PlanMap:
         """(M, 2) wall points visible from `pose` within `max_range` (see `visible_indices`)."""
         return self._points[self.visible_indices(pose, max_range)]
 
-    def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440) -> _core.WallView:
+    def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440,
+                  scan: Any = None) -> _core.WallView:
         """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
         `visible_indices`) and, in `directions` evenly spaced directions, the range to the first
         wall (the expected ranges `OcclusionRule` compares returns with).
@@ -277,6 +278,10 @@ class PlanMap:
                 base-frame angle -pi + j 2 pi / directions.
             max_range: how far the rays are cast, metres; beyond it a direction reads inf.
             directions: 8 to 2**20.
+            scan: (N, 2) base-frame returns, metres, or None. When given, only the directions the
+                returns span, widened by 10 degrees on either side, are cast: the visible points
+                are those seen over that arc, and the other directions' ranges are NaN (a 270-degree
+                scan casts 80 % of the circle).
 
         Returns:
             A `planicp.WallView`: `visible_indices`, `ranges` (metres, to about one raster
@@ -284,8 +289,9 @@ class PlanMap:
             points instead of casting them again.
         """
         x, y, yaw = as_pose(pose, "pose")
+        points = None if scan is None else as_points(scan, "scan", allow_empty=True)
         return self._native.view_from((x, y, yaw), positive(max_range, "max_range", "metres"),
-                                      whole_number(directions, "directions", 8, 1 << 20))
+                                      whole_number(directions, "directions", 8, 1 << 20), points)
 
     def __len__(self) -> int:
         return len(self._native)

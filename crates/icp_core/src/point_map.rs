@@ -192,9 +192,16 @@ impl PointMap {
     }
 
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
-    /// the range to the first wall in `directions` evenly spaced directions. See [`WallView::cast`].
-    pub fn view_from(&self, pose: Pose2, max_range: f64, directions: usize) -> Result<WallView> {
-        WallView::cast(&self.raster, pose, max_range, directions)
+    /// the range to the first wall in `directions` evenly spaced directions, over the arc `scan`
+    /// spans when given. See [`WallView::cast`].
+    pub fn view_from(
+        &self,
+        pose: Pose2,
+        max_range: f64,
+        directions: usize,
+        scan: Option<&[[f64; 2]]>,
+    ) -> Result<WallView> {
+        WallView::cast(&self.raster, &self.points, pose, max_range, directions, scan)
     }
 }
 

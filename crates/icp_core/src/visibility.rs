@@ -24,14 +24,7 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
     check_cast(position, max_range)?;
     let mut hit_cells = Vec::new();
-    visible_cells(
-        raster,
-        position,
-        max_range,
-        RayFan { first_angle: 0.0, rays: BASE_RAYS },
-        &mut hit_cells,
-        None,
-    );
+    visible_cells(raster, position, max_range, RayFan::circle(0.0, BASE_RAYS), &mut hit_cells, None);
     Ok(raster.points_in_cells(&hit_cells))
 }
 
@@ -52,13 +45,24 @@ pub(crate) fn check_cast(position: [f64; 2], max_range: f64) -> Result<()> {
 pub struct RayFan {
     /// Map angle of ray 0, radians.
     pub first_angle: f64,
-    /// Number of base rays (at least 2).
+    /// Number of base rays over the full circle (at least 2).
     pub rays: usize,
+    /// How many of the gaps between base rays, from ray 0 on, are cast: `rays` for the full
+    /// circle, fewer for an arc (rays 0 to `span`).
+    pub span: usize,
+}
+
+impl RayFan {
+    /// The full circle of `rays` base rays from `first_angle`.
+    pub fn circle(first_angle: f64, rays: usize) -> Self {
+        Self { first_angle, rays, span: rays }
+    }
 }
 
 /// Linear indices (sorted, unique) of the wall cells where the rays from `position` stop (see
-/// [`visible_points`]). With `ranges`, also the metres from `position` to the first wall cell
-/// in `2 * fan.rays` directions: each base ray of `fan`, then the direction halfway to the next
+/// [`visible_points`]). With `ranges`, also the metres from `position` to the wall in the first
+/// wall cell (see `SurfaceRanges`) in `2 * fan.span` directions (one more for an arc, whose last
+/// base ray has no gap after it): each base ray of `fan`, then the direction halfway to the next
 /// one, `inf` where no wall cell lies within `max_range`. A halfway direction takes the range of
 /// the refinement's ray there when one was cast (the two base rays stopped in cells that are not
 /// adjacent), else the mean of the two base rays' ranges: they stopped in the same or adjacent
@@ -70,7 +74,7 @@ pub fn visible_cells(
     max_range: f64,
     fan: RayFan,
     out: &mut Vec<usize>,
-    mut ranges: Option<&mut Vec<f64>>,
+    ranges: Option<RangeOutput<'_>>,
 ) {
     out.clear();
     let res = raster.resolution();
@@ -82,12 +86,13 @@ pub fn visible_cells(
         max_t: max_range / res,
         shape: (cols, rows),
     };
-    let range_of = |hit: Hit| hit.map_or(f64::INFINITY, |stop| stop.t * res);
     let rays = fan.rays.max(2);
-    if let Some(r) = ranges.as_deref_mut() {
-        r.clear();
-        r.reserve(2 * rays);
-    }
+    let span = fan.span.clamp(1, rays);
+    let mut ranges = ranges.map(|output| {
+        output.ranges.clear();
+        output.ranges.reserve(2 * span + 1);
+        (output.ranges, SurfaceRanges { raster, points: output.points, position, cached: None })
+    });
     // Finest angle worth resolving: an eighth of a cell at the maximum range (walls seen at a
     // grazing angle need more than one ray per cell width).
     let min_gap = res / max_range / 8.0;
@@ -110,15 +115,23 @@ pub fn visible_cells(
     let cast = |ray: Ray| Ray { hit: caster.cast(ray.dir), ..ray };
     let first = cast(base(0, &Ray { angle: 0.0, dir: (1.0, 0.0), hit: None }));
     let mut previous = first;
+    let mut previous_range = ranges.as_mut().map_or(f64::NAN, |(_, surface)| surface.range(&first));
     let mut stack: Vec<Bracket> = Vec::new();
     // Neighbouring rays mostly stop in the same cell from the same free cell: its cells are
     // recorded once (the sort below then has far fewer duplicates to remove).
     let mut last_recorded: Option<(Cell, Option<Cell>)> = None;
-    for k in 1..=rays {
-        // The last bracket closes the circle: its end is ray 0, one turn on.
-        let next =
-            if k == rays { Ray { angle: first.angle + TAU, ..first } } else { cast(base(k, &previous)) };
-        let mut halfway: Option<Hit> = None;
+    // An arc ends with a bracket from its last base ray to itself, which records that ray's stop.
+    let brackets = if span < rays { span + 1 } else { span };
+    for k in 1..=brackets {
+        // On the full circle the last bracket closes it: its end is ray 0, one turn on.
+        let next = if k == rays {
+            Ray { angle: first.angle + TAU, ..first }
+        } else if k > span {
+            previous
+        } else {
+            cast(base(k, &previous))
+        };
+        let mut halfway: Option<Ray> = None;
         stack.push((previous, next, 0));
         while let Some((r0, r1, depth)) = stack.pop() {
             if let Some(Stop { cell: (cx, cy), came_from, .. }) =
@@ -145,27 +158,87 @@ pub fn visible_cells(
             }
             let mid = cast(Ray::between(&r0, &r1));
             if depth == 0 {
-                halfway = Some(mid.hit);
+                halfway = Some(mid);
             }
             // Right half first onto the stack so the left half is handled next; the left half
             // records `r0` again, which the final dedup removes.
             stack.push((mid, r1, depth + 1));
             stack.push((r0, mid, depth + 1));
         }
-        if let Some(r) = ranges.as_deref_mut() {
-            r.push(range_of(previous.hit));
-            r.push(match (halfway, previous.hit, next.hit) {
-                (Some(hit), _, _) => range_of(hit),
-                (None, Some(p), Some(q)) if adjacent(raster, p.cell, q.cell) => 0.5 * (p.t + q.t) * res,
+        if k > span {
+            break;
+        }
+        if let Some((out_ranges, surface)) = ranges.as_mut() {
+            let next_range = surface.range(&next);
+            out_ranges.push(previous_range);
+            out_ranges.push(match (halfway, previous.hit, next.hit) {
+                (Some(mid), _, _) => surface.range(&mid),
+                (None, Some(p), Some(q)) if adjacent(raster, p.cell, q.cell) => {
+                    0.5 * (previous_range + next_range)
+                }
                 (None, None, None) => f64::INFINITY,
                 // Not refined for want of angle (a range of kilometres): cast it for its range.
-                _ => range_of(caster.cast(Ray::between(&previous, &next).dir)),
+                _ => surface.range(&cast(Ray::between(&previous, &next))),
             });
+            previous_range = next_range;
         }
         previous = next;
     }
+    if span < rays {
+        // An arc's last base ray has no gap after it.
+        if let Some((out_ranges, _)) = ranges.as_mut() {
+            out_ranges.push(previous_range);
+        }
+    }
     out.sort_unstable();
     out.dedup();
+}
+
+/// Where [`visible_cells`] writes the range of each direction, and the plan points (those the
+/// raster was built from) the ranges are measured to.
+pub struct RangeOutput<'a> {
+    /// Cleared, then one range per direction, metres.
+    pub ranges: &'a mut Vec<f64>,
+    /// The plan's wall points, map frame, metres.
+    pub points: &'a [[f64; 2]],
+}
+
+/// The range along a ray to the wall it stopped at: the along-ray distance of the wall point in
+/// the stop's cell that lies nearest the ray (the cell only says the wall is somewhere within it).
+struct SurfaceRanges<'a> {
+    raster: &'a WallRaster,
+    points: &'a [[f64; 2]],
+    position: [f64; 2],
+    /// The last cell looked up and its points: neighbouring rays mostly stop in the same cell.
+    cached: Option<(usize, &'a [u32])>,
+}
+
+impl<'a> SurfaceRanges<'a> {
+    /// Metres along `ray` to its wall, `inf` when it stopped at none.
+    fn range(&mut self, ray: &Ray) -> f64 {
+        let Some(stop) = ray.hit else { return f64::INFINITY };
+        let (cols, _) = self.raster.shape();
+        let cell = stop.cell.1 as usize * cols + stop.cell.0 as usize;
+        let in_cell = match self.cached {
+            Some((c, points)) if c == cell => points,
+            _ => {
+                let points = self.raster.points_in_cell(cell);
+                self.cached = Some((cell, points));
+                points
+            }
+        };
+        let (dx, dy) = ray.dir;
+        let mut best = (f64::INFINITY, stop.t * self.raster.resolution());
+        for &i in in_cell {
+            let Some(p) = self.points.get(i as usize) else { continue };
+            let (px, py) = (p[0] - self.position[0], p[1] - self.position[1]);
+            let lateral = (px * dy - py * dx).abs();
+            if lateral < best.0 {
+                best = (lateral, px * dx + py * dy);
+            }
+        }
+        best.1
+    }
 }
 
 /// Whether no wall cell can lie between the stops of two neighbouring rays: both stopped in the
@@ -176,6 +249,13 @@ fn touching(raster: &WallRaster, h0: Hit, h1: Hit) -> bool {
         (None, None) => true,
         _ => false,
     }
+}
+
+/// The distance (cells) along the unit direction `(dx, dy)` from `origin` to the centre of `cell`,
+/// projected on the ray.
+#[inline]
+fn centre_along(origin: (f64, f64), cell: (i64, i64), (dx, dy): (f64, f64)) -> f64 {
+    (cell.0 as f64 + 0.5 - origin.0) * dx + (cell.1 as f64 + 0.5 - origin.1) * dy
 }
 
 /// Whether rays between two that stopped in cells `p` and `q` can only stop in `p` or `q`: the
@@ -200,7 +280,9 @@ struct Stop {
     cell: (i64, i64),
     /// The free cell the ray left to enter it; None when that was the start cell.
     came_from: Option<(i64, i64)>,
-    /// Cells along the ray from the cast's position to where it enters the wall cell.
+    /// Cells along the ray from the cast's position to the wall cell's centre, projected on the ray:
+    /// the wall points lie somewhere in the cell, so the centre is the unbiased guess of where the
+    /// ray meets them (where it enters the cell is up to a cell short of them).
     t: f64,
 }
 
@@ -270,7 +352,7 @@ impl RayCaster<'_> {
             (entry.1.floor() as i64).clamp(0, self.shape.1 as i64 - 1),
         );
         if self.raster.is_wall(cell.0, cell.1) {
-            return Some(Stop { cell, came_from: None, t: t_in });
+            return Some(Stop { cell, came_from: None, t: t_in + centre_along(entry, cell, (dx, dy)) });
         }
         first_wall_cell(self.raster, entry, cell, (dx, dy), self.max_t - t_in, self.shape)
             .map(|stop| Stop { t: t_in + stop.t, ..stop })
@@ -336,7 +418,7 @@ fn first_wall_cell(
         clearance = raster.clearance(cx as usize, cy as usize);
         if clearance == 0 {
             let came_from = (before != start || !raster.is_wall(start.0, start.1)).then_some(before);
-            return Some(Stop { cell: (cx, cy), came_from, t });
+            return Some(Stop { cell: (cx, cy), came_from, t: centre_along((ox, oy), (cx, cy), (dx, dy)) });
         }
         t_cur = t;
     }

@@ -139,18 +139,22 @@ impl PyPointMap {
     }
 
     /// The plan as seen from pose (x, y, yaw), within max_range metres, in `directions` evenly
-    /// spaced directions: one ray cast for the visible points and each direction's wall range.
+    /// spaced directions: one ray cast for the visible points and each direction's wall range;
+    /// with `scan` (N, 2, base frame), only over the arc its returns span.
+    #[pyo3(signature = (pose, max_range, directions, scan=None))]
     fn view_from(
         &self,
         py: Python<'_>,
         pose: (f64, f64, f64),
         max_range: f64,
         directions: &Bound<'_, PyAny>,
+        scan: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<WallView> {
         let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
+        let scan = scan.map(|s| points_from("scan", &s)).transpose()?;
         let map = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
-        let view = py.detach(|| guarded(|| map.view_from(pose, max_range, directions)))?;
+        let view = py.detach(|| guarded(|| map.view_from(pose, max_range, directions, scan.as_deref())))?;
         Ok(WallView { inner: Arc::new(view) })
     }
 }
@@ -477,6 +481,33 @@ impl OccupancyGrid {
     fn origin(&self) -> (f64, f64) {
         let [x, y] = self.inner.origin();
         (x, y)
+    }
+
+    /// (in_front, beyond), each (N,) bool: the occlusion rule's classes of the base-frame points
+    /// against the walls of this grid seen from pose (x, y, yaw) in `directions` directions: more
+    /// than margin metres short of the wall in their direction, and more than margin beyond it.
+    /// Only the arc the points span is cast.
+    fn classify_returns<'py>(
+        &self,
+        py: Python<'py>,
+        pose: (f64, f64, f64),
+        points: PyReadonlyArray2<'_, f64>,
+        margin: f64,
+        directions: &Bound<'py, PyAny>,
+    ) -> PyResult<BoolPair<'py>> {
+        if !(margin.is_finite() && margin >= 0.0) {
+            return Err(PlanicpError::new_err(format!(
+                "margin must be a finite number of metres >= 0, got {margin}"
+            )));
+        }
+        let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
+        let pts = points_from("points", &points)?;
+        let raster = Arc::clone(&self.inner);
+        let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
+        let classes = py.detach(|| {
+            guarded(|| icp_core::wall_view::classify_exact(&raster, pose, &pts, margin, directions))
+        })?;
+        Ok((classes.in_front.into_pyarray(py), classes.beyond.into_pyarray(py)))
     }
 
     /// (beams,) float64 ranges of a LIDAR at sensor_pose (x, y, yaw; map frame), REP-117 style:
