@@ -22,7 +22,6 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._validation import Pose, positive, whole_number
-from .icp_config import IcpConfig
 from .plan_map import PlanMap
 from .plan_raster import PlanRaster
 
@@ -50,8 +49,7 @@ class OcclusionRule:
 
 class OcclusionFilter:
     """`OcclusionRule` applied to a plan. The expected ranges are cast exactly through the plan's
-    raster (the plan image, or the wall points rastered), over the arc the returns span. The
-    alignment's visible wall points come from one visibility cast from the same pose (`view`).
+    raster (the plan image, or the wall points rastered), over the arc the returns span.
 
     (A `WallView`'s own ranges, from the coarser visibility raster, would save this cast, but its
     cells lengthen walls at their ends and put the wall up to half a cell deeper. With them the
@@ -67,13 +65,6 @@ class OcclusionFilter:
         # Rows of the native grid grow with +y; images put the top row first.
         self._grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
                                          (raster.origin[0], raster.origin[1]))
-
-    def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig) -> _core.WallView:
-        """The plan as seen from `pose` (T_map_base) over the arc the base-frame `points` span
-        (see `PlanMap.view_from`), far enough to align them with `config`: its visible points
-        serve `localize(..., view=...)`."""
-        reach = _core.visibility_range(points, config._native) if len(points) else 1.0
-        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points)
 
     def in_front(self, points: NDArray[np.float64], pose: Pose) -> NDArray[np.bool_]:
         """(N,) bool: which base-frame `points` lie more than `margin` short of the plan's wall in

@@ -11,7 +11,7 @@
 use crate::error::{invalid, Result};
 use crate::pose::Pose2;
 use crate::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
-use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan};
+use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan, BASE_RAYS};
 use crate::wall_raster::WallRaster;
 use std::f64::consts::{PI, TAU};
 
@@ -73,28 +73,13 @@ impl WallView {
         if !(MIN_DIRECTIONS..=MAX_DIRECTIONS).contains(&directions) {
             return Err(invalid("directions", directions, "must be between 8 and 2^20"));
         }
-        let n = directions;
-        let margin = (ARC_MARGIN / (TAU / n as f64)).ceil() as usize;
-        let arc = scan.and_then(|s| spanned_arc(s, n, margin));
-        // An even number of directions: half of them (the even ones) are base rays and the cast
-        // gives the range halfway between neighbours too (see `visible_cells`). An odd number:
-        // every direction is a base ray and the halfway ranges are dropped.
-        let (rays, every) = if n % 2 == 0 { (n / 2, 1) } else { (n, 2) };
-        // The arc in base rays: from the one at or before its first direction to the one at or
-        // after its last.
-        let (first_ray, span) = match arc {
-            None => (0, rays),
-            Some((first, count)) if every == 1 => (first / 2, (first + count - 1).div_ceil(2) - first / 2),
-            Some((first, count)) => (first, count - 1),
-        };
-        let step = TAU / rays as f64;
-        let fan = RayFan { first_angle: pose.yaw - PI + first_ray as f64 * step, rays, span };
+        let ScanFan { fan, every, first_direction, arc } = ScanFan::new(pose, directions, scan);
+        let (n, span) = (directions, fan.span);
         let mut cells = Vec::new();
         let mut cast = Vec::with_capacity(2 * span + 1);
         let output = RangeOutput { ranges: &mut cast, points };
         visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(output));
-        let first_direction = if every == 1 { 2 * first_ray } else { first_ray };
-        let ranges = if arc.is_none() {
+        let ranges = if !arc {
             cast.into_iter().step_by(every).collect()
         } else {
             let mut ranges = vec![f64::NAN; n];
@@ -157,6 +142,64 @@ fn bearing(y: f64, x: f64) -> f64 {
     } else {
         angle
     }
+}
+
+/// The base rays of a cast in `directions` directions from a pose, over the arc a scan spans.
+struct ScanFan {
+    fan: RayFan,
+    /// 1: the cast's ranges are every direction (base rays and halfway); 2: every other one.
+    every: usize,
+    /// The direction of the fan's first base ray.
+    first_direction: usize,
+    /// Whether the fan covers an arc, not the full circle.
+    arc: bool,
+}
+
+impl ScanFan {
+    /// Direction `j` (of `directions`) at base angle `-pi + j * TAU / directions` from `pose`; with
+    /// `scan`, over the arc its returns span widened by [`ARC_MARGIN`] on either side. An even
+    /// number of directions: the even ones are base rays and the cast gives the range halfway
+    /// between neighbours too (see `visible_cells`). An odd number: every direction is a base ray
+    /// and the halfway ranges are dropped.
+    fn new(pose: Pose2, directions: usize, scan: Option<&[[f64; 2]]>) -> Self {
+        let n = directions;
+        let margin = (ARC_MARGIN / (TAU / n as f64)).ceil() as usize;
+        let arc = scan.and_then(|s| spanned_arc(s, n, margin));
+        let (rays, every) = if n % 2 == 0 { (n / 2, 1) } else { (n, 2) };
+        // The arc in base rays: from the one at or before its first direction to the one at or
+        // after its last.
+        let (first_ray, span) = match arc {
+            None => (0, rays),
+            Some((first, count)) if every == 1 => (first / 2, (first + count - 1).div_ceil(2) - first / 2),
+            Some((first, count)) => (first, count - 1),
+        };
+        let step = TAU / rays as f64;
+        let fan = RayFan { first_angle: pose.yaw - PI + first_ray as f64 * step, rays, span };
+        let first_direction = if every == 1 { 2 * first_ray } else { first_ray };
+        Self { fan, every, first_direction, arc: arc.is_some() }
+    }
+}
+
+/// Indices (ascending) of the plan points visible from `pose` (`T_map_base`) within `max_range`
+/// metres over the arc the base-frame `scan` spans, widened by [`ARC_MARGIN`] on either side (the
+/// full circle when it spans nearly all of it): the visible points of [`WallView::cast`] with
+/// `scan`, without the ranges. The alignment's own visibility cast.
+///
+/// Errors: a pose that is not finite, a range that is not positive and finite.
+pub fn visible_over_scan(
+    raster: &WallRaster,
+    pose: Pose2,
+    max_range: f64,
+    scan: &[[f64; 2]],
+) -> Result<Vec<u32>> {
+    check_cast([pose.x, pose.y], max_range)?;
+    if !pose.yaw.is_finite() {
+        return Err(invalid("pose yaw", pose.yaw, "must be finite"));
+    }
+    let ScanFan { fan, .. } = ScanFan::new(pose, 2 * BASE_RAYS, Some(scan));
+    let mut cells = Vec::new();
+    visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, None);
+    Ok(raster.points_in_cells(&cells))
 }
 
 /// Which of `points` (base frame, metres) lie more than `margin` metres short of, or beyond, the
