@@ -8,8 +8,9 @@ scans are then fed to a fresh `Localizer` exactly as a robot stack would: ranges
 `time.perf_counter`; the table gives the median and 90th percentile over all updates, per
 correspondence search, with the share spent in the conversion. Then, for the same scans and
 predictions, the native steps are timed on their own: the occlusion rule (one exact cast through
-the plan image and the classification) and the alignment of the returns it keeps (with the
-KD-tree search, its visibility cast included); the rest of an update is Python.
+the plan image and the classification), the view from the prediction over the scan's arc whose
+visible points the KD-tree search matches against (`PlanMap.view_from`), and the alignment of the
+kept returns given it; the rest of an update is Python.
 
     python benches/localizer_update.py               # 60 s drive (600 scans)
     python benches/localizer_update.py --duration 20
@@ -41,7 +42,7 @@ def main() -> None:
     print("| correspondence search | update p50 | update p90 | of which scan_to_points | RMS error |")
     print("|---|---|---|---|---|")
     truth = recording.poses("truth")
-    steps: dict[str, tuple[float, float]] = {}
+    steps: dict[str, tuple[float, float | None, float]] = {}
     for search in ("wall_index", "kd_tree"):
         config = IcpConfig.for_tracking(correspondence_search=search)
         localizer = Localizer(plan, truth[0], config)
@@ -64,27 +65,33 @@ def main() -> None:
         print(f"| {search} | {p50:.3f} ms | {p90:.3f} ms | {np.median(convert_s) * 1e3:.3f} ms "
               f"| {rms * 100:.2f} cm |")
         steps[search] = _native_steps(plan, config, localizer, replay)
-    for search, (classify_ms, align_ms) in steps.items():
-        print(f"# {search}: median occlusion rule {classify_ms:.3f} ms, alignment {align_ms:.3f} ms")
+    for search, (classify_ms, view_ms, align_ms) in steps.items():
+        view = f"view_from {view_ms:.3f} ms, " if view_ms is not None else ""
+        print(f"# {search}: median occlusion rule {classify_ms:.3f} ms, {view}alignment {align_ms:.3f} ms")
 
 
 def _native_steps(plan: planicp.PlanMap, config: IcpConfig, localizer: Localizer,
-                  replay: list[tuple[np.ndarray, tuple[float, float, float]]]) -> tuple[float, float]:
-    """Median milliseconds per update of the occlusion rule (one native cast and classification)
-    and of the alignment (for the KD-tree search including its visibility cast), done as the
-    localizer does them."""
+                  replay: list[tuple[np.ndarray, tuple[float, float, float]]]) -> tuple[float, float | None, float]:
+    """Median milliseconds per update of the occlusion rule (one native cast and classification),
+    of the view cast (the KD-tree search's visible points; None for the index, which does not use
+    one) and of the alignment of the kept returns given it, done as the localizer does them."""
     occlusion = localizer._occlusion
     assert occlusion is not None
-    classify_s, align_s = [], []
+    uses_view = config.correspondence_search == "kd_tree"
+    classify_s, view_s, align_s = [], [], []
     for points, predicted in replay:
         t0 = time.perf_counter()
         in_front, _ = occlusion.classify(points, predicted)
         t1 = time.perf_counter()
-        planicp.localize(points[~in_front], plan, predicted, config)
+        view = occlusion.view(points, predicted, config) if uses_view else None
         t2 = time.perf_counter()
+        planicp.localize(points[~in_front], plan, predicted, config, view=view)
+        t3 = time.perf_counter()
         classify_s.append(t1 - t0)
-        align_s.append(t2 - t1)
-    return float(np.median(classify_s)) * 1e3, float(np.median(align_s)) * 1e3
+        view_s.append(t2 - t1)
+        align_s.append(t3 - t2)
+    return (float(np.median(classify_s)) * 1e3, float(np.median(view_s)) * 1e3 if uses_view else None,
+            float(np.median(align_s)) * 1e3)
 
 
 if __name__ == "__main__":

@@ -376,40 +376,45 @@ class Localizer:
         part of the margin, which makes returns on the plan's walls look short of them (a
         prediction 25 cm off left 400 of 1080 returns out, and the fit stopped 15 cm from the
         truth): the returns are judged again from the fit and aligned again from there, once."""
-        kept, beyond, occluded = self._unoccluded(points, predicted, predicted_covariance)
-        result = localize(points if kept is None else points[kept], self.plan, predicted, self.config)
+        kept, beyond, occluded, view = self._unoccluded(points, predicted, predicted_covariance)
+        result = localize(points if kept is None else points[kept], self.plan, predicted, self.config, view=view)
         if beyond is not None and self._occlusion is not None:
             shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
             if shift > self._occlusion.rule.margin / 4.0:
                 kept, occluded = None, False
-                result = localize(points, self.plan, predicted, self.config)
+                result = localize(points, self.plan, predicted, self.config, view=view)
         return result, kept, beyond, occluded
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]
-                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool]:
+                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
         """`_classified` from the prediction when the occlusion rule applies (a trusted
-        prediction, not lost); (None, None, False) otherwise."""
+        prediction, not lost); (None, None, False, None) otherwise."""
         if self._occlusion is None or self._detector.lost:
-            return None, None, False
+            return None, None, False, None
         if 3.0 * _largest_position_std(predicted_covariance) >= self._occlusion.rule.margin:
-            return None, None, False
+            return None, None, False, None
         return self._classified(points, predicted)
 
     def _classified(self, points: NDArray[np.float64], pose: Pose
-                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool]:
-        """(kept, beyond, occluded) of the occlusion rule seen from `pose`: the points not in
+                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
+        """(kept, beyond, occluded, view) of the occlusion rule seen from `pose`: the points not in
         front of the plan's walls (None when too few would remain, or all: align them all), the
-        points beyond them, and whether fewer than the rule's `min_points` remain."""
+        points beyond them, whether fewer than the rule's `min_points` remain, and, for the KD-tree
+        search, the view from `pose` over the arc the WHOLE scan spans whose visible points it
+        matches against (the alignment of the kept returns would cast over theirs: on the Intel
+        log that gave 3.57 cm ATE and a 14.6 cm worst error, against 3.52 cm and 11.1 cm)."""
         assert self._occlusion is not None
         rule = self._occlusion.rule
+        uses_view = self.config.correspondence_search == "kd_tree" and self.config.use_visibility
+        view = self._occlusion.view(points, pose, self.config) if uses_view else None
         in_front, beyond = self._occlusion.classify(points, pose)
         kept: NDArray[np.bool_] = ~in_front
         remaining = int(np.count_nonzero(kept))
         if remaining < rule.min_points:
-            return None, beyond, True
+            return None, beyond, True, view
         if remaining == len(points):
-            return None, beyond, False
-        return kept, beyond, False
+            return None, beyond, False, view
+        return kept, beyond, False, view
 
     def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
         """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._validation import Pose, positive, whole_number
+from .icp_config import IcpConfig
 from .plan_map import PlanMap
 from .plan_raster import PlanRaster
 
@@ -65,6 +66,13 @@ class OcclusionFilter:
         # Rows of the native grid grow with +y; images put the top row first.
         self._grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
                                          (raster.origin[0], raster.origin[1]))
+
+    def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig) -> _core.WallView:
+        """The plan as seen from `pose` (T_map_base) over the arc the base-frame `points` span
+        (see `PlanMap.view_from`), far enough to align them with `config`: its visible points
+        serve `localize(..., view=...)` for the KD-tree search."""
+        reach = _core.visibility_range(points, config._native) if len(points) else 1.0
+        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points)
 
     def in_front(self, points: NDArray[np.float64], pose: Pose) -> NDArray[np.bool_]:
         """(N,) bool: which base-frame `points` lie more than `margin` short of the plan's wall in

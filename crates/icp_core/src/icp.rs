@@ -1,7 +1,6 @@
 //! Trimmed, coarse-to-fine point-to-point ICP of a scan against the plan.
 //!
-//! 1. The plan points visible from the initial guess are selected by ray casting (optional), over
-//!    the arc the scan spans plus 10 degrees either side.
+//! 1. The plan points visible from the initial guess are selected by ray casting (optional).
 //! 2. For each stage of the correspondence schedule (distances `max_correspondence_distance *
 //!    factor`), iterate: pair each scan point with its nearest plan point, drop pairs beyond the
 //!    stage's distance, keep the closest `trim_ratio` share, solve the rigid update in closed form.
@@ -246,7 +245,7 @@ pub fn align_seen(
     } else if config.use_visibility {
         let visible = match visible {
             Some(given) => given.to_vec(),
-            None => map.visible_over_scan(initial, visibility_range(scan, config), scan)?,
+            None => map.visible_from(initial, visibility_range(scan, config))?,
         };
         if visible.len() >= MIN_PAIRS {
             TargetSet::subset(map, visible).unwrap_or(TargetSet::Full(map))
@@ -617,7 +616,7 @@ mod tests {
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let kd = IcpConfig { search: CorrespondenceSearch::KdTree, ..IcpConfig::default() };
         // The set the alignment would cast itself: the same result, bit for bit.
-        let cast = map.visible_over_scan(guess, visibility_range(&scan, &kd), &scan).unwrap();
+        let cast = map.visible_from(guess, visibility_range(&scan, &kd)).unwrap();
         assert_eq!(
             align_seen(&map, &scan, guess, &kd, Some(&cast)).unwrap(),
             align(&map, &scan, guess, &kd).unwrap()

@@ -191,12 +191,6 @@ impl PointMap {
         visibility::visible_points(&self.raster, [pose.x, pose.y], max_range)
     }
 
-    /// Indices of the plan points visible from `pose` within `max_range` metres over the arc the
-    /// base-frame `scan` spans. See [`crate::wall_view::visible_over_scan`].
-    pub fn visible_over_scan(&self, pose: Pose2, max_range: f64, scan: &[[f64; 2]]) -> Result<Vec<u32>> {
-        crate::wall_view::visible_over_scan(&self.raster, pose, max_range, scan)
-    }
-
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
     /// the range to the first wall in `directions` evenly spaced directions, over the arc `scan`
     /// spans when given. See [`WallView::cast`].

@@ -11,7 +11,7 @@
 use crate::error::{invalid, Result};
 use crate::pose::Pose2;
 use crate::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
-use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan, BASE_RAYS};
+use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan};
 use crate::wall_raster::WallRaster;
 use std::f64::consts::{PI, TAU};
 
@@ -178,28 +178,6 @@ impl ScanFan {
         let first_direction = if every == 1 { 2 * first_ray } else { first_ray };
         Self { fan, every, first_direction, arc: arc.is_some() }
     }
-}
-
-/// Indices (ascending) of the plan points visible from `pose` (`T_map_base`) within `max_range`
-/// metres over the arc the base-frame `scan` spans, widened by [`ARC_MARGIN`] on either side (the
-/// full circle when it spans nearly all of it): the visible points of [`WallView::cast`] with
-/// `scan`, without the ranges. The alignment's own visibility cast.
-///
-/// Errors: a pose that is not finite, a range that is not positive and finite.
-pub fn visible_over_scan(
-    raster: &WallRaster,
-    pose: Pose2,
-    max_range: f64,
-    scan: &[[f64; 2]],
-) -> Result<Vec<u32>> {
-    check_cast([pose.x, pose.y], max_range)?;
-    if !pose.yaw.is_finite() {
-        return Err(invalid("pose yaw", pose.yaw, "must be finite"));
-    }
-    let ScanFan { fan, .. } = ScanFan::new(pose, 2 * BASE_RAYS, Some(scan));
-    let mut cells = Vec::new();
-    visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, None);
-    Ok(raster.points_in_cells(&cells))
 }
 
 /// Which of `points` (base frame, metres) lie more than `margin` metres short of, or beyond, the
