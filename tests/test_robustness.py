@@ -503,6 +503,12 @@ def test_a_view_gives_the_alignment_its_visible_points() -> None:
     assert 0.3 < np.mean(np.isnan(arc.ranges)) < 0.75
     for got, want in zip(arc.classify(ahead, 0.2), view.classify(ahead, 0.2)):
         np.testing.assert_array_equal(got, want)
+    # Without ranges: the same visible points, nothing to classify with.
+    bare = plan.view_from(pose, 8.0, 720, scan=ahead, ranges=False)
+    np.testing.assert_array_equal(bare.visible_indices, arc.visible_indices)
+    assert bare.ranges.shape == (0,)
+    with pytest.raises(ValueError, match="without ranges"):
+        bare.classify(ahead, 0.2)
     with pytest.raises(ValueError, match="was cast from"):
         localize(scan, plan, (5.5, 1.0, 0.0), config, view=view)
     with pytest.raises(TypeError, match="view must be a planicp.WallView"):

@@ -57,6 +57,7 @@ class PointMap:
         max_range: float,
         directions: int,
         scan: NDArray[np.float64] | None = None,
+        ranges: bool = True,
     ) -> WallView: ...
 
 @final

@@ -72,7 +72,7 @@ class OcclusionFilter:
         (see `PlanMap.view_from`), far enough to align them with `config`: its visible points
         serve `localize(..., view=...)` for the KD-tree search."""
         reach = _core.visibility_range(points, config._native) if len(points) else 1.0
-        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points)
+        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points, False)
 
     def in_front(self, points: NDArray[np.float64], pose: Pose) -> NDArray[np.bool_]:
         """(N,) bool: which base-frame `points` lie more than `margin` short of the plan's wall in

@@ -268,7 +268,7 @@ class PlanMap:
         return self._points[self.visible_indices(pose, max_range)]
 
     def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440,
-                  scan: Any = None) -> _core.WallView:
+                  scan: Any = None, ranges: bool = True) -> _core.WallView:
         """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
         `visible_indices`) and, in `directions` evenly spaced directions, the range to the first
         wall (the expected ranges `OcclusionRule` compares returns with).
@@ -282,6 +282,8 @@ class PlanMap:
                 returns span, widened by 10 degrees on either side, are cast: the visible points
                 are those seen over that arc, and the other directions' ranges are NaN (a 270-degree
                 scan casts 80 % of the circle).
+            ranges: False casts only what the visible points need (no halfway directions, no
+                ranges): `ranges` is then empty and `classify` refuses.
 
         Returns:
             A `planicp.WallView`: `visible_indices`, `ranges` (metres, to about one raster
@@ -291,7 +293,7 @@ class PlanMap:
         x, y, yaw = as_pose(pose, "pose")
         points = None if scan is None else as_points(scan, "scan", allow_empty=True)
         return self._native.view_from((x, y, yaw), positive(max_range, "max_range", "metres"),
-                                      whole_number(directions, "directions", 8, 1 << 20), points)
+                                      whole_number(directions, "directions", 8, 1 << 20), points, bool(ranges))
 
     def __len__(self) -> int:
         return len(self._native)

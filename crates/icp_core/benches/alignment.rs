@@ -90,7 +90,7 @@ fn benches(c: &mut Criterion) {
     g.bench_function("visible_from_30m", |b| b.iter(|| map.visible_from(black_box(guess), 30.0).unwrap()));
     // The tracking step's one cast: visible points and the occlusion rule's 1440 wall ranges.
     g.bench_function("view_from_30m_1440", |b| {
-        b.iter(|| map.view_from(black_box(guess), 30.0, 1440, None).unwrap())
+        b.iter(|| map.view_from(black_box(guess), 30.0, 1440, None, true).unwrap())
     });
     g.finish();
 

@@ -193,15 +193,16 @@ impl PointMap {
 
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
     /// the range to the first wall in `directions` evenly spaced directions, over the arc `scan`
-    /// spans when given. See [`WallView::cast`].
+    /// spans when given; only the visible points without `with_ranges`. See [`WallView::cast`].
     pub fn view_from(
         &self,
         pose: Pose2,
         max_range: f64,
         directions: usize,
         scan: Option<&[[f64; 2]]>,
+        with_ranges: bool,
     ) -> Result<WallView> {
-        WallView::cast(&self.raster, &self.points, pose, max_range, directions, scan)
+        WallView::cast(&self.raster, &self.points, pose, max_range, directions, scan, with_ranges)
     }
 }
 

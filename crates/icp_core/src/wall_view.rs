@@ -34,7 +34,8 @@ pub struct WallView {
     pub pose: Pose2,
     /// Plan point indices (ascending, unique) in the wall cells the rays reach first.
     pub visible: Vec<u32>,
-    /// Per direction: metres from the pose's position to the wall where the direction's ray stops:
+    /// Per direction (empty for a view cast without ranges): metres from the pose's position to
+    /// the wall where the direction's ray stops:
     /// the along-ray distance of the wall point nearest the ray in the first wall cell; `inf` when
     /// none lies within the cast's range.
     pub ranges: Vec<f64>,
@@ -54,7 +55,8 @@ impl WallView {
     /// within `max_range` metres. With `scan` (base-frame returns), only the directions the
     /// returns span, widened by [`ARC_MARGIN`] on either side, are cast: the visible points are
     /// those seen in that arc, and the other directions' ranges are NaN (a return there is neither
-    /// in front nor beyond). A 270-degree scan casts 80 % of the circle.
+    /// in front nor beyond). A 270-degree scan casts 80 % of the circle. Without `with_ranges`
+    /// only the visible points are cast (the base rays and their refinement): `ranges` is empty.
     ///
     /// Errors: a pose that is not finite, a range that is not positive and finite, a number of
     /// directions outside [[`MIN_DIRECTIONS`], [`MAX_DIRECTIONS`]].
@@ -65,6 +67,7 @@ impl WallView {
         max_range: f64,
         directions: usize,
         scan: Option<&[[f64; 2]]>,
+        with_ranges: bool,
     ) -> Result<Self> {
         check_cast([pose.x, pose.y], max_range)?;
         if !pose.yaw.is_finite() {
@@ -76,6 +79,10 @@ impl WallView {
         let ScanFan { fan, every, first_direction, arc } = ScanFan::new(pose, directions, scan);
         let (n, span) = (directions, fan.span);
         let mut cells = Vec::new();
+        if !with_ranges {
+            visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, None);
+            return Ok(Self { pose, visible: raster.points_in_cells(&cells), ranges: Vec::new() });
+        }
         let mut cast = Vec::with_capacity(2 * span + 1);
         let output = RangeOutput { ranges: &mut cast, points };
         visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(output));
@@ -318,7 +325,8 @@ mod tests {
     fn ranges_are_the_distances_to_the_first_walls() {
         let (pts, raster) = room();
         // Facing +y from (1, 1.2): direction j looks along base angle -pi + j * 2 pi / 16.
-        let view = WallView::cast(&raster, &pts, Pose2::new(1.0, 1.2, PI / 2.0), 10.0, 16, None).unwrap();
+        let view =
+            WallView::cast(&raster, &pts, Pose2::new(1.0, 1.2, PI / 2.0), 10.0, 16, None, true).unwrap();
         assert_eq!(view.ranges.len(), 16);
         let cell = 0.075;
         // Base angle 0 (j = 8) is map +y: the north wall at y = 4, 2.8 m away.
@@ -337,7 +345,8 @@ mod tests {
         let (pts, raster) = room();
         // Facing pi, the first direction is map angle 0, as the visibility cast's first ray.
         let pose = Pose2 { x: 2.3, y: 1.7, yaw: PI };
-        let view = WallView::cast(&raster, &pts, pose, 8.0, 2 * crate::visibility::BASE_RAYS, None).unwrap();
+        let view =
+            WallView::cast(&raster, &pts, pose, 8.0, 2 * crate::visibility::BASE_RAYS, None, true).unwrap();
         let seen = crate::visibility::visible_points(&raster, [2.3, 1.7], 8.0).unwrap();
         assert_eq!(view.visible, seen);
     }
@@ -346,7 +355,7 @@ mod tests {
     fn a_doorway_reads_inf_within_range_and_returns_are_classified() {
         let (pts, raster) = room();
         // At (2, 2) facing +x: base angle 0 (direction 360 of 720) looks through the doorway.
-        let view = WallView::cast(&raster, &pts, Pose2::new(2.0, 2.0, 0.0), 3.0, 720, None).unwrap();
+        let view = WallView::cast(&raster, &pts, Pose2::new(2.0, 2.0, 0.0), 3.0, 720, None, true).unwrap();
         assert_eq!(view.ranges[360], f64::INFINITY);
         let ahead_left = view.ranges[540]; // base angle pi/2: the north wall, 2 m
         assert!((ahead_left - 2.0).abs() <= 0.075, "{ahead_left}");
@@ -371,10 +380,10 @@ mod tests {
         for (x, y, yaw) in [(1.0, 1.2, 0.3), (2.0, 2.0, 0.0), (3.7, 0.4, -2.0), (6.0, 2.0, 1.0)] {
             let pose = Pose2::new(x, y, yaw);
             // 1441 directions: every one a base ray. 1440: every other one, the rest halfway.
-            let exact = WallView::cast(&raster, &pts, pose, 12.0, 1441, None).unwrap();
-            let halved = WallView::cast(&raster, &pts, pose, 12.0, 1440, None).unwrap();
+            let exact = WallView::cast(&raster, &pts, pose, 12.0, 1441, None, true).unwrap();
+            let halved = WallView::cast(&raster, &pts, pose, 12.0, 1440, None, true).unwrap();
             assert_eq!((exact.ranges.len(), halved.ranges.len()), (1441, 1440));
-            let reference = WallView::cast(&raster, &pts, pose, 12.0, 2881, None).unwrap();
+            let reference = WallView::cast(&raster, &pts, pose, 12.0, 2881, None, true).unwrap();
             // Direction j of 1440 is direction 2j of 2880; the 2881-direction cast is within
             // 1/2881 of a turn of it, compare with the nearer of its neighbours.
             for (j, r) in halved.ranges.iter().enumerate() {
@@ -425,7 +434,7 @@ mod tests {
     fn a_view_over_the_scan_arc_classifies_as_the_full_circle() {
         let (pts, raster) = room();
         let pose = Pose2::new(1.3, 2.2, 0.7);
-        let full = WallView::cast(&raster, &pts, pose, 10.0, 1440, None).unwrap();
+        let full = WallView::cast(&raster, &pts, pose, 10.0, 1440, None, true).unwrap();
         // A 180-degree scan ahead: returns at 0.5-5 m.
         let scan: Vec<[f64; 2]> = (0..721)
             .map(|i| {
@@ -434,7 +443,7 @@ mod tests {
                 [r * a.cos(), r * a.sin()]
             })
             .collect();
-        let arc = WallView::cast(&raster, &pts, pose, 10.0, 1440, Some(&scan)).unwrap();
+        let arc = WallView::cast(&raster, &pts, pose, 10.0, 1440, Some(&scan), true).unwrap();
         assert_eq!(arc.ranges.len(), 1440);
         let cast = arc.ranges.iter().filter(|r| !r.is_nan()).count();
         assert!(cast < 1440 * 6 / 10, "{cast} directions cast for a half circle");
@@ -451,14 +460,21 @@ mod tests {
     fn bad_casts_are_refused() {
         let (pts, raster) = room();
         let ok = Pose2::new(1.0, 1.0, 0.0);
-        assert!(WallView::cast(&raster, &pts, ok, 0.0, 16, None).is_err());
-        assert!(WallView::cast(&raster, &pts, ok, f64::NAN, 16, None).is_err());
-        assert!(WallView::cast(&raster, &pts, ok, 5.0, 7, None).is_err());
-        assert!(WallView::cast(&raster, &pts, ok, 5.0, MAX_DIRECTIONS + 1, None).is_err());
-        assert!(
-            WallView::cast(&raster, &pts, Pose2 { x: f64::NAN, y: 1.0, yaw: 0.0 }, 5.0, 16, None).is_err()
-        );
-        assert!(WallView::cast(&raster, &pts, Pose2 { x: 1.0, y: 1.0, yaw: f64::INFINITY }, 5.0, 16, None)
+        assert!(WallView::cast(&raster, &pts, ok, 0.0, 16, None, true).is_err());
+        assert!(WallView::cast(&raster, &pts, ok, f64::NAN, 16, None, true).is_err());
+        assert!(WallView::cast(&raster, &pts, ok, 5.0, 7, None, true).is_err());
+        assert!(WallView::cast(&raster, &pts, ok, 5.0, MAX_DIRECTIONS + 1, None, true).is_err());
+        assert!(WallView::cast(&raster, &pts, Pose2 { x: f64::NAN, y: 1.0, yaw: 0.0 }, 5.0, 16, None, true)
             .is_err());
+        assert!(WallView::cast(
+            &raster,
+            &pts,
+            Pose2 { x: 1.0, y: 1.0, yaw: f64::INFINITY },
+            5.0,
+            16,
+            None,
+            true
+        )
+        .is_err());
     }
 }

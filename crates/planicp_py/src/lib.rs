@@ -141,7 +141,8 @@ impl PyPointMap {
     /// The plan as seen from pose (x, y, yaw), within max_range metres, in `directions` evenly
     /// spaced directions: one ray cast for the visible points and each direction's wall range;
     /// with `scan` (N, 2, base frame), only over the arc its returns span.
-    #[pyo3(signature = (pose, max_range, directions, scan=None))]
+    #[pyo3(signature = (pose, max_range, directions, scan=None, ranges=true))]
+    #[allow(clippy::too_many_arguments)]
     fn view_from(
         &self,
         py: Python<'_>,
@@ -149,12 +150,14 @@ impl PyPointMap {
         max_range: f64,
         directions: &Bound<'_, PyAny>,
         scan: Option<PyReadonlyArray2<'_, f64>>,
+        ranges: bool,
     ) -> PyResult<WallView> {
         let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
         let scan = scan.map(|s| points_from("scan", &s)).transpose()?;
         let map = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
-        let view = py.detach(|| guarded(|| map.view_from(pose, max_range, directions, scan.as_deref())))?;
+        let view =
+            py.detach(|| guarded(|| map.view_from(pose, max_range, directions, scan.as_deref(), ranges)))?;
         Ok(WallView { inner: Arc::new(view) })
     }
 }
@@ -203,6 +206,11 @@ impl WallView {
             return Err(PlanicpError::new_err(format!(
                 "margin must be a finite number of metres >= 0, got {margin}"
             )));
+        }
+        if self.inner.ranges.is_empty() {
+            return Err(PlanicpError::new_err(
+                "this view was cast without ranges (ranges=False): cast it with them",
+            ));
         }
         let pts = points_from("points", &points)?;
         let view = Arc::clone(&self.inner);
