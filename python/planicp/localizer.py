@@ -373,9 +373,12 @@ class Localizer:
         """The fit of the scan from `predicted`, with the occlusion rule's (kept, beyond,
         occluded) (see `_unoccluded`). The rule judges the returns from the prediction. When the
         fit lands more than a quarter of the rule's margin away, the prediction was off by a good
-        part of the margin, which makes returns on the plan's walls look short of them (a
-        prediction 25 cm off left 400 of 1080 returns out, and the fit stopped 15 cm from the
-        truth): the returns are judged again from the fit and aligned again from there, once."""
+        part of the margin, which makes returns on the plan's walls look short of them: every
+        return is aligned again from the prediction, and none counts as left out. (In
+        `tests/test_localizer.py::test_gate_rejects_a_correction_beyond_max_translation_jump`, a
+        prediction 25 cm off left 400 of 1080 returns out and the fit of the rest stopped 15 cm
+        from the truth; judging the returns again from that fit and aligning from there stayed
+        there too, while all returns from the prediction reach the truth.)"""
         kept, beyond, occluded, view = self._unoccluded(points, predicted, predicted_covariance)
         result = localize(points if kept is None else points[kept], self.plan, predicted, self.config, view=view)
         if beyond is not None and self._occlusion is not None:

@@ -7,7 +7,7 @@ scan spans). A return more than
 front of a wall, and is left out of the alignment. Nearest-neighbour outlier rejection cannot do
 this when the obstacle stands near a wall, or when obstacles are most of the scan: with 63 % of
 the returns on a crowd, trimming alone lost track (4.6 m RMS over five drives) while the
-`Localizer`'s defaults, this rule among them, kept 0.35 cm (`benches/crowd.py`).
+`Localizer`'s defaults, this rule among them, kept 0.32 cm (`benches/crowd.py`, session 5).
 
 It needs a trustworthy prediction: it is only applied when the predicted position's 3-sigma
 uncertainty is below `margin`, and when enough returns remain.
