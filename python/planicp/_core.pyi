@@ -17,10 +17,12 @@ __all__ = [
     "PointMap",
     "Relocalization",
     "RelocalizationCandidate",
+    "WallView",
     "__version__",
     "_panic_for_tests",
     "align",
     "relocalize",
+    "visibility_range",
 ]
 
 __version__: str
