@@ -270,8 +270,10 @@ class PlanMap:
     def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440,
                   scan: Any = None, ranges: bool = True) -> _core.WallView:
         """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
-        `visible_indices`) and, in `directions` evenly spaced directions, the range to the first
-        wall (the expected ranges `OcclusionRule` compares returns with).
+        `visible_indices`) and, in `directions` evenly spaced directions, the range to the wall
+        point nearest the ray in its first wall cell of the visibility raster. (`OcclusionRule`
+        casts exactly through the plan image instead: the raster's cells lengthen walls at their
+        ends; see the README's known limitations.)
 
         Args:
             pose: (x, y, yaw) `T_map_base`, metres and radians; direction j looks along the

@@ -1,12 +1,17 @@
-//! What a range sensor at one pose sees of the plan, cast once and used twice.
+//! What a range sensor at one pose sees of the plan, and which returns disagree with it.
 //!
 //! A tracking step asks two questions of the walls seen from the predicted pose: which plan points
 //! the alignment may pair with (the visible wall faces, [`crate::visibility`]), and how far each
 //! direction's first wall is, so that returns far short of it (people, furniture) or far beyond it
-//! (a wrong prediction) can be told apart. One visibility cast answers both: its base rays are
-//! every other direction, the rays it adds where neighbouring rays stop in cells that are not
-//! adjacent give most directions between them, and the distance at which a ray enters its first
-//! wall cell is that direction's expected range.
+//! (a wrong prediction) can be told apart.
+//!
+//! A [`WallView`] answers both with one visibility cast: its base rays are every other direction,
+//! the rays it adds where neighbouring rays stop in cells that are not adjacent give most
+//! directions between them, and the wall point nearest a ray in its stop cell gives that
+//! direction's range. It may be cast over the arc a scan spans only. The localizer uses a view
+//! for the visible points alone: the occlusion rule casts exactly through the plan image
+//! ([`classify_exact`]), since the visibility raster's cells lengthen walls at their ends, which
+//! cost robustness in crowds.
 
 use crate::error::{invalid, Result};
 use crate::pose::Pose2;
