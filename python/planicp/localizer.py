@@ -390,27 +390,20 @@ class Localizer:
 
     def _unoccluded(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]
                     ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
-        """`_classified` from the prediction when the occlusion rule applies (a trusted
-        prediction, not lost); (None, None, False, None) otherwise."""
+        """(kept, beyond, occluded, view) when the occlusion rule applies (a trusted prediction,
+        not lost): the points not in front of the plan's walls (None when too few would remain, or
+        all: align them all), the points beyond the walls seen from the prediction, whether fewer
+        than the rule's `min_points` remain, and, for the KD-tree search, the view from the
+        prediction over the arc the whole scan spans, whose visible points it matches against.
+        (None, None, False, None) otherwise."""
         if self._occlusion is None or self._detector.lost:
             return None, None, False, None
-        if 3.0 * _largest_position_std(predicted_covariance) >= self._occlusion.rule.margin:
-            return None, None, False, None
-        return self._classified(points, predicted)
-
-    def _classified(self, points: NDArray[np.float64], pose: Pose
-                    ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
-        """(kept, beyond, occluded, view) of the occlusion rule seen from `pose`: the points not in
-        front of the plan's walls (None when too few would remain, or all: align them all), the
-        points beyond them, whether fewer than the rule's `min_points` remain, and, for the KD-tree
-        search, the view from `pose` over the arc the WHOLE scan spans whose visible points it
-        matches against (the alignment of the kept returns would cast over theirs: on the Intel
-        log that gave 3.57 cm ATE and a 14.6 cm worst error, against 3.52 cm and 11.1 cm)."""
-        assert self._occlusion is not None
         rule = self._occlusion.rule
+        if 3.0 * _largest_position_std(predicted_covariance) >= rule.margin:
+            return None, None, False, None
         uses_view = self.config.correspondence_search == "kd_tree" and self.config.use_visibility
-        view = self._occlusion.view(points, pose, self.config) if uses_view else None
-        in_front, beyond = self._occlusion.classify(points, pose)
+        view = self._occlusion.view(points, predicted, self.config) if uses_view else None
+        in_front, beyond = self._occlusion.classify(points, predicted)
         kept: NDArray[np.bool_] = ~in_front
         remaining = int(np.count_nonzero(kept))
         if remaining < rule.min_points:
