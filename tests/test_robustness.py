@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
+import planicp
+
 from planicp import (
     AcceptanceGate,
     DegeneracyRule,
@@ -477,6 +479,28 @@ def test_a_views_ranges_classify_returns_almost_as_an_exact_cast_does() -> None:
         total += len(r)
     assert disagreements < 0.03 * total and inside_a_wall < 5, (disagreements, total, inside_a_wall)
     assert occlusion.classify(np.zeros((0, 2)), (5.0, 5.0, 0.0))[0].shape == (0,)
+
+
+def test_the_native_occlusion_classification_refuses_bad_arguments() -> None:
+    """`OccupancyGrid.classify_returns` and `visibility_range` name what is wrong."""
+    from planicp import _core
+
+    grid = _core.OccupancyGrid(np.eye(40, dtype=bool), 0.1, (0.0, 0.0))
+    points = np.array([[1.0, 0.0], [0.0, 1.0]])
+    in_front, beyond = grid.classify_returns((2.0, 1.0, 0.0), points, 0.2, 720)
+    assert in_front.shape == beyond.shape == (2,)
+    with pytest.raises(planicp.PlanicpError, match="margin must be a finite number"):
+        grid.classify_returns((2.0, 1.0, 0.0), points, -0.1, 720)
+    with pytest.raises(planicp.PlanicpError, match="directions = 4: must be between 8"):
+        grid.classify_returns((2.0, 1.0, 0.0), points, 0.2, 4)
+    with pytest.raises(planicp.PlanicpError, match="directions must be a non-negative integer"):
+        grid.classify_returns((2.0, 1.0, 0.0), points, 0.2, -1)
+    with pytest.raises(planicp.PlanicpError, match="sensor pose"):
+        grid.classify_returns((math.nan, 1.0, 0.0), points, 0.2, 720)
+    settings = IcpConfig()._native
+    assert _core.visibility_range(points, settings) == pytest.approx(1.0 + 0.25)
+    with pytest.raises(planicp.PlanicpError, match=r"shape \(N, 2\)"):
+        _core.visibility_range(np.zeros((3, 3)), settings)
 
 
 def test_a_view_gives_the_alignment_its_visible_points() -> None:

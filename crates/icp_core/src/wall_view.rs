@@ -462,6 +462,17 @@ mod tests {
     }
 
     #[test]
+    fn the_exact_classification_refuses_bad_directions() {
+        let raster = OccupancyRaster::new(vec![false; 100], 10, 10, 0.1, [0.0, 0.0]).unwrap();
+        let pose = Pose2::new(0.5, 0.5, 0.0);
+        assert!(classify_exact(&raster, pose, &[[1.0, 0.0]], 0.2, 7).is_err());
+        assert!(classify_exact(&raster, pose, &[[1.0, 0.0]], 0.2, MAX_DIRECTIONS + 1).is_err());
+        // Nothing but free cells: every return is in front of "no wall" (inf), none beyond.
+        let classes = classify_exact(&raster, pose, &[[1.0, 0.0], [0.0, -0.3]], 0.2, 720).unwrap();
+        assert_eq!(classes, ReturnClasses { in_front: vec![true, true], beyond: vec![false, false] });
+    }
+
+    #[test]
     fn bad_casts_are_refused() {
         let (pts, raster) = room();
         let ok = Pose2::new(1.0, 1.0, 0.0);
