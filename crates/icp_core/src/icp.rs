@@ -319,14 +319,7 @@ pub fn align_seen(
             } else {
                 trim(&mut pairs, config.trim_ratio, MIN_PAIRS);
             }
-            let mut acc = RigidAccumulator::default();
-            let mut centroid = [0.0, 0.0];
-            for p in &pairs {
-                let s = moved[p.source as usize];
-                centroid[0] += s[0];
-                centroid[1] += s[1];
-                acc.add(s, map.points()[p.target as usize]);
-            }
+            let acc = RigidAccumulator::of_pairs(&pairs, &moved, map.points());
             let Some(step) = acc.solve() else {
                 // Too few pairs to continue: keep the pose reached so far.
                 converged = false;
@@ -341,8 +334,9 @@ pub fn align_seen(
             if converged && !tolerances.disabled() {
                 break;
             }
-            let n = pairs.len() as f64;
-            let update = Update::new(&step, [centroid[0] / n, centroid[1] / n]);
+            // Pairs there are: the step was solved from them.
+            let centroid = acc.source_mean().unwrap_or_default();
+            let update = Update::new(&step, centroid);
             if config.accelerate && cooldown == 0 && !fixed_point {
                 if let Some(jump) =
                     last_update.as_ref().and_then(|prev| extrapolation(prev, &update, scan_radius))

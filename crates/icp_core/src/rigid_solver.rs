@@ -4,6 +4,7 @@
 //! Umeyama/Kabsch, without reflection): `theta = atan2(sum s'_i x d'_i, sum s'_i . d'_i)` over the
 //! centred points, `t = mean(d) - R mean(s)`.
 
+use crate::correspondence::Pair;
 use crate::pose::Pose2;
 
 /// Fewest pairs the solver accepts: two distinct points fix a 2D rigid transform; a third guards
@@ -46,6 +47,62 @@ impl RigidAccumulator {
         self.sxy += s[0] * d[1];
         self.syx += s[1] * d[0];
         self.syy += s[1] * d[1];
+    }
+
+    /// The sums of every pair `sources[p.source] -> destinations[p.target]` of `pairs`, added
+    /// as [`add`](Self::add) would, in two interleaved halves: one chain of additions per sum
+    /// waits on each addition's latency, two overlap. (The order of the additions differs from
+    /// `add`'s, so the sums may differ in the last bits.)
+    ///
+    /// Panics when a pair indexes beyond `sources` or `destinations`.
+    pub fn of_pairs(pairs: &[Pair], sources: &[[f64; 2]], destinations: &[[f64; 2]]) -> Self {
+        let Some(first) = pairs.first() else {
+            return Self::default();
+        };
+        let (ref_s, ref_d) = (sources[first.source as usize], destinations[first.target as usize]);
+        // Per half: sum_s (2), sum_d (2), sxx, sxy, syx, syy.
+        let mut halves = [[0.0f64; 8]; 2];
+        let add = |h: &mut [f64; 8], p: &Pair| {
+            let s = sources[p.source as usize];
+            let d = destinations[p.target as usize];
+            let s = [s[0] - ref_s[0], s[1] - ref_s[1]];
+            let d = [d[0] - ref_d[0], d[1] - ref_d[1]];
+            h[0] += s[0];
+            h[1] += s[1];
+            h[2] += d[0];
+            h[3] += d[1];
+            h[4] += s[0] * d[0];
+            h[5] += s[0] * d[1];
+            h[6] += s[1] * d[0];
+            h[7] += s[1] * d[1];
+        };
+        let mut twos = pairs.chunks_exact(2);
+        for two in &mut twos {
+            let [h0, h1] = &mut halves;
+            add(h0, &two[0]);
+            add(h1, &two[1]);
+        }
+        for p in twos.remainder() {
+            add(&mut halves[0], p);
+        }
+        let h: [f64; 8] = std::array::from_fn(|k| halves[0][k] + halves[1][k]);
+        Self {
+            n: pairs.len() as f64,
+            ref_s,
+            ref_d,
+            sum_s: [h[0], h[1]],
+            sum_d: [h[2], h[3]],
+            sxx: h[4],
+            sxy: h[5],
+            syx: h[6],
+            syy: h[7],
+        }
+    }
+
+    /// Mean of the sources added (`None`: none).
+    pub fn source_mean(&self) -> Option<[f64; 2]> {
+        (self.n > 0.0)
+            .then(|| [self.ref_s[0] + self.sum_s[0] / self.n, self.ref_s[1] + self.sum_s[1] / self.n])
     }
 
     /// Number of pairs added.
@@ -114,6 +171,48 @@ mod tests {
             assert!((est.x - truth.x).abs() < 1e-9, "{est:?} vs {truth:?}");
             assert!((est.y - truth.y).abs() < 1e-9);
             assert!(crate::pose::wrap_angle(est.yaw - truth.yaw).abs() < 1e-11);
+        }
+    }
+
+    #[test]
+    fn sums_of_pairs_match_adding_them_one_by_one() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let src: Vec<[f64; 2]> =
+            (0..101).map(|_| [rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0)]).collect();
+        let dst: Vec<[f64; 2]> =
+            (0..77).map(|_| [rng.random_range(100.0..110.0), rng.random_range(-3.0..3.0)]).collect();
+        for n in [0, 1, 2, 3, 4, 57] {
+            let pairs: Vec<Pair> = (0..n)
+                .map(|k| Pair {
+                    source: rng.random_range(0..src.len() as u32),
+                    target: rng.random_range(0..dst.len() as u32),
+                    sq_dist: k as f64,
+                })
+                .collect();
+            let mut one_by_one = RigidAccumulator::default();
+            for p in &pairs {
+                one_by_one.add(src[p.source as usize], dst[p.target as usize]);
+            }
+            let batch = RigidAccumulator::of_pairs(&pairs, &src, &dst);
+            assert_eq!(batch.len(), n);
+            match (batch.solve(), one_by_one.solve()) {
+                (Some(a), Some(b)) => {
+                    assert!((a.x - b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9, "{a:?} vs {b:?}");
+                    assert!((a.yaw - b.yaw).abs() < 1e-12);
+                }
+                (a, b) => assert!(a.is_none() && b.is_none() && n < MIN_PAIRS, "{n}: {a:?} vs {b:?}"),
+            }
+            let mean = |v: Vec<[f64; 2]>| {
+                let k = v.len() as f64;
+                [v.iter().map(|p| p[0]).sum::<f64>() / k, v.iter().map(|p| p[1]).sum::<f64>() / k]
+            };
+            match batch.source_mean() {
+                Some(m) => {
+                    let e = mean(pairs.iter().map(|p| src[p.source as usize]).collect());
+                    assert!((m[0] - e[0]).abs() < 1e-12 && (m[1] - e[1]).abs() < 1e-12);
+                }
+                None => assert_eq!(n, 0),
+            }
         }
     }
 
