@@ -45,19 +45,24 @@ impl<'a> VisibleThroughIndex<'a> {
         max_distance: f64,
         out: &mut Vec<Pair>,
     ) {
-        out.clear();
+        // The plan's nearest points first, in the index's batched pass: beyond `max_distance`
+        // of the whole plan, nothing visible is nearer either.
+        self.index.find_pairs(transformed, max_distance, None, out);
         let max_sq = max_distance.min(self.index.reach()).powi(2);
-        for (i, q) in transformed.iter().enumerate() {
-            // Nothing of the plan within the reach: nothing visible either.
-            let Some((t, d2)) = self.index.nearest(*q) else { continue };
-            if d2 > max_sq {
-                continue;
+        let mut kept = 0usize;
+        for k in 0..out.len() {
+            let mut pair = out[k];
+            if !self.visible[pair.target as usize] {
+                let (t, d2) = target.nearest(transformed[pair.source as usize]);
+                if d2 > max_sq {
+                    continue;
+                }
+                pair = Pair { source: pair.source, target: t, sq_dist: d2 };
             }
-            let (t, d2) = if self.visible[t as usize] { (t, d2) } else { target.nearest(*q) };
-            if d2 <= max_sq {
-                out.push(Pair { source: i as u32, target: t, sq_dist: d2 });
-            }
+            out[kept] = pair;
+            kept += 1;
         }
+        out.truncate(kept);
     }
 }
 
