@@ -261,13 +261,11 @@ pub fn classify_exact(
 /// the base-frame point `p`.
 #[inline]
 fn direction_of(p: [f64; 2], n: usize) -> usize {
-    let k = ((bearing(p[1], p[0]) + PI) / (TAU / n as f64)).round();
-    // The bearing lies in [-pi, pi]: k in [0, n], where n is direction 0 again.
-    if k.is_finite() {
-        (k as usize) % n
-    } else {
-        0
-    }
+    // The bearing lies in [-pi, pi]: k in [0, n], where n is direction 0 again. Rounded by
+    // truncating k + 0.5, which is not negative (`round` is a library call on baseline x86-64);
+    // a NaN bearing converts to 0.
+    let k = (bearing(p[1], p[0]) + PI) / (TAU / n as f64) + 0.5;
+    (k as usize) % n
 }
 
 /// (first direction, count): the shortest run of directions (of `n`, wrapping) holding every
