@@ -250,67 +250,24 @@ class Localizer:
             motion = (0.0, 0.0, 0.0) if self._last_odom is None else between(self._last_odom, odom)
             predicted = compose(self._pose, motion)
             predicted_covariance = self.motion_noise.propagate_checked(self._covariance, self._pose, motion)
-            result: IcpResult | None = None
-            kept: NDArray[np.bool_] | None = None
-            beyond: NDArray[np.bool_] | None = None
-            occluded = False
-            usable = -(-len(points) // self.config.subsample)
-            if usable < _core.MIN_SCAN_POINTS:
-                reason = f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})"
-            else:
-                result, kept, beyond, occluded = self._aligned(points, predicted, predicted_covariance)
-                used = points if kept is None else points[kept]
-                reason = self.gate.rejection(result, predicted)
-                # A fit that explains little of the whole scan may have started outside the index's
-                # narrower basin (a bad odometry step also misleads the occlusion rule): the
-                # KD-tree tries again.
-                if (self._poor_fit(result.num_inliers / len(points), reason, result)
-                        and self.config.correspondence_search == "wall_index"):
-                    wide = localize(used, self.plan, predicted, self._wide_config)
-                    if wide.num_inliers > result.num_inliers:
-                        result, reason = wide, self.gate.rejection(wide, predicted)
+            fit = self._fit(points, predicted, predicted_covariance)
+            result, kept, reason = fit.result, fit.kept, fit.reason
             searched = False
             if result is not None and not self._detector.lost and self._needs_search(result, reason,
                                                                                       predicted_covariance):
                 found_near = self._search_near(points, predicted, result if reason == "" else None)
                 if found_near is not None:
                     result, reason, searched = found_near, "", True
-            # A fit the plan explains poorly (rejected for its fit, or accepted with a score below
-            # the lost rule's) is checked against the last scan the plan explained well: if the
-            # scan continues it, the robot is among clutter and nothing is concluded; if not, the
-            # fit is not trusted and counts towards being lost. (Against the last well explained
-            # scan, not simply the previous one: after a kidnap the second scan continues the first
-            # one elsewhere.)
-            continues: bool | None = None
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
-                                                self._score(result, kept, beyond, len(points)))
+                                                self._score(result, kept, fit.beyond, len(points)))
             poor = result is not None and self._poor_fit(score, reason, result)
+            continues: bool | None = None
             if poor and result is not None and not self._detector.lost:
-                # A crowd hides most walls, and its people move between scans: the plan explains
-                # little of the scan and the scan does not continue the last one. If the plan
-                # explains the returns the occlusion rule kept (those on or beyond its walls) as
-                # well as a continuation must overlap, the scan is sound where it sees the plan;
-                # if the rule kept too few to align, the scan says nothing either way. Otherwise
-                # only the kept returns need to continue the last scan: a return short of the
-                # plan's walls says nothing about where the robot is.
-                continues = occluded or (kept is not None and not searched and reason == ""
-                                         and result.inlier_ratio >= self.continuity.min_overlap)
-                if not continues and self._anchor is not None:
-                    continues = self.continuity.continues(points if kept is None else points[kept], self._anchor[0],
-                                                          between(self._anchor[1], odom))
-                    if not continues and reason == "":
-                        reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
-                                  f"continue the last scan the plan explained")
+                continues, reason = self._continuity(points, odom, fit, result, reason, searched, score)
             degeneracy: Degeneracy | None = None
             if result is not None and reason == "":
                 degeneracy = self.degeneracy.check(result)
-                fused = None if searched else self.fusion.fuse(result, predicted, predicted_covariance)
-                if fused is not None:
-                    pose, covariance = fused
-                elif degeneracy is not None:
-                    pose, covariance = fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
-                else:
-                    pose, covariance = result.pose, _finite_or(result.covariance, predicted_covariance)
+                pose, covariance = self._corrected(result, degeneracy, searched, predicted, predicted_covariance)
             else:
                 pose, covariance = predicted, predicted_covariance
             accepted = result is not None and reason == ""
@@ -325,7 +282,7 @@ class Localizer:
                 clears = not was_lost or searched or score >= self._recovery.config.min_inlier_ratio
                 lost = self._detector.update(score, accepted and clears)
             relocalized = searched
-            if lost and usable >= _core.MIN_SCAN_POINTS:
+            if lost and fit.usable:
                 found = self._recovery.step(points, motion, predicted)
                 if found is not None:
                     pose, result, accepted, relocalized, lost = found.pose, found.result, True, True, False
@@ -344,6 +301,65 @@ class Localizer:
                 kept = None  # a search's result is over the whole scan
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses, kept)
+
+    def _fit(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]) -> _Fit:
+        """The scan aligned from `predicted` (see `_aligned`) and judged by the gate; with the
+        index, a fit that explains little of the scan is tried again with the KD-tree. A scan
+        with too few usable points is not aligned."""
+        usable = -(-len(points) // self.config.subsample)
+        if usable < _core.MIN_SCAN_POINTS:
+            return _Fit(None, None, None, False, f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})",
+                        usable=False)
+        result, kept, beyond, occluded = self._aligned(points, predicted, predicted_covariance)
+        reason = self.gate.rejection(result, predicted)
+        # A fit that explains little of the whole scan may have started outside the index's
+        # narrower basin (a bad odometry step also misleads the occlusion rule): the KD-tree
+        # tries again.
+        if (self._poor_fit(result.num_inliers / len(points), reason, result)
+                and self.config.correspondence_search == "wall_index"):
+            used = points if kept is None else points[kept]
+            wide = localize(used, self.plan, predicted, self._wide_config)
+            if wide.num_inliers > result.num_inliers:
+                result, reason = wide, self.gate.rejection(wide, predicted)
+        return _Fit(result, kept, beyond, occluded, reason, usable=True)
+
+    def _continuity(self, points: NDArray[np.float64], odom: Pose, fit: _Fit, result: IcpResult, reason: str,
+                    searched: bool, score: float) -> tuple[bool, str]:
+        """(continues, reason) for a fit the plan explains poorly (rejected for its fit, or
+        accepted with a score below the lost rule's), checked against the last scan the plan
+        explained well: if the scan continues it, the robot is among clutter and nothing is
+        concluded; if not, the fit is not trusted (an accepted one gets a `reason`) and counts
+        towards being lost. (Against the last well explained scan, not simply the previous one:
+        after a kidnap the second scan continues the first one elsewhere.)
+
+        A crowd hides most walls, and its people move between scans: the plan explains little of
+        the scan and the scan does not continue the last one. If the plan explains the returns the
+        occlusion rule kept (those on or beyond its walls) as well as a continuation must overlap,
+        the scan is sound where it sees the plan; if the rule kept too few to align, the scan says
+        nothing either way. Otherwise only the kept returns need to continue the last scan: a
+        return short of the plan's walls says nothing about where the robot is."""
+        kept = fit.kept
+        continues = fit.occluded or (kept is not None and not searched and reason == ""
+                                     and result.inlier_ratio >= self.continuity.min_overlap)
+        if not continues and self._anchor is not None:
+            continues = self.continuity.continues(points if kept is None else points[kept], self._anchor[0],
+                                                  between(self._anchor[1], odom))
+            if not continues and reason == "":
+                reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
+                          f"continue the last scan the plan explained")
+        return continues, reason
+
+    def _corrected(self, result: IcpResult, degeneracy: Degeneracy | None, searched: bool, predicted: Pose,
+                   predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+        """The pose and covariance after an accepted fit: its fusion with the prediction; after
+        an odometry fault (not fused) or a search, the fit alone, except along a degenerate axis,
+        where the prediction is corrected only as far as the variances say."""
+        fused = None if searched else self.fusion.fuse(result, predicted, predicted_covariance)
+        if fused is not None:
+            return fused
+        if degeneracy is not None:
+            return fuse_along_weak_axis(degeneracy, result, predicted, predicted_covariance)
+        return result.pose, _finite_or(result.covariance, predicted_covariance)
 
     def _poor_fit(self, score: float, reason: str, result: IcpResult) -> bool:
         """Whether the plan explains `result` poorly: rejected for its fit, or accepted with a
@@ -437,6 +453,25 @@ class Localizer:
         if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
             return None
         return refined
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """One scan's fit from the prediction, as `Localizer._fit` makes it.
+
+    Attributes:
+        result: the ICP result, None when the scan had too few usable points.
+        kept, beyond, occluded: the occlusion rule's findings (see `Localizer._unoccluded`).
+        reason: the gate's rejection ("" when accepted).
+        usable: the scan had enough points to align.
+    """
+
+    result: IcpResult | None
+    kept: NDArray[np.bool_] | None
+    beyond: NDArray[np.bool_] | None
+    occluded: bool
+    reason: str
+    usable: bool
 
 
 def _largest_position_std(covariance: NDArray[np.float64]) -> float:
