@@ -228,16 +228,26 @@ impl<'a> SurfaceRanges<'a> {
             }
         };
         let (dx, dy) = ray.dir;
-        let mut best = (f64::INFINITY, stop.t * self.raster.resolution());
+        let mut best: Option<(f64, f64)> = None;
         for &i in in_cell {
             let Some(p) = self.points.get(i as usize) else { continue };
             let (px, py) = (p[0] - self.position[0], p[1] - self.position[1]);
             let lateral = (px * dy - py * dx).abs();
-            if lateral < best.0 {
-                best = (lateral, px * dx + py * dy);
+            if best.is_none_or(|(nearest, _)| lateral < nearest) {
+                best = Some((lateral, px * dx + py * dy));
             }
         }
-        best.1
+        // No point of the given ones in the cell (points that are not the raster's): the cell's
+        // centre, projected on the ray, is the unbiased guess of where the ray meets its wall.
+        best.map_or_else(|| self.centre_along(stop.cell, ray.dir), |(_, along)| along)
+    }
+
+    /// Metres along the unit direction `(dx, dy)` from the cast's position to the centre of `cell`,
+    /// projected on the ray.
+    fn centre_along(&self, cell: (i64, i64), (dx, dy): (f64, f64)) -> f64 {
+        let (res, origin) = (self.raster.resolution(), self.raster.origin());
+        let centre = [origin[0] + (cell.0 as f64 + 0.5) * res, origin[1] + (cell.1 as f64 + 0.5) * res];
+        (centre[0] - self.position[0]) * dx + (centre[1] - self.position[1]) * dy
     }
 }
 
@@ -249,13 +259,6 @@ fn touching(raster: &WallRaster, h0: Hit, h1: Hit) -> bool {
         (None, None) => true,
         _ => false,
     }
-}
-
-/// The distance (cells) along the unit direction `(dx, dy)` from `origin` to the centre of `cell`,
-/// projected on the ray.
-#[inline]
-fn centre_along(origin: (f64, f64), cell: (i64, i64), (dx, dy): (f64, f64)) -> f64 {
-    (cell.0 as f64 + 0.5 - origin.0) * dx + (cell.1 as f64 + 0.5 - origin.1) * dy
 }
 
 /// Whether rays between two that stopped in cells `p` and `q` can only stop in `p` or `q`: the
@@ -280,10 +283,6 @@ struct Stop {
     cell: (i64, i64),
     /// The free cell the ray left to enter it; None when that was the start cell.
     came_from: Option<(i64, i64)>,
-    /// Cells along the ray from the cast's position to the wall cell's centre, projected on the ray:
-    /// the wall points lie somewhere in the cell, so the centre is the unbiased guess of where the
-    /// ray meets them (where it enters the cell is up to a cell short of them).
-    t: f64,
 }
 
 /// The stop of a ray, `None` when it meets no wall cell within range.
@@ -354,10 +353,9 @@ impl RayCaster<'_> {
             (entry.1.floor() as i64).clamp(0, self.shape.1 as i64 - 1),
         );
         if self.raster.is_wall(cell.0, cell.1) {
-            return Some(Stop { cell, came_from: None, t: t_in + centre_along(entry, cell, (dx, dy)) });
+            return Some(Stop { cell, came_from: None });
         }
         first_wall_cell(self.raster, entry, cell, (dx, dy), self.max_t - t_in, self.shape)
-            .map(|stop| Stop { t: t_in + stop.t, ..stop })
     }
 }
 
@@ -420,7 +418,7 @@ fn first_wall_cell(
         clearance = raster.clearance(cx as usize, cy as usize);
         if clearance == 0 {
             let came_from = (before != start || !raster.is_wall(start.0, start.1)).then_some(before);
-            return Some(Stop { cell: (cx, cy), came_from, t: centre_along((ox, oy), (cx, cy), (dx, dy)) });
+            return Some(Stop { cell: (cx, cy), came_from });
         }
         t_cur = t;
     }

@@ -343,6 +343,30 @@ mod tests {
         assert!(!view.visible.is_empty());
     }
 
+    /// Points that are not the raster's (none here) leave a ray's stop cell empty: the range is then
+    /// the stop cell's centre, projected on the ray, still within a cell of the wall.
+    #[test]
+    fn without_the_rasters_points_a_range_is_the_stop_cells_centre() {
+        let (pts, raster) = room();
+        let pose = Pose2::new(1.0, 1.2, PI / 2.0);
+        let exact = WallView::cast(&raster, &pts, pose, 10.0, 16, None, true).unwrap();
+        let centres = WallView::cast(&raster, &[], pose, 10.0, 16, None, true).unwrap();
+        let cell = 0.075;
+        let mut differ = 0;
+        for (j, (a, b)) in exact.ranges.iter().zip(&centres.ranges).enumerate() {
+            if a.is_finite() {
+                assert!((a - b).abs() <= cell, "direction {j}: {a} against the centre's {b}");
+                differ += usize::from(a != b);
+            } else {
+                assert_eq!(a, b, "direction {j}");
+            }
+        }
+        // With the points, the ranges are the walls' own (a wall point can lie at a centre's
+        // projection, so not every direction differs).
+        assert!(differ >= 10, "{differ} of 16 directions differ");
+        assert!((centres.ranges[12] - 1.0).abs() <= cell, "{}", centres.ranges[12]);
+    }
+
     #[test]
     fn the_visible_points_are_the_visibility_casts() {
         let (pts, raster) = room();
