@@ -36,7 +36,6 @@ Scored on the scans each variant keeps: translation ATE (RMS), worst error, shar
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
 import platform
@@ -51,9 +50,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from peers_module import DEFAULT_PEERS_FILE, load_peers_module  # benches/ is on sys.path
+
 HERE = Path(__file__).resolve().parent
-DEFAULT_LOG = Path("/work/shared/data/logs/intel-corrected.log.gz")
-DEFAULT_PEERS = Path("/work/shared/bench/peers.py")
+DEFAULT_LOG = HERE.parent.parent / "shared" / "data" / "logs" / "intel-corrected.log.gz"
+DEFAULT_PEERS = DEFAULT_PEERS_FILE
 GAP_S = 30.0
 STEP_ERROR_DEG = 10.0
 PEER_NAMES = ("small_gicp_icp", "open3d", "kiss_icp", "numpy")
@@ -168,15 +169,6 @@ def make_variants(frames: list[Any], windows: list[dict[str, Any]], errors: list
 
 
 # --------------------------------------------------------------------------- trackers
-
-
-def load_peers_module(path: Path) -> Any:
-    spec = importlib.util.spec_from_file_location("shared_bench_peers", path)
-    if spec is None or spec.loader is None:
-        raise ImportError(f"cannot load {path}")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def score(estimate: NDArray[np.float64], frames: list[Any], seconds: float | None) -> dict[str, Any]:

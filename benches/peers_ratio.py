@@ -24,12 +24,10 @@ is small_gicp ICP when it can be imported, else the numpy + SciPy cKDTree ICP of
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 # One thread everywhere, as peers.py pins it, before numpy starts its pools.
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
@@ -37,21 +35,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUME
 
 import numpy as np  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
-DEFAULT_PEERS_FILE = HERE.parent.parent / "shared" / "bench" / "peers.py"
+from peers_module import DEFAULT_PEERS_FILE, load_peers_module  # noqa: E402  (benches/ is on sys.path)
+
 PLANICP = ("planicp", "planicp_default")
-
-
-def load_peers_module(path: Path) -> Any:
-    """`peers.py` as a module (it is a script, not a package)."""
-    if not path.is_file():
-        raise SystemExit(f"peers.py not found at {path}; pass --peers-file")
-    spec = importlib.util.spec_from_file_location("shared_bench_peers", path)
-    if spec is None or spec.loader is None:
-        raise SystemExit(f"cannot load {path}")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
