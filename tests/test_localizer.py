@@ -314,3 +314,37 @@ def test_an_uncertain_prediction_is_searched_around(
     est = Localizer(plan, off, initial_covariance=wide).update(scans[0], (0.0, 0.0, 0.0))
     assert est.accepted and est.relocalized, est.reason
     assert error(path[0], est.pose)[0] < 0.05 and error(path[0], est.pose)[1] < 1 * DEG
+
+
+def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> None:
+    """A start pose given with 0.35-0.5 m and 2 degrees of uncertainty (as from RViz) makes the first
+    update search around it (3 sigma above the gate's 0.5 m). With a 6 m, 180-degree scanner, a place
+    2.4 m away and turned by 136 degrees explained more of this scan (0.66 of it, against 0.54 at
+    the truth) and was adopted; the search now refuses places outside the prediction's covariance
+    (the fusion's 99.9 % chi-square bound). The scan is scan 346 of the sample sweep's run
+    ea5715a8fb28ab6c (README, "Studies at scale")."""
+    from planicp.default_plan import load_default_plan
+    from planicp.sim.experiment import run_experiment
+    from planicp.sweep.runs import expand_runs
+    from planicp.sweep.study import Study
+
+    study = Study.from_dict({
+        "name": "one run", "duration_s": 60, "plans": ["default"], "seeds": [3], "furniture": [0],
+        "people": [2],
+        "sensors": {"budget": {"fov_deg": 180, "beams": 181, "range_max": 6.0, "range_sigma": 0.03,
+                               "dropout": 0.1}},
+        "odometry": {"thesis": {}},
+    })
+    (spec,) = expand_runs(study)
+    assert spec.run_id == "ea5715a8fb28ab6c"
+    config = spec.experiment_config()
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, config)
+    truth, scan = tuple(recording.truth[346]), recording.scans[346]
+    for sd in (0.35, 0.5):
+        localizer = Localizer(plan, truth, config.icp,
+                              initial_covariance=np.diag([sd ** 2, sd ** 2, math.radians(2.0) ** 2]))
+        estimate = localizer.update(scan, (0.0, 0.0, 0.0))
+        error = math.hypot(estimate.pose[0] - truth[0], estimate.pose[1] - truth[1])
+        assert estimate.accepted and not estimate.relocalized, (sd, estimate.reason)
+        assert error < 0.05 and abs(se2.wrap_angle(estimate.pose[2] - truth[2])) < math.radians(1.0), (sd, error)

@@ -22,7 +22,7 @@ from .motion_noise import MotionNoise
 from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
-from .prediction_fusion import FusionRule
+from .prediction_fusion import CHI2_3_999, FusionRule
 from .scan_continuity import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, relocalize
 from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
@@ -255,7 +255,11 @@ class Localizer:
             searched = False
             if result is not None and not self._detector.lost and self._needs_search(result, reason,
                                                                                       predicted_covariance):
-                found_near = self._search_near(points, predicted, result if reason == "" else None)
+                # Searched for an uncertain prediction, not for a fit rejected for its jump (which
+                # says odometry may have faulted): the place found must agree with the prediction.
+                jumped = reason != "" and self.gate.fit_rejection(result) == ""
+                found_near = self._search_near(points, predicted, result if reason == "" else None,
+                                               None if jumped else predicted_covariance)
                 if found_near is not None:
                     result, reason, searched = found_near, "", True
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
@@ -437,10 +441,13 @@ class Localizer:
             return True
         return 3.0 * _largest_position_std(predicted_covariance) > self.gate.max_translation_jump
 
-    def _search_near(self, points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None) -> IcpResult | None:
+    def _search_near(self, points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None,
+                     consistent_with: NDArray[np.float64] | None = None) -> IcpResult | None:
         """The fit at the unambiguous best place around `predicted`, when it explains at least the
-        recovery's `min_inlier_ratio` of the scan and (if the fit from the prediction was
-        acceptable, `accepted`) more of it than that fit by the recovery's `margin`; else None."""
+        recovery's `min_inlier_ratio` of the scan, (if the fit from the prediction was acceptable,
+        `accepted`) more of it than that fit by the recovery's `margin`, and (given the
+        prediction's covariance, `consistent_with`) lies within the chi-square bound of the
+        fusion (`CHI2_3_999`, 99.9 %) of the prediction; else None."""
         config = self._recovery.config
         found = relocalize(points, self.plan, region=SearchRegion(predicted, config.local_radius, math.pi),
                            config=config.search, max_candidates=config.max_hypotheses)
@@ -451,6 +458,10 @@ class Localizer:
         if self.gate.rejection(refined, best.pose) or refined.inlier_ratio < config.min_inlier_ratio:
             return None
         if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
+            return None
+        if consistent_with is not None and not self.fusion.innovation(refined, predicted, consistent_with) <= CHI2_3_999:
+            # A place the prediction's own uncertainty rules out: with a short-range scanner a
+            # wrong place can explain more of a scan than the right one.
             return None
         return refined
 
