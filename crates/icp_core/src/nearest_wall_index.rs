@@ -560,6 +560,8 @@ impl NearestWallIndex {
         self.nearest_of(self.slots[cell], q)
     }
 
+    /// The nearest to `q` of the candidates a cell's slots `[a, b]` name (two sites, or a list)
+    /// and its squared distance (infinite: none).
     #[inline(always)]
     fn nearest_of(&self, [a, b]: [u32; 2], q: [f64; 2]) -> (u32, f64) {
         let sentinel = (self.sites.len() - 1) as u32;
