@@ -253,13 +253,13 @@ class Localizer:
             fit = self._fit(points, predicted, predicted_covariance)
             result, kept, reason = fit.result, fit.kept, fit.reason
             searched = False
-            if result is not None and not self._detector.lost and self._needs_search(result, reason,
-                                                                                      predicted_covariance):
-                # Searched for an uncertain prediction, not for a fit rejected for its jump (which
-                # says odometry may have faulted): the place found must agree with the prediction.
-                jumped = reason != "" and self.gate.fit_rejection(result) == ""
+            search = None if result is None or self._detector.lost else self._search_cause(
+                result, reason, predicted_covariance)
+            if result is not None and search is not None:
+                # A place found for an uncertain prediction must agree with it; after a fit
+                # rejected for its jump, odometry may have faulted and the prediction says nothing.
                 found_near = self._search_near(points, predicted, result if reason == "" else None,
-                                               None if jumped else predicted_covariance)
+                                               predicted_covariance if search == "uncertain" else None)
                 if found_near is not None:
                     result, reason, searched = found_near, "", True
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
@@ -432,14 +432,18 @@ class Localizer:
             return None, beyond, False, view
         return kept, beyond, False, view
 
-    def _needs_search(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]) -> bool:
-        """Whether the gate cannot vouch for this update: a good fit rejected only for its jump, or a
-        prediction whose 3-sigma position uncertainty exceeds the translation limit."""
+    def _search_cause(self, result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64]
+                      ) -> Literal["jump", "uncertain"] | None:
+        """Why the gate cannot vouch for this update, if it cannot: "jump", a good fit rejected
+        only for its jump; "uncertain", a prediction whose 3-sigma position uncertainty exceeds
+        the translation limit. None: no search (or the recovery searches no neighbourhood)."""
         if self._recovery.config.local_radius <= 0.0:
-            return False
+            return None
         if reason != "" and self.gate.fit_rejection(result) == "":
-            return True
-        return 3.0 * _largest_position_std(predicted_covariance) > self.gate.max_translation_jump
+            return "jump"
+        if 3.0 * _largest_position_std(predicted_covariance) > self.gate.max_translation_jump:
+            return "uncertain"
+        return None
 
     def _search_near(self, points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None,
                      consistent_with: NDArray[np.float64] | None = None) -> IcpResult | None:
