@@ -19,13 +19,28 @@ pub struct RigidAccumulator {
     // cancel in the centred moments.
     ref_s: [f64; 2],
     ref_d: [f64; 2],
-    sum_s: [f64; 2],
-    sum_d: [f64; 2],
-    // Raw second moments: sxx = sum s.x d.x, etc.
-    sxx: f64,
-    sxy: f64,
-    syx: f64,
-    syy: f64,
+    /// Sums over the pairs of [`moments`]: s.x, s.y, d.x, d.y and the raw second moments
+    /// s.x d.x, s.x d.y, s.y d.x, s.y d.y.
+    sums: Moments,
+}
+
+/// What one pair adds to the sums (see [`RigidAccumulator`]).
+type Moments = [f64; 8];
+
+/// The sums' terms of the pair `s -> d`, both relative to the reference pair `(ref_s, ref_d)`.
+#[inline]
+fn moments(s: [f64; 2], d: [f64; 2], ref_s: [f64; 2], ref_d: [f64; 2]) -> Moments {
+    let s = [s[0] - ref_s[0], s[1] - ref_s[1]];
+    let d = [d[0] - ref_d[0], d[1] - ref_d[1]];
+    [s[0], s[1], d[0], d[1], s[0] * d[0], s[0] * d[1], s[1] * d[0], s[1] * d[1]]
+}
+
+/// `into += from`, term by term.
+#[inline]
+fn absorb(into: &mut Moments, from: Moments) {
+    for (a, b) in into.iter_mut().zip(from) {
+        *a += b;
+    }
 }
 
 impl RigidAccumulator {
@@ -36,17 +51,8 @@ impl RigidAccumulator {
             self.ref_s = s;
             self.ref_d = d;
         }
-        let s = [s[0] - self.ref_s[0], s[1] - self.ref_s[1]];
-        let d = [d[0] - self.ref_d[0], d[1] - self.ref_d[1]];
         self.n += 1.0;
-        self.sum_s[0] += s[0];
-        self.sum_s[1] += s[1];
-        self.sum_d[0] += d[0];
-        self.sum_d[1] += d[1];
-        self.sxx += s[0] * d[0];
-        self.sxy += s[0] * d[1];
-        self.syx += s[1] * d[0];
-        self.syy += s[1] * d[1];
+        absorb(&mut self.sums, moments(s, d, self.ref_s, self.ref_d));
     }
 
     /// The sums of every pair `sources[p.source] -> destinations[p.target]` of `pairs`, added
@@ -60,49 +66,25 @@ impl RigidAccumulator {
             return Self::default();
         };
         let (ref_s, ref_d) = (sources[first.source as usize], destinations[first.target as usize]);
-        // Per half: sum_s (2), sum_d (2), sxx, sxy, syx, syy.
-        let mut halves = [[0.0f64; 8]; 2];
-        let add = |h: &mut [f64; 8], p: &Pair| {
-            let s = sources[p.source as usize];
-            let d = destinations[p.target as usize];
-            let s = [s[0] - ref_s[0], s[1] - ref_s[1]];
-            let d = [d[0] - ref_d[0], d[1] - ref_d[1]];
-            h[0] += s[0];
-            h[1] += s[1];
-            h[2] += d[0];
-            h[3] += d[1];
-            h[4] += s[0] * d[0];
-            h[5] += s[0] * d[1];
-            h[6] += s[1] * d[0];
-            h[7] += s[1] * d[1];
-        };
+        let mut halves: [Moments; 2] = [[0.0; 8]; 2];
+        let term =
+            |p: &Pair| moments(sources[p.source as usize], destinations[p.target as usize], ref_s, ref_d);
         let mut twos = pairs.chunks_exact(2);
         for two in &mut twos {
-            let [h0, h1] = &mut halves;
-            add(h0, &two[0]);
-            add(h1, &two[1]);
+            absorb(&mut halves[0], term(&two[0]));
+            absorb(&mut halves[1], term(&two[1]));
         }
         for p in twos.remainder() {
-            add(&mut halves[0], p);
+            absorb(&mut halves[0], term(p));
         }
-        let h: [f64; 8] = std::array::from_fn(|k| halves[0][k] + halves[1][k]);
-        Self {
-            n: pairs.len() as f64,
-            ref_s,
-            ref_d,
-            sum_s: [h[0], h[1]],
-            sum_d: [h[2], h[3]],
-            sxx: h[4],
-            sxy: h[5],
-            syx: h[6],
-            syy: h[7],
-        }
+        let [mut sums, other] = halves;
+        absorb(&mut sums, other);
+        Self { n: pairs.len() as f64, ref_s, ref_d, sums }
     }
 
     /// Mean of the sources added (`None`: none).
     pub fn source_mean(&self) -> Option<[f64; 2]> {
-        (self.n > 0.0)
-            .then(|| [self.ref_s[0] + self.sum_s[0] / self.n, self.ref_s[1] + self.sum_s[1] / self.n])
+        (self.n > 0.0).then(|| [self.ref_s[0] + self.sums[0] / self.n, self.ref_s[1] + self.sums[1] / self.n])
     }
 
     /// Number of pairs added.
@@ -121,13 +103,14 @@ impl RigidAccumulator {
             return None;
         }
         let n = self.n;
-        let ms = [self.sum_s[0] / n, self.sum_s[1] / n];
-        let md = [self.sum_d[0] / n, self.sum_d[1] / n];
+        let [sx, sy, dx, dy, sxx, sxy, syx, syy] = self.sums;
+        let ms = [sx / n, sy / n];
+        let md = [dx / n, dy / n];
         // Centred cross-covariance H = sum (s - ms)(d - md)^T.
-        let hxx = self.sxx - n * ms[0] * md[0];
-        let hxy = self.sxy - n * ms[0] * md[1];
-        let hyx = self.syx - n * ms[1] * md[0];
-        let hyy = self.syy - n * ms[1] * md[1];
+        let hxx = sxx - n * ms[0] * md[0];
+        let hxy = sxy - n * ms[0] * md[1];
+        let hyx = syx - n * ms[1] * md[0];
+        let hyy = syy - n * ms[1] * md[1];
         let theta = (hxy - hyx).atan2(hxx + hyy);
         let (s, c) = theta.sin_cos();
         // Undo the reference shift: R (s + ref_s) + t = d + ref_d.
