@@ -409,3 +409,37 @@ def test_pixel_centres_for_maps_whose_pixels_are_the_surfaces() -> None:
     assert set(np.round(faces[:, 1], 9)) == {2.1, 2.15, 2.2}
     plan = PlanMap.from_raster(raster, edge_detector="centres")
     np.testing.assert_allclose(plan.points, centres)
+
+
+def test_auto_reads_walls_one_or_two_cells_thick_as_surfaces() -> None:
+    from planicp.plan_raster import thin_wall_pixels
+
+    walls = np.zeros((12, 12), dtype=bool)
+    walls[1, 1:11] = True  # one pixel thick
+    walls[4:6, 1:11] = True  # two pixels thick
+    walls[8:11, 1:11] = True  # three pixels thick: an interior row, two faces
+    thin = thin_wall_pixels(walls)
+    assert thin[1].sum() == 10 and thin[4:6].sum() == 20 and not thin[8:11].any()
+    raster = PlanRaster(walls, 0.1, (0.0, 0.0, 0.0))
+    auto = raster.surface_points("auto")
+    # The thin walls give their 30 pixel centres; the thick one its 2 x 10 + 2 x 3 faces.
+    assert len(auto) == 30 + 26
+    ys = np.round(auto[:, 1], 9)
+    assert set(ys[(ys > 0.5)]) == {1.05, 0.75, 0.65}  # centres of image rows 1, 4 and 5 (12 rows of 0.1 m)
+    assert {0.1, 0.4} <= set(ys)  # the thick wall's faces, at its top and bottom edges
+    # A drawing (`from_image`, `from_raster`) keeps every face; a map_server map reads as surfaces.
+    assert len(PlanMap.from_raster(raster)) == raster.boundary_face_count()
+
+
+def test_a_map_server_map_defaults_to_the_surface_reading(tmp_path: Path) -> None:
+    walls = np.zeros((20, 30), dtype=np.uint8) + 254
+    walls[5, 2:28] = 0  # a one-cell wall, as SLAM leaves it
+    import cv2
+
+    cv2.imwrite(str(tmp_path / "m.pgm"), walls)
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    plan = PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+    np.testing.assert_allclose(plan.points[:, 1], (20 - 5 - 0.5) * 0.05)  # on the cells' centre line
+    faces = PlanMap.from_ros_map(tmp_path / "m.yaml", edge_detector="boundary", cache=False)
+    assert set(np.round(faces.points[:, 1], 9)) == {0.7, 0.725, 0.75}

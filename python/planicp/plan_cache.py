@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from . import _core
 
-FORMAT = 2
+FORMAT = 3
 """Bumped whenever what an entry holds, or how a plan is prepared, changes."""
 
 

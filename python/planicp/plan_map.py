@@ -114,7 +114,7 @@ class PlanMap:
             threshold: grey level (1..255) below which a pixel is wall; None: Otsu's threshold.
             open_px, close_px: morphological opening (removes specks up to that size) and closing
                 (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
-            edge_detector: "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
+            edge_detector: "auto", "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
             cache: True (default folder, see `planicp.plan_cache`), False, or a folder.
 
         Raises:
@@ -160,9 +160,15 @@ class PlanMap:
                 "shape": np.array(raster.walls.shape)}
 
     @classmethod
-    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str = "boundary", cache: CacheSetting = True) -> PlanMap:
+    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str = "auto", cache: CacheSetting = True) -> PlanMap:
         """A plan from a ROS map_server map (YAML + image), with map_server's semantics: occupied
-        cells are walls; `resolution`, `origin`, `negate`, thresholds and `mode` from the YAML."""
+        cells are walls; `resolution`, `origin`, `negate`, thresholds and `mode` from the YAML.
+
+        An occupancy grid's occupied cell is one where a surface was seen, so the default
+        `edge_detector="auto"` takes the centres of the cells of walls one or two cells thick (a
+        SLAM map's walls; there the faces would put the surface half a cell to a cell in front of
+        where the beams ended) and the faces of thicker walls (a drawn plan saved as a map). See
+        `PlanRaster.surface_points` for the other choices."""
         ros_map = read_ros_map(yaml_path)
         params = {"resolution": ros_map.resolution, "origin": ros_map.origin, "mode": ros_map.mode,
                   "negate": ros_map.negate, "occupied": ros_map.occupied_thresh, "free": ros_map.free_thresh,

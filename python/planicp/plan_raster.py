@@ -77,7 +77,12 @@ class PlanRaster:
         """(N, 2) wall-surface points in metres: the middle of each face between a wall pixel and a
         non-wall pixel (outside the image is non-wall). Deterministic order.
 
-        `edge_detector`: "boundary" (default) takes every such face. "canny" keeps only the faces
+        `edge_detector`: "boundary" (default) takes every such face: a drawing's wall pixels
+        are wall material, and its surfaces are their faces. "auto" reads the raster as an
+        occupancy grid, whose occupied cells are where a surface was seen, and decides wall by wall
+        (see `thin_wall_pixels`): a wall at most two pixels thick does not resolve two faces, so
+        its pixels are the surface and their centres are taken (SLAM maps, maps drawn from scan
+        end points); a thicker wall, which does, gets its faces as with "boundary". "canny" keeps only the faces
         next to an edge OpenCV's Canny detector finds on the wall mask (the thesis's method); on a
         binary mask it finds the same boundary but thins it away at corners and one-pixel walls: it
         kept 8,015 of depot.pgm's 9,184 faces (tests/test_plans.py checks the loss). "centres" takes
@@ -88,21 +93,32 @@ class PlanRaster:
         if edge_detector == "centres":
             rows_c, cols_c = np.nonzero(self.walls)
             return self.pixel_to_map(rows_c.astype(np.float64) + 0.5, cols_c.astype(np.float64) + 0.5)
+        thin = thin_wall_pixels(self.walls) if edge_detector == "auto" else None
         walls = np.pad(self.walls, 1, constant_values=False)
         vertical = walls[:-1, :] != walls[1:, :]  # face between padded rows r and r+1, column c
         horizontal = walls[:, :-1] != walls[:, 1:]  # face between padded cols c and c+1, row r
+        if thin is not None:
+            # Faces of thick walls only: a face borders exactly one wall pixel, and it counts
+            # when that pixel is not thin.
+            thick = np.pad(self.walls & ~thin, 1, constant_values=False)
+            vertical &= thick[:-1, :] | thick[1:, :]
+            horizontal &= thick[:, :-1] | thick[:, 1:]
         if edge_detector == "canny":
             cv2 = _cv2()
             edges = cv2.Canny(walls.astype(np.uint8) * 255, 100, 200, L2gradient=True) > 0
             vertical &= edges[:-1, :] | edges[1:, :]
             horizontal &= edges[:, :-1] | edges[:, 1:]
-        elif edge_detector != "boundary":
-            raise ValueError(f'edge_detector must be "boundary", "canny" or "centres", got {edge_detector!r}')
+        elif edge_detector not in ("boundary", "auto"):
+            raise ValueError(f'edge_detector must be "auto", "boundary", "canny" or "centres", got {edge_detector!r}')
         vr, vc = np.nonzero(vertical)
         hr, hc = np.nonzero(horizontal)
         # Unpadded image coordinates: the boundary between padded rows vr and vr+1 is image row vr.
         rows = np.concatenate([vr.astype(np.float64), hr - 1 + 0.5])
         cols = np.concatenate([vc - 1 + 0.5, hc.astype(np.float64)])
+        if thin is not None and thin.any():
+            thin_rows, thin_cols = np.nonzero(thin)
+            rows = np.concatenate([rows, thin_rows + 0.5])
+            cols = np.concatenate([cols, thin_cols + 0.5])
         return self.pixel_to_map(rows, cols)
 
     def boundary_face_count(self) -> int:
@@ -167,6 +183,23 @@ class PlanRaster:
         walls[margin : rows - margin, margin : cols - margin] = True
         walls &= ~inside
         return cls(np.ascontiguousarray(walls[::-1]), res, (float(lo[0]), float(lo[1]), 0.0))
+
+
+def thin_wall_pixels(walls: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """(H, W) bool: the wall pixels of walls drawn at most two pixels thick.
+
+    A wall pixel is part of a thick wall when it is, or touches (8-neighbourhood), a pixel whose
+    four neighbours are all wall: a wall three or more pixels across has such an interior, and every
+    pixel of it lies within one pixel of it. A wall one or two pixels across has none: the image
+    does not resolve its two faces, and the pixels mark where the surface is (a SLAM map's
+    occupied cells, where beams ended), not solid material.
+    """
+    cv2 = _cv2()
+    mask = walls.astype(np.uint8)
+    cross = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+    interior = cv2.erode(mask, cross, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    thick = cv2.dilate(interior, np.ones((3, 3), np.uint8)) > 0
+    return np.asarray(walls & ~thick, dtype=np.bool_)
 
 
 def _polygon(vertices: Any) -> NDArray[np.float64]:
