@@ -8,6 +8,8 @@ odometry T_odom_base, reference T_map_base where the log has one):
 * `planicp.io.bag.read_bag` / `write_bag` — ROS 1 and ROS 2 bags (needs `pip install planicp[ros]`),
 * `open_log` picks one of them from the path.
 
+Timestamps as real logs have them (coarse, missing, out of order): `repair_times` (`log_times`).
+
 Trajectories: `write_tum`, `read_tum`, `write_kitti`, `read_kitti`.
 """
 
@@ -18,6 +20,7 @@ from typing import Any
 
 from .carmen import read_carmen
 from .g2o import G2oGraph, read_g2o, read_g2o_graph
+from .log_times import DEFAULT_SCAN_PERIOD, TimeRepair, repair_times
 from .pose_interpolation import interpolate_poses
 from .scan_log import BadLine, ScanFrame, ScanLog
 from .trajectory_files import read_kitti, read_tum, write_kitti, write_tum
@@ -79,9 +82,11 @@ def _first_record(source: Path) -> str | None:
 
 __all__ = [
     "BadLine",
+    "DEFAULT_SCAN_PERIOD",
     "G2oGraph",
     "ScanFrame",
     "ScanLog",
+    "TimeRepair",
     "interpolate_poses",
     "open_log",
     "read_carmen",
@@ -89,6 +94,7 @@ __all__ = [
     "read_g2o_graph",
     "read_kitti",
     "read_tum",
+    "repair_times",
     "write_kitti",
     "write_tum",
 ]

@@ -10,7 +10,10 @@ Line formats (fields separated by white space, `#` starts a comment line)::
                 tv rv forward_safety side_safety turn_axis ts host logger_ts
 
 Interpretation:
-    * Time is the `ts` field (the sensor's timestamp), seconds.
+    * Time is the `ts` field (the sensor's timestamp), seconds. Stamps that are coarse (printed with
+      six significant digits), all equal or out of order are repaired with `repair_times` and a
+      warning: out-of-order lines are left out and counted, runs of equal stamps spread, a log
+      without timing taken `DEFAULT_SCAN_PERIOD` apart (`ScanLog.time_repair` says which).
     * FLASER/RLASER beams start at -90 degrees; n = 180 or 181 beams are 1 degree apart, 360 or 361
       beams 0.5 degree apart (as CARMEN's `carmen_laser_guess_angle_increment`), any other n spreads
       evenly over 180 degrees. A reading at or above the maximum range (`max_range` argument, else the
@@ -24,8 +27,8 @@ Interpretation:
     * Reference T_map_base (when `reference=True`): the line's laser pose (`x y theta`, corrected in a
       corrected log) moved back to the base: T_map_base = T_map_laser * inverse(T_base_laser).
     * Odometry T_odom_base: the ODOM stream interpolated to the scan time when the log has ODOM lines
-      that are not all (0, 0, 0) placeholders (scans outside the ODOM time span get None); otherwise the
-      robot pose on the laser line itself (`odom_x odom_y odom_theta`, `robot_x robot_y robot_theta`).
+      that are not all (0, 0, 0) placeholders and the scan stamps needed no repair (scans outside the
+      ODOM time span get None); otherwise the robot pose on the laser line itself (`odom_x odom_y odom_theta`, `robot_x robot_y robot_theta`).
 
 Bad lines: with `errors="skip"` (the default) a malformed line (truncated, wrong field count, a
 field that is not a number, a non-finite pose or time) is left out, recorded in `ScanLog.bad_lines`
@@ -37,7 +40,8 @@ with a ValueError naming the file and line. Unknown line types are counted in `s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -49,6 +53,7 @@ from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records
+from .log_times import TimeRepair, repair_times
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
@@ -250,10 +255,22 @@ def read_carmen(
         if other != chosen and lasers[other]:
             tally.skip(f"{other} (other laser)", len(lasers[other]))
 
-    frames, odo_t, odo_p = _frames(lasers[chosen], odom_rows, params, mount_override, max_range, reference,
+    chosen_records = lasers[chosen]
+    times, in_order, repair = repair_times(np.array([r.time for r in chosen_records], dtype=np.float64))
+    if repair.out_of_order:
+        tally.skip(f"{chosen} (out-of-order timestamp)", repair.out_of_order)
+    chosen_records = [replace(r, time=float(t)) for r, t in zip((r for r, k in zip(chosen_records, in_order) if k),
+                                                                 times)]
+    # Repaired stamps cannot be matched against the ODOM stream's: each line's own odometry is used.
+    stream_rows = odom_rows if repair.fallback == "none" else []
+    if repair.fallback != "none" and odom_rows:
+        tally.skip("ODOM (scan timestamps repaired: the laser lines' odometry is used)", len(odom_rows))
+    frames, odo_t, odo_p = _frames(chosen_records, stream_rows, params, mount_override, max_range, reference,
                                    tally.skipped)
     tally.warn(stacklevel=2)
-    return ScanLog(source, frames, odo_t, odo_p, tally.skipped, tally.bad, params)
+    if repair.message:
+        warnings.warn(f"{source}: {repair.message}", stacklevel=2)
+    return ScanLog(source, frames, odo_t, odo_p, tally.skipped, tally.bad, params, repair)
 
 
 def _frames(

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from .._validation import Pose, as_pose
 from ..laser_scan import scan_to_points
+from .log_times import TimeRepair
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,6 +109,8 @@ class ScanLog(Sequence[ScanFrame]):
             placeholder odometry, other lasers, ...).
         bad_lines: every malformed record with its line number and the reason.
         params: settings the log carries (CARMEN `PARAM` lines, bag metadata), as text.
+        time_repair: how the reader repaired the scans' timestamps (see `planicp.io.log_times`;
+            None when the reader does not repair them).
     """
 
     source: Path
@@ -117,6 +120,7 @@ class ScanLog(Sequence[ScanFrame]):
     skipped: dict[str, int] = field(default_factory=dict)
     bad_lines: list[BadLine] = field(default_factory=list)
     params: dict[str, str] = field(default_factory=dict)
+    time_repair: TimeRepair | None = None
 
     def __len__(self) -> int:
         return len(self.frames)

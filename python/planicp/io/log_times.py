@@ -1,0 +1,108 @@
+"""Timestamps of real logs as they are: coarse, repeated, missing or out of order.
+
+Real logs do not always carry usable scan times. Some CARMEN logs print UNIX times with six
+significant digits (`1.10287e+09`: a stamp that changes every 100 s), some write 0 on every line,
+and a log stitched from two runs can step back in time. `repair_times` turns such stamps into
+increasing times and says what it did, instead of refusing the log:
+
+1. A stamp below an earlier one is out of order. When at most `MAX_DISORDERED_SHARE` of the steps go
+   back, those records are left out (and counted); when more do, the stamps say nothing about the
+   order and are replaced by one `nominal_period` per record.
+2. When every (remaining) stamp is the same, the log has no timing: one `nominal_period` per record.
+3. Runs of equal stamps (coarse printing) make a clock that ticks over now and then. Between its
+   first and its last tick the records span exactly the stamps' difference: that gives the scan
+   period, and the records are taken that far apart (at `nominal_period` when it ticks fewer than
+   twice).
+
+Times are seconds; the result is strictly increasing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+DEFAULT_SCAN_PERIOD = 0.2
+"""Seconds per scan assumed when a log's stamps carry no timing (a SICK LMS 200 logged at 5 Hz, as
+in the CARMEN logs of the Radish collection)."""
+
+MAX_DISORDERED_SHARE = 0.05
+"""Largest share of steps going back in time for the stamps to be kept (the backward records left out)."""
+
+TimeFallback = Literal["none", "coarse", "missing", "disordered"]
+
+
+@dataclass(frozen=True)
+class TimeRepair:
+    """What `repair_times` did.
+
+    Attributes:
+        fallback: "none" (the stamps were strictly increasing), "coarse" (runs of equal stamps were
+            spread), "missing" (every stamp equal: `nominal_period` per record), "disordered" (too
+            many steps back: `nominal_period` per record).
+        out_of_order: records left out because their stamp went back in time.
+        repeated: records whose stamp repeated the previous one (before spreading).
+        message: one sentence for a warning ("" when nothing was done).
+    """
+
+    fallback: TimeFallback
+    out_of_order: int
+    repeated: int
+    message: str
+
+
+def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD
+                 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], TimeRepair]:
+    """(times, kept, repair): strictly increasing times for the `kept` records of `times` (seconds,
+    in record order), following the module's rules.
+
+    Raises:
+        ValueError: `nominal_period` is not a positive finite number, or a stamp is not finite.
+    """
+    if not (np.isfinite(nominal_period) and nominal_period > 0.0):
+        raise ValueError(f"nominal_period must be a positive number of seconds, got {nominal_period!r}")
+    t = np.asarray(times, dtype=np.float64)
+    if not np.isfinite(t).all():
+        raise ValueError("timestamps must be finite")
+    kept = np.ones(t.shape[0], dtype=bool)
+    if t.shape[0] < 2:
+        return t.copy(), kept, TimeRepair("none", 0, 0, "")
+    steps = np.diff(t)
+    if np.all(steps > 0.0):
+        return t.copy(), kept, TimeRepair("none", 0, 0, "")
+    backward = int(np.count_nonzero(steps < 0.0))
+    if backward > MAX_DISORDERED_SHARE * steps.shape[0]:
+        even = t[0] + nominal_period * np.arange(t.shape[0], dtype=np.float64)
+        return even, kept, TimeRepair(
+            "disordered", 0, 0, f"{backward} of {steps.shape[0]} timestamps go back in time: they are ignored, "
+            f"and the scans are taken {nominal_period:g} s apart")
+    # A record whose stamp is below the latest one before it is out of order.
+    earlier_max = np.maximum.accumulate(np.concatenate([[-np.inf], t[:-1]]))
+    kept = t >= earlier_max
+    out_of_order = int(np.count_nonzero(~kept))
+    u = t[kept]
+    repeated = int(np.count_nonzero(np.diff(u) == 0.0))
+    dropped = f"{out_of_order} record(s) with a timestamp earlier than the one before left out; " if out_of_order else ""
+    if repeated == 0:
+        return u.copy(), kept, TimeRepair("none", out_of_order, 0, dropped.rstrip("; "))
+    if u[-1] == u[0]:
+        even = u[0] + nominal_period * np.arange(u.shape[0], dtype=np.float64)
+        return even, kept, TimeRepair(
+            "missing", out_of_order, repeated, f"{dropped}every timestamp is {u[0]:g}: the scans are taken "
+            f"{nominal_period:g} s apart")
+    # A coarse clock ticks over between two records: from the first tick over to the last, the
+    # records span exactly the stamps' difference, which gives the scan period.
+    ticks = np.flatnonzero(np.diff(u) != 0.0) + 1
+    if ticks.shape[0] < 2:
+        period, start, anchor, how = nominal_period, 0, u[0], f"the scans are taken {nominal_period:g} s apart"
+    else:
+        first, last = int(ticks[0]), int(ticks[-1])
+        period, start, anchor = (u[last] - u[first]) / (last - first), first, u[first]
+        how = f"the scans are taken {period:.4g} s apart, the mean period between the stamps' changes"
+    out = anchor + period * (np.arange(u.shape[0], dtype=np.float64) - start)
+    return out, kept, TimeRepair(
+        "coarse", out_of_order, repeated, f"{dropped}{repeated} of {u.shape[0]} timestamps repeat the one "
+        f"before (coarse stamps): {how}")

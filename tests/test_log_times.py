@@ -1,0 +1,123 @@
+"""Timestamps as real logs have them: coarse, all equal, out of order (`planicp.io.log_times`)."""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import carmen_excerpt as ex
+from planicp.cli import main as cli_main
+from planicp.io import DEFAULT_SCAN_PERIOD, read_carmen, repair_times
+
+
+def test_increasing_stamps_are_kept_exactly() -> None:
+    t = np.array([1.0, 1.2, 1.45, 2.0])
+    out, kept, repair = repair_times(t)
+    np.testing.assert_array_equal(out, t)
+    assert kept.all() and repair.fallback == "none" and repair.message == ""
+
+
+def test_coarse_stamps_give_the_period_between_their_changes() -> None:
+    # A clock printed to 10 s (six significant digits of a UNIX time), scans every 2.5 s from 3 s
+    # past a tick: the stamps tick over before records 3 and 7.
+    true = 1.10287e9 + 3.0 + 2.5 * np.arange(10)
+    t = np.floor(true / 10.0) * 10.0
+    out, kept, repair = repair_times(t)
+    assert kept.all() and repair.fallback == "coarse" and repair.repeated == 7
+    np.testing.assert_allclose(np.diff(out), 2.5)
+    assert np.max(np.abs(out - true)) < 2.5  # within one scan period of the truth
+    assert "7 of 10 timestamps repeat" in repair.message and "2.5 s apart" in repair.message
+    # A clock that ticks over once says nothing of the period.
+    once, _, repair = repair_times(np.array([10.0, 10.0, 20.0, 20.0]), nominal_period=0.25)
+    np.testing.assert_allclose(np.diff(once), 0.25)
+
+
+def test_all_equal_stamps_take_the_nominal_period() -> None:
+    out, kept, repair = repair_times(np.zeros(5), nominal_period=0.1)
+    assert repair.fallback == "missing" and kept.all()
+    np.testing.assert_allclose(out, 0.1 * np.arange(5))
+    assert repair_times(np.zeros(3))[0][1] == pytest.approx(DEFAULT_SCAN_PERIOD)
+
+
+def test_a_stamp_going_back_is_left_out_and_counted() -> None:
+    t = np.arange(40, dtype=np.float64) * 0.2
+    t[17] = 1.0  # one record from the past
+    out, kept, repair = repair_times(t)
+    assert repair.out_of_order == 1 and not kept[17] and kept.sum() == 39
+    np.testing.assert_array_equal(out, np.delete(t, 17))
+    assert repair.fallback == "none" and "earlier than the one before" in repair.message
+
+
+def test_stamps_mostly_out_of_order_are_replaced() -> None:
+    t = np.array([5.0, 1.0, 4.0, 2.0, 3.0, 0.5])
+    out, kept, repair = repair_times(t, nominal_period=0.5)
+    assert repair.fallback == "disordered" and kept.all()
+    np.testing.assert_allclose(out, 5.0 + 0.5 * np.arange(6))
+
+
+def test_bad_arguments_are_refused_with_the_reason() -> None:
+    with pytest.raises(ValueError, match="nominal_period must be a positive number"):
+        repair_times(np.zeros(3), nominal_period=0.0)
+    with pytest.raises(ValueError, match="timestamps must be finite"):
+        repair_times(np.array([0.0, np.nan]))
+
+
+def _coarse_log(tmp_path: Path, slower: float) -> Path:
+    """The reader-test excerpt with its stamps printed as a UNIX time with 6 significant digits (a
+    clock ticking over every 10,000 s), the log's time running `slower` times as slow."""
+    def coarse(match: re.Match[str]) -> str:
+        return f"{1.10287e9 + float(match.group(0)) * slower:.6g}"
+
+    lines = []
+    for line in ex.log_lines():
+        fields = line.split()
+        if fields and fields[0] in ("FLASER", "ODOM"):
+            fields[-3] = coarse(re.match(r".*", fields[-3]))  # type: ignore[arg-type]
+            fields[-1] = coarse(re.match(r".*", fields[-1]))  # type: ignore[arg-type]
+        lines.append(" ".join(fields))
+    path = tmp_path / "coarse.log"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_reader_repairs_coarse_stamps_with_a_warning(tmp_path: Path) -> None:
+    path = _coarse_log(tmp_path, 1e4)  # scans 2,000 s apart: the clock ticks over four times
+    with pytest.warns(UserWarning, match="timestamps repeat the one before"):
+        log = read_carmen(path)
+    assert len(log) == ex.SCANS and log.time_repair is not None and log.time_repair.fallback == "coarse"
+    np.testing.assert_allclose(np.diff(log.times()), 1e4 * ex.SCAN_DT, rtol=0.15)
+    # The ODOM stream cannot be matched to repaired stamps: each line's own odometry is used.
+    assert log.skipped["ODOM (scan timestamps repaired: the laser lines' odometry is used)"] > 0
+    np.testing.assert_allclose(log[5].odometry, ex.odom_pose(1.0 + 5 * ex.SCAN_DT), atol=1e-5)
+
+
+def test_reader_leaves_out_a_line_from_the_past(tmp_path: Path) -> None:
+    lines = ex.log_lines()
+    flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
+    fields = lines[flaser[20]].split()
+    fields[-1] = fields[-3] = "0.5"  # earlier than every scan before it
+    lines[flaser[20]] = " ".join(fields)
+    path = tmp_path / "disordered.log"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match="1 record"):
+        log = read_carmen(path)
+    assert len(log) == ex.SCANS - 1 and log.skipped["FLASER (out-of-order timestamp)"] == 1
+
+
+def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path,
+                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "eval"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        # Every stamp prints as 1.10287e+09: before the repair, writing the TUM trajectory refused the log.
+        code = cli_main(["evaluate-log", str(_coarse_log(tmp_path, 1.0)), "--out", str(out)])
+    assert code == 0, capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["planicp"]["ate_rms_m"] < 0.05
+    times = np.loadtxt(out / "trajectory.tum")[:, 0]
+    assert np.all(np.diff(times) > 0)
