@@ -233,13 +233,25 @@ def test_quality_figure_and_progress_bar() -> None:
     assert len(fig.axes) == 2
     with pytest.raises(ValueError, match="must have one shape"):
         plot_quality([0.0, 1.0], [0.9], [0.01], [True])
-    stream = io.StringIO()
-    report = progress_bar(stream, 10, "scans")
-    for k in range(1, 11):
+    stream = io.StringIO()  # a file or a pipe: plain lines, no carriage-return frames
+    report = progress_bar(stream, 1000, "scans")
+    for k in range(1, 1001):
         report(k)
     text = stream.getvalue()
-    assert "100 %" in text and "10 / 10 scans" in text
+    assert "\r" not in text
+    lines = text.splitlines()
+    assert len(lines) == 10 and "100 %" in lines[-1] and "1,000 / 1,000 scans" in lines[-1]
     progress_bar(None, 10, "scans")(5)  # silent without a stream
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    terminal = Terminal()  # a terminal: one bar redrawn in place
+    report = progress_bar(terminal, 10, "scans")
+    for k in range(1, 11):
+        report(k)
+    assert "\r" in terminal.getvalue() and "10/10" in terminal.getvalue()
 
 
 INTEL = Path(__file__).resolve().parents[2] / "shared" / "data" / "logs" / "intel-corrected.log.gz"

@@ -1,4 +1,9 @@
-"""A one-line progress bar for the command line (no dependency; silent without a stream)."""
+"""Progress of a long command (log replay, evaluation, sweeps) on the command line.
+
+On a terminal the bar is tqdm's, redrawn in place. Written to a file or a pipe (a CI log, `| tee`),
+a bar redrawn with carriage returns would be one long line of frames, so a plain line is printed at
+every tenth of the work instead.
+"""
 
 from __future__ import annotations
 
@@ -6,27 +11,42 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
+from tqdm import tqdm
 
-def progress_bar(stream: TextIO | None, total: float, unit: str, width: int = 20) -> Callable[[float], None]:
-    """A function to call with the amount done so far (in `unit`s, out of `total`); it redraws the
-    bar on `stream` with the elapsed time when the percentage has changed, at most 5 times a
-    second. Does nothing when `stream` is None."""
-    started = time.perf_counter()
-    last = [-1.0, -1.0]  # percent and time of the last redraw
+
+def progress_bar(stream: TextIO | None, total: float, unit: str) -> Callable[[float], None]:
+    """A function to call with the amount done so far (in `unit`s, out of `total`); it shows the
+    progress on `stream` (see the module documentation). Does nothing when `stream` is None."""
+    if stream is None:
+        return lambda done: None
+    isatty = getattr(stream, "isatty", None)
+    if callable(isatty) and isatty():
+        return _terminal_bar(stream, total, unit)
+    return _plain_lines(stream, total, unit)
+
+
+def _terminal_bar(stream: TextIO, total: float, unit: str) -> Callable[[float], None]:
+    bar = tqdm(total=total, unit=f" {unit}", file=stream, leave=True, dynamic_ncols=True, mininterval=0.2)
 
     def report(done: float) -> None:
-        if stream is None:
-            return
+        bar.update(max(0.0, min(done, total)) - bar.n)
+        if done >= total:
+            bar.close()
+
+    return report
+
+
+def _plain_lines(stream: TextIO, total: float, unit: str) -> Callable[[float], None]:
+    started = time.perf_counter()
+    last = [-1]  # the last tenth printed
+
+    def report(done: float) -> None:
         share = min(max(done / total, 0.0), 1.0) if total > 0 else 1.0
-        percent = int(100 * share)
-        now = time.perf_counter()
-        # Redraw at most 5 times a second (and always at the end) so that the bar costs nothing.
-        if percent == last[0] or (now - last[1] < 0.2 and percent < 100):
+        tenth = int(10 * share)
+        if tenth <= last[0]:
             return
-        last[0], last[1] = percent, now
-        filled = int(width * share)
-        bar = "#" * filled + "." * (width - filled)
-        print(f"\r  [{bar}] {percent:3d} %  {done:,.0f} / {total:,.0f} {unit}, {now - started:5.1f} s",
-              end="", file=stream, flush=True)
+        last[0] = tenth
+        print(f"  {10 * tenth:3d} %  {done:,.0f} / {total:,.0f} {unit}, {time.perf_counter() - started:.1f} s",
+              file=stream, flush=True)
 
     return report
