@@ -44,13 +44,15 @@ def test_all_equal_stamps_take_the_nominal_period() -> None:
     assert repair_times(np.zeros(3))[0][1] == pytest.approx(DEFAULT_SCAN_PERIOD)
 
 
-def test_a_stamp_going_back_is_left_out_and_counted() -> None:
-    t = np.arange(40, dtype=np.float64) * 0.2
-    t[17] = 1.0  # one record from the past
+def test_a_stamp_going_back_is_replaced_and_the_record_kept() -> None:
+    t = np.arange(60, dtype=np.float64) * 0.2
+    t[17] = 1.0  # a glitched stamp
+    t[59] = 0.5  # and one on the last record
     out, kept, repair = repair_times(t)
-    assert repair.out_of_order == 1 and not kept[17] and kept.sum() == 39
-    np.testing.assert_array_equal(out, np.delete(t, 17))
-    assert repair.fallback == "none" and "earlier than the one before" in repair.message
+    assert repair.out_of_order == 2 and kept.all()
+    assert out[17] == pytest.approx(3.4) and out[59] == pytest.approx(11.8)
+    np.testing.assert_allclose(np.delete(out, [17, 59]), np.delete(0.2 * np.arange(60), [17, 59]))
+    assert repair.fallback == "none" and "earlier than the one before replaced" in repair.message
 
 
 def test_stamps_mostly_out_of_order_are_replaced() -> None:
@@ -96,7 +98,7 @@ def test_reader_repairs_coarse_stamps_with_a_warning(tmp_path: Path) -> None:
     np.testing.assert_allclose(log[5].odometry, ex.odom_pose(1.0 + 5 * ex.SCAN_DT), atol=1e-5)
 
 
-def test_reader_leaves_out_a_line_from_the_past(tmp_path: Path) -> None:
+def test_reader_keeps_a_line_whose_stamp_goes_back(tmp_path: Path) -> None:
     lines = ex.log_lines()
     flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
     fields = lines[flaser[20]].split()
@@ -104,9 +106,12 @@ def test_reader_leaves_out_a_line_from_the_past(tmp_path: Path) -> None:
     lines[flaser[20]] = " ".join(fields)
     path = tmp_path / "disordered.log"
     path.write_text("\n".join(lines) + "\n")
-    with pytest.warns(UserWarning, match="1 record"):
+    with pytest.warns(UserWarning, match="1 timestamp"):
         log = read_carmen(path)
-    assert len(log) == ex.SCANS - 1 and log.skipped["FLASER (out-of-order timestamp)"] == 1
+    assert len(log) == ex.SCANS and log.time_repair is not None and log.time_repair.out_of_order == 1
+    assert log[20].time == pytest.approx(1.0 + 20 * ex.SCAN_DT)
+    # Odometry from the ODOM stream at the repaired stamp, as for every other scan.
+    np.testing.assert_allclose(log[20].odometry, ex.odom_pose(1.0 + 20 * ex.SCAN_DT), atol=1e-3)
 
 
 def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path,

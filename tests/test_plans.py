@@ -65,13 +65,18 @@ def test_image_ros_map_round_trip(floor: synthetic.Floor, tmp_path: Path) -> Non
 @pytest.mark.parametrize("name", ["tb3_sandbox", "depot"])
 def test_ros_map_and_image_of_it_agree(name: str) -> None:
     """nav2 maps (negative origins, trinary): the ROS map and the same PGM read as an image with the
-    equivalent threshold give identical points, inside the map's extent."""
+    equivalent threshold and the same reading of its pixels give identical points, inside the map's
+    extent. By default the map is read as an occupancy grid (thin walls' cell centres) and the
+    image as a drawing (every face)."""
     ros = read_ros_map(DATA / f"{name}.yaml")
-    plan = PlanMap.from_ros_map(DATA / f"{name}.yaml")
     # trinary occupied: (255 - v) / 255 > occupied_thresh  <=>  v < 255 * (1 - occupied_thresh)
     threshold = math.ceil(255 * (1 - ros.occupied_thresh))
-    image_plan = PlanMap.from_image(DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold)
-    np.testing.assert_array_equal(plan.points, image_plan.points)
+    for ros_reading, image_reading in (("auto", "auto"), ("boundary", "boundary")):
+        plan = PlanMap.from_ros_map(DATA / f"{name}.yaml", edge_detector=ros_reading)
+        image_plan = PlanMap.from_image(DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold,
+                                        edge_detector=image_reading)
+        np.testing.assert_array_equal(plan.points, image_plan.points)
+    assert len(PlanMap.from_ros_map(DATA / f"{name}.yaml")) < len(plan)  # thin walls: one point per cell, not two
     rows, cols = ros.occupancy.shape
     xmin, ymin, xmax, ymax = plan.extent
     assert ros.origin[0] <= xmin and xmax <= ros.origin[0] + cols * ros.resolution

@@ -38,7 +38,7 @@ def _terminal_bar(stream: TextIO, total: float, unit: str) -> Callable[[float], 
 
 def _plain_lines(stream: TextIO, total: float, unit: str) -> Callable[[float], None]:
     started = time.perf_counter()
-    last = [-1]  # the last tenth printed
+    last = [0]  # the last tenth printed
 
     def report(done: float) -> None:
         share = min(max(done / total, 0.0), 1.0) if total > 0 else 1.0

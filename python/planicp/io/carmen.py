@@ -12,8 +12,9 @@ Line formats (fields separated by white space, `#` starts a comment line)::
 Interpretation:
     * Time is the `ts` field (the sensor's timestamp), seconds. Stamps that are coarse (printed with
       six significant digits), all equal or out of order are repaired with `repair_times` and a
-      warning: out-of-order lines are left out and counted, runs of equal stamps spread, a log
-      without timing taken `DEFAULT_SCAN_PERIOD` apart (`ScanLog.time_repair` says which).
+      warning: a stamp that goes back is replaced by its neighbours' middle, a coarse clock gives
+      the period between its ticks, a log without timing is taken `DEFAULT_SCAN_PERIOD` apart
+      (`ScanLog.time_repair` says which).
     * FLASER/RLASER beams start at -90 degrees; n = 180 or 181 beams are 1 degree apart, 360 or 361
       beams 0.5 degree apart (as CARMEN's `carmen_laser_guess_angle_increment`), any other n spreads
       evenly over 180 degrees. A reading at or above the maximum range (`max_range` argument, else the
@@ -257,8 +258,6 @@ def read_carmen(
 
     chosen_records = lasers[chosen]
     times, in_order, repair = repair_times(np.array([r.time for r in chosen_records], dtype=np.float64))
-    if repair.out_of_order:
-        tally.skip(f"{chosen} (out-of-order timestamp)", repair.out_of_order)
     chosen_records = [replace(r, time=float(t)) for r, t in zip((r for r, k in zip(chosen_records, in_order) if k),
                                                                  times)]
     # Repaired stamps cannot be matched against the ODOM stream's: each line's own odometry is used.

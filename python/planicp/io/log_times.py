@@ -5,9 +5,10 @@ significant digits (`1.10287e+09`: a stamp that changes every 100 s), some write
 and a log stitched from two runs can step back in time. `repair_times` turns such stamps into
 increasing times and says what it did, instead of refusing the log:
 
-1. A stamp below an earlier one is out of order. When at most `MAX_DISORDERED_SHARE` of the steps go
-   back, those records are left out (and counted); when more do, the stamps say nothing about the
-   order and are replaced by one `nominal_period` per record.
+1. A stamp below an earlier one is a glitch of the clock (the file's order is the recording's). When
+   at most `MAX_DISORDERED_SHARE` of the steps go back, such a record is kept and its stamp becomes
+   the middle of its in-order neighbours' (and counted); when more do, the stamps say nothing and
+   are replaced by one `nominal_period` per record.
 2. When every (remaining) stamp is the same, the log has no timing: one `nominal_period` per record.
 3. Runs of equal stamps (coarse printing) make a clock that ticks over now and then. Between its
    first and its last tick the records span exactly the stamps' difference: that gives the scan
@@ -43,7 +44,7 @@ class TimeRepair:
         fallback: "none" (the stamps were strictly increasing), "coarse" (runs of equal stamps were
             spread), "missing" (every stamp equal: `nominal_period` per record), "disordered" (too
             many steps back: `nominal_period` per record).
-        out_of_order: records left out because their stamp went back in time.
+        out_of_order: records whose stamp went back in time and was replaced.
         repeated: records whose stamp repeated the previous one (before spreading).
         message: one sentence for a warning ("" when nothing was done).
     """
@@ -57,7 +58,7 @@ class TimeRepair:
 def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD
                  ) -> tuple[NDArray[np.float64], NDArray[np.bool_], TimeRepair]:
     """(times, kept, repair): strictly increasing times for the `kept` records of `times` (seconds,
-    in record order), following the module's rules.
+    in record order), following the module's rules (today every record is kept).
 
     Raises:
         ValueError: `nominal_period` is not a positive finite number, or a stamp is not finite.
@@ -79,13 +80,23 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
         return even, kept, TimeRepair(
             "disordered", 0, 0, f"{backward} of {steps.shape[0]} timestamps go back in time: they are ignored, "
             f"and the scans are taken {nominal_period:g} s apart")
-    # A record whose stamp is below the latest one before it is out of order.
+    # A record whose stamp is below the latest one before it has a glitched stamp: the file's order
+    # is the recording's, so the record is kept and takes the middle of its in-order neighbours.
     earlier_max = np.maximum.accumulate(np.concatenate([[-np.inf], t[:-1]]))
-    kept = t >= earlier_max
-    out_of_order = int(np.count_nonzero(~kept))
-    u = t[kept]
+    late = t < earlier_max
+    out_of_order = int(np.count_nonzero(late))
+    u = t.copy()
+    if out_of_order:
+        index = np.arange(t.shape[0], dtype=np.float64)
+        u[late] = np.interp(index[late], index[~late], t[~late])
+        steps_in_order = np.diff(t[~late])
+        step = float(np.median(steps_in_order[steps_in_order > 0])) if np.any(steps_in_order > 0) else nominal_period
+        for k in np.flatnonzero(late):  # after the last stamp in order: one step on
+            if u[k] <= u[k - 1]:
+                u[k] = u[k - 1] + step
     repeated = int(np.count_nonzero(np.diff(u) == 0.0))
-    dropped = f"{out_of_order} record(s) with a timestamp earlier than the one before left out; " if out_of_order else ""
+    dropped = (f"{out_of_order} timestamp(s) earlier than the one before replaced by the middle of their "
+               f"neighbours' (the records are kept in the log's order); ") if out_of_order else ""
     if repeated == 0:
         return u.copy(), kept, TimeRepair("none", out_of_order, 0, dropped.rstrip("; "))
     if u[-1] == u[0]:
