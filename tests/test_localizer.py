@@ -316,6 +316,38 @@ def test_an_uncertain_prediction_is_searched_around(
     assert error(path[0], est.pose)[0] < 0.05 and error(path[0], est.pose)[1] < 1 * DEG
 
 
+def test_a_search_for_an_uncertain_prediction_covers_only_what_it_allows(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The search around an uncertain prediction covers the places that can pass the fusion's
+    99.9 % bound (sqrt(16.266) = 4.03 sigma, widened by the refinement's reach), not every
+    heading within the recovery's radius; a search after a rejected jump (odometry may have
+    faulted) still covers the whole neighbourhood."""
+    import planicp.localizer as localizer_module
+
+    regions: list[Any] = []
+    search = localizer_module.relocalize
+
+    def recording(*args: Any, **kwargs: Any) -> Any:
+        regions.append(kwargs["region"])
+        return search(*args, **kwargs)
+
+    monkeypatch.setattr(localizer_module, "relocalize", recording)
+    off = se2.compose(path[0], (0.7, -0.7, 8 * DEG))
+    wide = np.diag([0.4**2, 0.4**2, (5 * DEG) ** 2])
+    est = Localizer(plan, off, initial_covariance=wide).update(scans[0], (0.0, 0.0, 0.0))
+    assert est.accepted and est.relocalized and error(path[0], est.pose)[0] < 0.05, est.reason
+    (region,) = regions
+    k = math.sqrt(16.266)
+    assert region.radius == pytest.approx(k * 0.4 + 0.25, rel=1e-3)  # + the ICP's correspondence distance
+    assert region.yaw_tolerance == pytest.approx(k * 5 * DEG + 2 * 2 * DEG, rel=1e-3)  # + two heading steps
+    regions.clear()
+    loc = Localizer(plan, path[0])
+    loc.update(scans[0], (0.0, 0.0, 0.0))
+    loc.update(scans[1], se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG)))
+    assert [(r.radius, r.yaw_tolerance) for r in regions] == [(3.0, math.pi)]
+
+
 def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> None:
     """A start pose given with 0.35-0.5 m and 2 degrees of uncertainty (as from RViz) makes the first
     update search around it (3 sigma above the gate's 0.5 m). With a 6 m, 180-degree scanner, a place

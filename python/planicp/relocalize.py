@@ -251,6 +251,14 @@ def relocalize(
     )
 
 
+def prepare_search(plan: PlanMap, config: RelocalizationConfig | None = None) -> None:
+    """Builds the plan's likelihood pyramid for `relocalize` with `config` now, rather than in the
+    first search (30 ms on the real logs' plans of 70 x 60 m); it is kept for the next searches."""
+    if not isinstance(plan, PlanMap):
+        raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
+    _matcher(plan, _default_config() if config is None else config)
+
+
 def _candidate(raw: _core.RelocalizationCandidate, covariance_scale: float) -> Candidate:
     a = raw.alignment
     result = IcpResult.from_alignment(a, covariance_scale)
