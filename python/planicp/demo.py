@@ -35,6 +35,7 @@ from .localize import localize
 from .plan_figure import plot_plan_overlay
 from .plan_loading import load_plan
 from .plan_map import PlanMap
+from .progress import progress_bar
 from .sim.experiment import ExperimentConfig, Recording, replay, run_experiment
 
 EOG_RESOLUTION = 0.05
@@ -48,23 +49,6 @@ ABLATIONS: dict[str, tuple[IcpConfig, dict[str, Any]]] = {
     # Every in-range pair counts: no automatic trimming of the clutter near the walls.
     "without automatic trimming": (IcpConfig(correspondence_search="kd_tree"), {}),
 }
-
-
-def _progress(stream: TextIO | None, total: float) -> Any:
-    started = time.perf_counter()
-    last = [-1]
-
-    def report(t: float) -> None:
-        if stream is None:
-            return
-        tenth = int(10 * t / total)
-        if tenth != last[0]:
-            last[0] = tenth
-            bar = "#" * tenth + "." * (10 - tenth)
-            print(f"\r  [{bar}] {t:6.1f} / {total:.0f} s simulated, {time.perf_counter() - started:5.1f} s",
-                  end="", file=stream, flush=True)
-
-    return report
 
 
 def _summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str, str, str, str]]:
@@ -166,9 +150,9 @@ def run_demo(
     config = ExperimentConfig(duration_s=duration, seed=seed)
     if stream is not None:
         print(f"planicp {__version__} demo: {plan_name}, {duration:.0f} s simulated, seed {seed}", file=stream)
-    recording, world = run_experiment(plan, config, _progress(stream, duration))
-    if stream is not None:
-        print(file=stream)
+    progress = progress_bar(stream, duration, "s simulated")
+    recording, world = run_experiment(plan, config, progress)
+    progress(duration)
     runs = {"planicp (default)": recording.metrics()}
     for name, (icp, options) in ABLATIONS.items():
         runs[name] = replay(plan, recording, icp, config.gate, **options).metrics()

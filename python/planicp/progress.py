@@ -29,6 +29,8 @@ def _terminal_bar(stream: TextIO, total: float, unit: str) -> Callable[[float], 
     bar = tqdm(total=total, unit=f" {unit}", file=stream, leave=True, dynamic_ncols=True, mininterval=0.2)
 
     def report(done: float) -> None:
+        if bar.disable:  # closed: the work is done
+            return
         bar.update(max(0.0, min(done, total)) - bar.n)
         if done >= total:
             bar.close()

@@ -54,7 +54,7 @@ from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records
-from .log_times import TimeRepair, repair_times
+from .log_times import repair_times
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
