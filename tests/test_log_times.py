@@ -17,9 +17,9 @@ from planicp.io import DEFAULT_SCAN_PERIOD, read_carmen, repair_times
 
 def test_increasing_stamps_are_kept_exactly() -> None:
     t = np.array([1.0, 1.2, 1.45, 2.0])
-    out, kept, repair = repair_times(t)
+    out, repair = repair_times(t)
     np.testing.assert_array_equal(out, t)
-    assert kept.all() and repair.fallback == "none" and repair.message == ""
+    assert repair.fallback == "none" and repair.message == ""
 
 
 def test_coarse_stamps_give_the_period_between_their_changes() -> None:
@@ -27,19 +27,19 @@ def test_coarse_stamps_give_the_period_between_their_changes() -> None:
     # past a tick: the stamps tick over before records 3 and 7.
     true = 1.10287e9 + 3.0 + 2.5 * np.arange(10)
     t = np.floor(true / 10.0) * 10.0
-    out, kept, repair = repair_times(t)
-    assert kept.all() and repair.fallback == "coarse" and repair.repeated == 7
+    out, repair = repair_times(t)
+    assert repair.fallback == "coarse" and repair.repeated == 7
     np.testing.assert_allclose(np.diff(out), 2.5)
     assert np.max(np.abs(out - true)) < 2.5  # within one scan period of the truth
     assert "7 of 10 timestamps repeat" in repair.message and "2.5 s apart" in repair.message
     # A clock that ticks over once says nothing of the period.
-    once, _, repair = repair_times(np.array([10.0, 10.0, 20.0, 20.0]), nominal_period=0.25)
+    once, repair = repair_times(np.array([10.0, 10.0, 20.0, 20.0]), nominal_period=0.25)
     np.testing.assert_allclose(np.diff(once), 0.25)
 
 
 def test_all_equal_stamps_take_the_nominal_period() -> None:
-    out, kept, repair = repair_times(np.zeros(5), nominal_period=0.1)
-    assert repair.fallback == "missing" and kept.all()
+    out, repair = repair_times(np.zeros(5), nominal_period=0.1)
+    assert repair.fallback == "missing"
     np.testing.assert_allclose(out, 0.1 * np.arange(5))
     assert repair_times(np.zeros(3))[0][1] == pytest.approx(DEFAULT_SCAN_PERIOD)
 
@@ -48,8 +48,8 @@ def test_a_stamp_going_back_is_replaced_and_the_record_kept() -> None:
     t = np.arange(60, dtype=np.float64) * 0.2
     t[17] = 1.0  # a glitched stamp
     t[59] = 0.5  # and one on the last record
-    out, kept, repair = repair_times(t)
-    assert repair.out_of_order == 2 and kept.all()
+    out, repair = repair_times(t)
+    assert repair.out_of_order == 2
     assert out[17] == pytest.approx(3.4) and out[59] == pytest.approx(11.8)
     np.testing.assert_allclose(np.delete(out, [17, 59]), np.delete(0.2 * np.arange(60), [17, 59]))
     assert repair.fallback == "none" and "earlier than the one before replaced" in repair.message
@@ -57,8 +57,8 @@ def test_a_stamp_going_back_is_replaced_and_the_record_kept() -> None:
 
 def test_stamps_mostly_out_of_order_are_replaced() -> None:
     t = np.array([5.0, 1.0, 4.0, 2.0, 3.0, 0.5])
-    out, kept, repair = repair_times(t, nominal_period=0.5)
-    assert repair.fallback == "disordered" and kept.all()
+    out, repair = repair_times(t, nominal_period=0.5)
+    assert repair.fallback == "disordered"
     np.testing.assert_allclose(out, 5.0 + 0.5 * np.arange(6))
 
 
@@ -126,3 +126,22 @@ def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path,
     assert metrics["planicp"]["ate_rms_m"] < 0.05
     times = np.loadtxt(out / "trajectory.tum")[:, 0]
     assert np.all(np.diff(times) > 0)
+
+
+def test_g2o_reader_repairs_stamps_that_never_change(tmp_path: Path) -> None:
+    from planicp.io import read_g2o
+
+    killian = Path(__file__).parent / "data" / "killian-excerpt.g2o"
+    lines = []
+    for line in killian.read_text().splitlines():
+        fields = line.split()
+        if fields and fields[0] == "ROBOTLASER1":
+            fields[-1] = fields[-3] = "0"  # ts and logger_ts
+        lines.append(" ".join(fields))
+    path = tmp_path / "zero.g2o"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match="every timestamp is 0"):
+        log = read_g2o(path)
+    assert len(log) == 60 and log.time_repair is not None and log.time_repair.fallback == "missing"
+    np.testing.assert_allclose(log.times(), DEFAULT_SCAN_PERIOD * np.arange(60))
+    np.testing.assert_array_equal(log.odometry_at_scans(), read_g2o(killian).odometry_at_scans())

@@ -20,7 +20,6 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
-
 from . import _core
 from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
 from .icp_config import IcpConfig

@@ -28,8 +28,9 @@ Interpretation:
     * Reference T_map_base (when `reference=True`): the line's laser pose (`x y theta`, corrected in a
       corrected log) moved back to the base: T_map_base = T_map_laser * inverse(T_base_laser).
     * Odometry T_odom_base: the ODOM stream interpolated to the scan time when the log has ODOM lines
-      that are not all (0, 0, 0) placeholders and the scan stamps needed no repair (scans outside the
-      ODOM time span get None); otherwise the robot pose on the laser line itself (`odom_x odom_y odom_theta`, `robot_x robot_y robot_theta`).
+      that are not all (0, 0, 0) placeholders and the scans' stamps were not coarse or missing (scans
+      outside the ODOM time span get None); otherwise the robot pose on the laser line itself
+      (`odom_x odom_y odom_theta`, `robot_x robot_y robot_theta`).
 
 Bad lines: with `errors="skip"` (the default) a malformed line (truncated, wrong field count, a
 field that is not a number, a non-finite pose or time) is left out, recorded in `ScanLog.bad_lines`
@@ -256,11 +257,10 @@ def read_carmen(
         if other != chosen and lasers[other]:
             tally.skip(f"{other} (other laser)", len(lasers[other]))
 
-    chosen_records = lasers[chosen]
-    times, in_order, repair = repair_times(np.array([r.time for r in chosen_records], dtype=np.float64))
-    chosen_records = [replace(r, time=float(t)) for r, t in zip((r for r, k in zip(chosen_records, in_order) if k),
-                                                                 times)]
-    # Repaired stamps cannot be matched against the ODOM stream's: each line's own odometry is used.
+    times, repair = repair_times(np.array([r.time for r in lasers[chosen]], dtype=np.float64))
+    chosen_records = [replace(r, time=float(t)) for r, t in zip(lasers[chosen], times)]
+    # Stamps made up for coarse or missing ones cannot be matched against the ODOM stream's: each
+    # line's own odometry is used.
     stream_rows = odom_rows if repair.fallback == "none" else []
     if repair.fallback != "none" and odom_rows:
         tally.skip("ODOM (scan timestamps repaired: the laser lines' odometry is used)", len(odom_rows))

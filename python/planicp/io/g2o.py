@@ -9,15 +9,18 @@ Line formats::
 A ROBOTLASER1 line belongs to the VERTEX_SE2 just before it. The vertices of such graphs are chained
 from wheel odometry, so every scan gets its vertex pose as odometry (T_odom_base) and no reference
 pose; the laser mount is the offset of the line's laser pose from its robot pose, and readings at or
-above the line's maximum range are "no return" (+inf). Time is the line's `ts` field. The file may be
-plain, gzip-compressed or a zip archive holding one `.g2o` (as `rtb-data` ships `killian.g2o.zip`).
+above the line's maximum range are "no return" (+inf). Time is the line's `ts` field, repaired as
+`read_carmen` repairs it when stamps are coarse, missing or out of order (`repair_times`). The file
+may be plain, gzip-compressed or a zip archive holding one `.g2o` (as `rtb-data` ships
+`killian.g2o.zip`).
 Bad lines are handled as in `read_carmen` (`errors="skip"` records and counts them).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -29,6 +32,7 @@ from ..se2 import between
 from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser
 from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records
+from .log_times import repair_times
 
 
 @dataclass(eq=False)
@@ -111,7 +115,10 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
     graph = G2oGraph(np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 3),
                      np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(meas, dtype=np.float64).reshape(-1, 3),
                      info_m)
+    times, repair = repair_times(np.array([f.time for f in frames], dtype=np.float64))
+    if repair.message:
+        warnings.warn(f"{source}: {repair.message}", stacklevel=3)
+        frames = [replace(f, time=float(t)) for f, t in zip(frames, times)]
     odometry = np.array([f.odometry for f in frames], dtype=np.float64).reshape(-1, 3)
-    log = ScanLog(source, frames, np.array([f.time for f in frames], dtype=np.float64), odometry, tally.skipped,
-                  tally.bad, {})
+    log = ScanLog(source, frames, times, odometry, tally.skipped, tally.bad, {}, repair)
     return log, graph

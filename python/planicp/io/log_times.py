@@ -31,7 +31,7 @@ DEFAULT_SCAN_PERIOD = 0.2
 in the CARMEN logs of the Radish collection)."""
 
 MAX_DISORDERED_SHARE = 0.05
-"""Largest share of steps going back in time for the stamps to be kept (the backward records left out)."""
+"""Largest share of steps going back in time for the stamps to be kept (those steps re-stamped)."""
 
 TimeFallback = Literal["none", "coarse", "missing", "disordered"]
 
@@ -56,9 +56,9 @@ class TimeRepair:
 
 
 def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD
-                 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], TimeRepair]:
-    """(times, kept, repair): strictly increasing times for the `kept` records of `times` (seconds,
-    in record order), following the module's rules (today every record is kept).
+                 ) -> tuple[NDArray[np.float64], TimeRepair]:
+    """(times, repair): strictly increasing times for the records stamped `times` (seconds, in
+    record order), following the module's rules; every record keeps its place.
 
     Raises:
         ValueError: `nominal_period` is not a positive finite number, or a stamp is not finite.
@@ -68,16 +68,15 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
     t = np.asarray(times, dtype=np.float64)
     if not np.isfinite(t).all():
         raise ValueError("timestamps must be finite")
-    kept = np.ones(t.shape[0], dtype=bool)
     if t.shape[0] < 2:
-        return t.copy(), kept, TimeRepair("none", 0, 0, "")
+        return t.copy(), TimeRepair("none", 0, 0, "")
     steps = np.diff(t)
     if np.all(steps > 0.0):
-        return t.copy(), kept, TimeRepair("none", 0, 0, "")
+        return t.copy(), TimeRepair("none", 0, 0, "")
     backward = int(np.count_nonzero(steps < 0.0))
     if backward > MAX_DISORDERED_SHARE * steps.shape[0]:
         even = t[0] + nominal_period * np.arange(t.shape[0], dtype=np.float64)
-        return even, kept, TimeRepair(
+        return even, TimeRepair(
             "disordered", 0, 0, f"{backward} of {steps.shape[0]} timestamps go back in time: they are ignored, "
             f"and the scans are taken {nominal_period:g} s apart")
     # A record whose stamp is below the latest one before it has a glitched stamp: the file's order
@@ -95,14 +94,14 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
             if u[k] <= u[k - 1]:
                 u[k] = u[k - 1] + step
     repeated = int(np.count_nonzero(np.diff(u) == 0.0))
-    dropped = (f"{out_of_order} timestamp(s) earlier than the one before replaced by the middle of their "
+    restamped = (f"{out_of_order} timestamp(s) earlier than the one before replaced by the middle of their "
                f"neighbours' (the records are kept in the log's order); ") if out_of_order else ""
     if repeated == 0:
-        return u.copy(), kept, TimeRepair("none", out_of_order, 0, dropped.rstrip("; "))
+        return u, TimeRepair("none", out_of_order, 0, restamped.rstrip("; "))
     if u[-1] == u[0]:
         even = u[0] + nominal_period * np.arange(u.shape[0], dtype=np.float64)
-        return even, kept, TimeRepair(
-            "missing", out_of_order, repeated, f"{dropped}every timestamp is {u[0]:g}: the scans are taken "
+        return even, TimeRepair(
+            "missing", out_of_order, repeated, f"{restamped}every timestamp is {u[0]:g}: the scans are taken "
             f"{nominal_period:g} s apart")
     # A coarse clock ticks over between two records: from the first tick over to the last, the
     # records span exactly the stamps' difference, which gives the scan period.
@@ -114,6 +113,6 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
         period, start, anchor = (u[last] - u[first]) / (last - first), first, u[first]
         how = f"the scans are taken {period:.4g} s apart, the mean period between the stamps' changes"
     out = anchor + period * (np.arange(u.shape[0], dtype=np.float64) - start)
-    return out, kept, TimeRepair(
-        "coarse", out_of_order, repeated, f"{dropped}{repeated} of {u.shape[0]} timestamps repeat the one "
+    return out, TimeRepair(
+        "coarse", out_of_order, repeated, f"{restamped}{repeated} of {u.shape[0]} timestamps repeat the one "
         f"before (coarse stamps): {how}")
