@@ -2,8 +2,8 @@
 and a `Localizer` with no options.
 
 The recording is the shipped excerpt of MIT Killian Court (60 real 180-beam scans, rtb-data, MIT
-licence). Its vertex poses are the robot's raw odometry, consistent over these 60 scans (about
-25 m): they serve as the reference. As `planicp evaluate-log` and the real-log benchmark do, the
+licence). Its vertex poses are the robot's raw odometry, consistent over these 60 scans (33 m of
+path): they serve as the reference. As `planicp evaluate-log` and the real-log benchmark do, the
 even-numbered scans placed at their poses draw the map (a cell is occupied when two end points fall
 in it), written as a map_server PGM + YAML; the odd-numbered scans are tracked against it from
 drifting synthetic odometry.
