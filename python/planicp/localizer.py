@@ -20,7 +20,7 @@ from .localize import localize
 from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
-from .recovery import Hypothesis, Recovery, RecoveryConfig
+from .recovery import Hypothesis, Recovery, RecoveryConfig, same_place
 from .occlusion_rule import OcclusionFilter, OcclusionRule
 from .prediction_fusion import CHI2_3_999, FusionRule
 from .scan_continuity import ContinuityRule
@@ -106,9 +106,12 @@ class Localizer:
     position uncertainty exceeds the translation limit (odometry integrated over a long gap in the
     scans: ICP's position basin is about its correspondence distance, while its heading converges
     from well beyond the rotation limit, so position is what makes a prediction a poor start), the
-    plan is searched around the prediction (the recovery's `local_radius`, any heading) and an
-    unambiguous place that explains at least the recovery's `min_inlier_ratio` of the scan is
-    adopted at once, when it explains the scan better than the fit from the prediction.
+    plan is searched around the prediction (the recovery's `local_radius`, any heading; for an
+    uncertain prediction, only the places its covariance allows) and an unambiguous place that
+    explains at least the recovery's `min_inlier_ratio` of the scan, and the scan better than the
+    fit from the prediction, is adopted: at once for an uncertain prediction, and after a rejected
+    jump only when the next scan's search finds the same place again (moved by the odometry), since
+    a corrupted scan fits some place beyond the gate too.
 
     Thread-safe: updates are serialised by a lock.
     """
@@ -182,6 +185,9 @@ class Localizer:
         self._last_odom: Pose | None = None
         # The last scan the plan explained, with its odometry pose.
         self._anchor: tuple[NDArray[np.float64], Pose] | None = None
+        # A place a search found after a rejected jump, with the odometry pose of its scan: taken
+        # only when the next scan's search finds it again (see `update`).
+        self._pending: tuple[Pose, Pose] | None = None
         self._lock = threading.Lock()
 
     @property
@@ -209,6 +215,7 @@ class Localizer:
             self._covariance = new_covariance
             self._last_odom = None
             self._anchor = None
+            self._pending = None
             self._detector.reset()
             self._recovery.clear()
 
@@ -258,12 +265,23 @@ class Localizer:
             searched = False
             search = None if result is None or self._detector.lost else self._search_cause(
                 result, reason, predicted_covariance)
+            pending, self._pending = self._pending, None
+            # Not on one scan's word: a corrupted scan (turned, shifted) fits some place beyond the
+            # gate, as a faulted odometry step makes a sound scan do. After a fault the next
+            # prediction is as far off and its search finds the same place again; after a corrupted
+            # scan the next one fits the prediction, and the place is forgotten.
             if result is not None and search is not None:
                 # A place found for an uncertain prediction must agree with it; after a fit
                 # rejected for its jump, odometry may have faulted and the prediction says nothing.
                 found_near = self._search_near(points, predicted, result if reason == "" else None,
                                                predicted_covariance if search == "uncertain" else None)
-                if found_near is not None:
+                if found_near is not None and search == "jump" and not (
+                        pending is not None
+                        and same_place(compose(pending[0], between(pending[1], odom)), found_near.pose)):
+                    self._pending = (found_near.pose, odom)
+                    reason = (f"{reason}; a search found a place {_distance(predicted, found_near.pose):.2f} m "
+                              f"away, taken if the next scan confirms it")
+                elif found_near is not None:
                     result, reason, searched = found_near, "", True
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
                                                 self._score(result, kept, fit.beyond, len(points)))
@@ -466,7 +484,8 @@ class Localizer:
         radius, yaw_tolerance = config.local_radius, math.pi
         if consistent_with is not None:
             k = math.sqrt(CHI2_3_999)
-            radius = min(radius, k * _largest_position_std(consistent_with) + self.config.max_correspondence_distance)
+            reach = self.config.max_correspondence_distance
+            radius = min(radius, k * _largest_position_std(consistent_with) + reach)
             yaw_std = math.sqrt(max(float(consistent_with[2, 2]), 0.0))
             yaw_tolerance = min(math.pi, k * yaw_std + 2.0 * config.search.max_angular_step)
         found = relocalize(points, self.plan, region=SearchRegion(predicted, radius, yaw_tolerance),
@@ -503,6 +522,11 @@ class _Fit:
     occluded: bool
     reason: str
     usable: bool
+
+
+def _distance(a: Pose, b: Pose) -> float:
+    """Metres between the positions of two poses."""
+    return math.hypot(a[0] - b[0], a[1] - b[1])
 
 
 def _largest_position_std(covariance: NDArray[np.float64]) -> float:
