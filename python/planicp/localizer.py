@@ -20,7 +20,7 @@ from .localize import localize
 from .lost_detection import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .plan_map import PlanMap
-from .recovery import Hypothesis, Recovery, RecoveryConfig, same_place
+from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
 from .prediction_fusion import CHI2_3_999, FusionRule
 from .scan_continuity import ContinuityRule
@@ -109,9 +109,10 @@ class Localizer:
     plan is searched around the prediction (the recovery's `local_radius`, any heading; for an
     uncertain prediction, only the places its covariance allows) and an unambiguous place that
     explains at least the recovery's `min_inlier_ratio` of the scan, and the scan better than the
-    fit from the prediction, is adopted: at once for an uncertain prediction, and after a rejected
-    jump only when the next scan's search finds the same place again (moved by the odometry), since
-    a corrupted scan fits some place beyond the gate too.
+    fit from the prediction, is adopted: at once for an uncertain prediction. After a rejected jump
+    the place (or, when the search finds none, the fit's) is taken only when the next scan, aligned
+    from it moved by the odometry, fits there soundly and better than from the prediction, since a
+    corrupted scan fits some place beyond the gate too.
 
     Thread-safe: updates are serialised by a lock.
     """
@@ -185,8 +186,9 @@ class Localizer:
         self._last_odom: Pose | None = None
         # The last scan the plan explained, with its odometry pose.
         self._anchor: tuple[NDArray[np.float64], Pose] | None = None
-        # A place a search found after a rejected jump, with the odometry pose of its scan: taken
-        # only when the next scan's search finds it again (see `update`).
+        # The place a scan put the robot at after a rejected jump (a search's, or the sound fit's),
+        # with the odometry pose of that scan: taken only when the next scan confirms it (see
+        # `update`).
         self._pending: tuple[Pose, Pose] | None = None
         self._lock = threading.Lock()
 
@@ -263,26 +265,36 @@ class Localizer:
             fit = self._fit(points, predicted, predicted_covariance)
             result, kept, reason = fit.result, fit.kept, fit.reason
             searched = False
-            search = None if result is None or self._detector.lost else self._search_cause(
-                result, reason, predicted_covariance)
             pending, self._pending = self._pending, None
-            # Not on one scan's word: a corrupted scan (turned, shifted) fits some place beyond the
-            # gate, as a faulted odometry step makes a sound scan do. After a fault the next
-            # prediction is as far off and its search finds the same place again; after a corrupted
-            # scan the next one fits the prediction, and the place is forgotten.
+            if pending is not None and result is not None:
+                # The place the last scan put the robot at after a rejected jump, followed with the
+                # odometry: taken when this scan confirms it, by a sound fit there that explains the
+                # scan better than the prediction's (or where the prediction's was rejected).
+                there = compose(pending[0], between(pending[1], odom))
+                follow = localize(points, self.plan, there, self._wide_config)
+                if not self.gate.rejection(follow, there) and (
+                        reason != "" or follow.inlier_ratio > result.inlier_ratio + self._recovery.config.margin):
+                    result, reason, searched = follow, "", True
+            search = None if result is None or searched or self._detector.lost else self._search_cause(
+                result, reason, predicted_covariance)
             if result is not None and search is not None:
                 # A place found for an uncertain prediction must agree with it; after a fit
                 # rejected for its jump, odometry may have faulted and the prediction says nothing.
                 found_near = self._search_near(points, predicted, result if reason == "" else None,
                                                predicted_covariance if search == "uncertain" else None)
-                if found_near is not None and search == "jump" and not (
-                        pending is not None
-                        and same_place(compose(pending[0], between(pending[1], odom)), found_near.pose)):
-                    self._pending = (found_near.pose, odom)
-                    reason = (f"{reason}; a search found a place {_distance(predicted, found_near.pose):.2f} m "
-                              f"away, taken if the next scan confirms it")
-                elif found_near is not None:
-                    result, reason, searched = found_near, "", True
+                if search == "uncertain":
+                    if found_near is not None:
+                        result, reason, searched = found_near, "", True
+                else:
+                    # Not on one scan's word: a corrupted scan (turned, shifted) fits some place
+                    # beyond the gate, as a faulted odometry step makes a sound scan do. After a
+                    # fault the next scan fits that place again (followed above); after a corrupted
+                    # scan the next one fits the prediction better.
+                    place = found_near if found_near is not None else result
+                    self._pending = (place.pose, odom)
+                    found = "a search found" if found_near is not None else "the fit puts the robot at"
+                    reason = (f"{reason}; {found} a place {_distance(predicted, place.pose):.2f} m away, taken "
+                              f"if the next scan confirms it")
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
                                                 self._score(result, kept, fit.beyond, len(points)))
             poor = result is not None and self._poor_fit(score, reason, result)

@@ -147,7 +147,7 @@ class Recovery:
                                 max_candidates=self.config.max_hypotheses)
             for c in search.candidates:
                 if (c.inlier_ratio >= self.config.min_inlier_ratio
-                        and not any(same_place(c.pose, h.pose) for h in found)
+                        and not any(_same(c.pose, h.pose) for h in found)
                         and not self._contradicted(scan, c.pose)):
                     found.append(Hypothesis(c.pose, c.result, 1, c.inlier_ratio))
         found.sort(key=lambda h: -h.total)
@@ -171,6 +171,6 @@ class Recovery:
         return float(np.mean(beyond)) > self.config.max_beyond
 
 
-def same_place(a: Pose, b: Pose) -> bool:
+def _same(a: Pose, b: Pose) -> bool:
     """Whether two hypotheses are one place (within 0.2 m and 5 degrees)."""
     return math.hypot(a[0] - b[0], a[1] - b[1]) < 0.2 and abs(wrap_angle(a[2] - b[2])) < math.radians(5.0)
