@@ -176,7 +176,7 @@ def test_known_transform_recovered_from_noiseless_wall_scan(
 def test_a_scan_on_the_plans_own_lattice_stops_within_2_cm(
     rooms_plan: PlanMap, truth: tuple[float, float, float], guess_offset: tuple[float, float, float]
 ) -> None:
-    """The known limitation (README): a noiseless scan made of exactly the plan's 5 cm sample points
+    """The known limitation (docs/limitations.md): a noiseless scan made of exactly the plan's 5 cm sample points
     is the one case where point-to-point pairing aliases. From 0.15 m / 3 deg off, ICP may stop on
     a lattice-shifted fixed point; session 6: 17.2 mm and 0.29 deg for the second pose, exact for
     the other two. This bounds it (real beams do not hit walls on the plan's lattice)."""

@@ -259,7 +259,7 @@ INTEL = Path(__file__).resolve().parents[2] / "shared" / "data" / "logs" / "inte
 
 @pytest.mark.skipif(not INTEL.is_file(), reason="the Intel Research Lab log is in ../shared, not in the project")
 def test_intel_research_lab_evaluation() -> None:
-    """The README's real-data numbers: the issue's bar is ATE < 5 cm and no error over 0.3 m."""
+    """The real-data numbers of docs/benchmarks.md: the issue's bar is ATE < 5 cm and no error over 0.3 m."""
     evaluation = evaluate_log(open_log(INTEL))
     m = evaluation.tracked.metrics()
     assert evaluation.plan_scans == 455 and evaluation.tracked_scans == 455

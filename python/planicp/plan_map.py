@@ -252,7 +252,7 @@ class PlanMap:
     def prepare_index(self) -> WallIndexStats:
         """Builds the plan's nearest-wall index now (the first alignment builds it otherwise; it
         is kept with the plan) and returns its sizes. About 3.2 s and 90 MB for a 100 x 100 m
-        floor sampled every 2 cm (README, "Performance")."""
+        floor sampled every 2 cm (docs/benchmarks.md, "Nearest-wall index: build and memory")."""
         return WallIndexStats(*self._native.wall_index_stats())
 
     def visible_indices(self, pose: Any, max_range: float = 30.0) -> NDArray[np.uint32]:
@@ -279,7 +279,7 @@ class PlanMap:
         `visible_indices`) and, in `directions` evenly spaced directions, the range to the wall
         point nearest the ray in its first wall cell of the visibility raster. (`OcclusionRule`
         casts exactly through the plan image instead: the raster's cells lengthen walls at their
-        ends; see the README's known limitations.)
+        ends; see docs/limitations.md.)
 
         Args:
             pose: (x, y, yaw) `T_map_base`, metres and radians; direction j looks along the
