@@ -267,34 +267,14 @@ class Localizer:
             searched = False
             pending, self._pending = self._pending, None
             if pending is not None and result is not None:
-                # The place the last scan put the robot at after a rejected jump, followed with the
-                # odometry: taken when this scan confirms it, by a sound fit there that explains the
-                # scan better than the prediction's (or where the prediction's was rejected).
-                there = compose(pending[0], between(pending[1], odom))
-                follow = localize(points, self.plan, there, self._wide_config)
-                if not self.gate.rejection(follow, there) and (
-                        reason != "" or follow.inlier_ratio > result.inlier_ratio + self._recovery.config.margin):
-                    result, reason, searched = follow, "", True
+                confirmed = self._confirmed(points, odom, pending, result, reason)
+                if confirmed is not None:
+                    result, reason, searched = confirmed, "", True
             search = None if result is None or searched or self._detector.lost else self._search_cause(
                 result, reason, predicted_covariance)
             if result is not None and search is not None:
-                # A place found for an uncertain prediction must agree with it; after a fit
-                # rejected for its jump, odometry may have faulted and the prediction says nothing.
-                found_near = self._search_near(points, predicted, result if reason == "" else None,
-                                               predicted_covariance if search == "uncertain" else None)
-                if search == "uncertain":
-                    if found_near is not None:
-                        result, reason, searched = found_near, "", True
-                else:
-                    # Not on one scan's word: a corrupted scan (turned, shifted) fits some place
-                    # beyond the gate, as a faulted odometry step makes a sound scan do. After a
-                    # fault the next scan fits that place again (followed above); after a corrupted
-                    # scan the next one fits the prediction better.
-                    place = found_near if found_near is not None else result
-                    self._pending = (place.pose, odom)
-                    found = "a search found" if found_near is not None else "the fit puts the robot at"
-                    reason = (f"{reason}; {found} a place {_distance(predicted, place.pose):.2f} m away, taken "
-                              f"if the next scan confirms it")
+                result, reason, searched = self._searched(points, predicted, predicted_covariance, odom, result,
+                                                          reason, search)
             score = 0.0 if result is None else (self._score(result, None, None, len(points)) if searched else
                                                 self._score(result, kept, fit.beyond, len(points)))
             poor = result is not None and self._poor_fit(score, reason, result)
@@ -338,6 +318,40 @@ class Localizer:
                 kept = None  # a search's result is over the whole scan
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
                             self._detector.score, relocalized, hypotheses, kept)
+
+    def _confirmed(self, points: NDArray[np.float64], odom: Pose, pending: tuple[Pose, Pose], result: IcpResult,
+                   reason: str) -> IcpResult | None:
+        """The fit at the place the last scan put the robot at after a rejected jump (`pending`:
+        the place and that scan's odometry pose), followed with the odometry, when this scan
+        confirms it: a sound fit there that explains the scan better than the prediction's fit
+        `result` by the recovery's `margin` (or the prediction's was rejected, `reason`); else None."""
+        there = compose(pending[0], between(pending[1], odom))
+        follow = localize(points, self.plan, there, self._wide_config)
+        if self.gate.rejection(follow, there) or (
+                reason == "" and follow.inlier_ratio <= result.inlier_ratio + self._recovery.config.margin):
+            return None
+        return follow
+
+    def _searched(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64],
+                  odom: Pose, result: IcpResult, reason: str, search: Literal["jump", "uncertain"]
+                  ) -> tuple[IcpResult, str, bool]:
+        """(result, reason, searched) after a search around the prediction (see `_search_near`).
+
+        A place found for an uncertain prediction agrees with it and is taken at once. After a fit
+        rejected for its jump, odometry may have faulted and the prediction says nothing; but a
+        corrupted scan (turned, shifted) fits some place beyond the gate too. So the place (the
+        search's, or the sound fit's where the search finds none) is not taken on one scan's word:
+        it waits for the next scan (`_confirmed`), which after a fault fits that place again and
+        after a corrupted scan fits the prediction better."""
+        found_near = self._search_near(points, predicted, result if reason == "" else None,
+                                       predicted_covariance if search == "uncertain" else None)
+        if search == "uncertain":
+            return (found_near, "", True) if found_near is not None else (result, reason, False)
+        place = found_near if found_near is not None else result
+        self._pending = (place.pose, odom)
+        found = "a search found" if found_near is not None else "the fit puts the robot at"
+        return result, (f"{reason}; {found} a place {_distance(predicted, place.pose):.2f} m away, taken if the "
+                        f"next scan confirms it"), False
 
     def _fit(self, points: NDArray[np.float64], predicted: Pose, predicted_covariance: NDArray[np.float64]) -> _Fit:
         """The scan aligned from `predicted` (see `_aligned`) and judged by the gate; with the
