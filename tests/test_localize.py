@@ -401,7 +401,10 @@ def test_repr_shows_pose_and_inliers(rooms_plan: PlanMap) -> None:
     x, y, yaw = res.pose
     assert abs(x - 4.2) < 0.01 and abs(y - 1.1) < 0.01
     assert f"pose=(x={x:.4f} m, y={y:.4f} m, yaw={math.degrees(yaw):.3f} deg)" in text
-    assert f"inliers={len(scan)}/{len(scan)} (100.0 %)" in text
+    # The scan is the cast's visible points, a corner's first layer included; the index's masks
+    # may hide one of those from the fit.
+    assert res.num_inliers >= len(scan) - 2
+    assert f"inliers={res.num_inliers}/{len(scan)} ({100 * res.inlier_ratio:.1f} %)" in text
     assert "converged=True" in text
 
 
@@ -493,9 +496,11 @@ def test_visible_from_inside_a_thick_box_sees_only_inner_faces() -> None:
     near = plan.visible_from((1.0, 1.0, 0.0), max_range=1.5)
     assert len(near) > 0
     assert np.all(np.hypot(near[:, 0] - 1.0, near[:, 1] - 1.0) < 1.5 + 2 * plan.raster_resolution)
-    # from outside, only the outer faces are seen
+    # from outside, only the outer faces are seen: the face x = 6.3 and, at its corners, the first
+    # layer behind them (the end points of the faces around the corner, 5 cm in)
     out = plan.visible_from((8.0, 2.0, 0.0))
-    assert len(out) > 0 and np.all(np.abs(out[:, 0] - 6.3) < 1e-9), out
+    assert len(out) > 0 and np.all(np.abs(out[:, 0] - 6.3) <= plan.raster_resolution), out
+    assert np.count_nonzero(np.abs(out[:, 0] - 6.3) > 1e-9) <= 4, out
 
 
 def test_plan_points_len_and_read_only() -> None:

@@ -56,27 +56,37 @@ def test_image_ros_map_round_trip(floor: synthetic.Floor, tmp_path: Path) -> Non
     yaml_path = plan.to_ros_map(tmp_path / "out" / "floor.yaml")
     back = PlanMap.from_ros_map(yaml_path, cache=False)
     np.testing.assert_array_equal(back.points, plan.points)
+    # The map says its cells are wall material (a drawing): read as an occupancy grid instead, its
+    # cells' centres would stand half a pixel inside every wall.
+    assert read_ros_map(yaml_path).edge_detector == "boundary" == back.edge_detector
+    assert len(PlanMap.from_ros_map(yaml_path, edge_detector="centres", cache=False)) != len(plan)
     meta = read_ros_map(yaml_path)
     assert meta.resolution == floor.resolution
     assert meta.origin == (floor.origin[0], floor.origin[1], 0.0)
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["floor.pgm", "floor.yaml"]
+    text = yaml_path.read_text()
+    yaml_path.write_text(text.replace("planicp_edge_detector: boundary", "planicp_edge_detector: faces"))
+    with pytest.raises(ValueError, match="planicp_edge_detector must be one of"):
+        PlanMap.from_ros_map(yaml_path, cache=False)
 
 
 @pytest.mark.parametrize("name", ["tb3_sandbox", "depot"])
 def test_ros_map_and_image_of_it_agree(name: str) -> None:
     """nav2 maps (negative origins, trinary): the ROS map and the same PGM read as an image with the
     equivalent threshold and the same reading of its pixels give identical points, inside the map's
-    extent. By default the map is read as an occupancy grid (thin walls' cell centres) and the
+    extent. By default the map is read as an occupancy grid (every occupied cell's centre) and the
     image as a drawing (every face)."""
     ros = read_ros_map(DATA / f"{name}.yaml")
     # trinary occupied: (255 - v) / 255 > occupied_thresh  <=>  v < 255 * (1 - occupied_thresh)
     threshold = math.ceil(255 * (1 - ros.occupied_thresh))
-    for ros_reading, image_reading in (("auto", "auto"), ("boundary", "boundary")):
+    for ros_reading, image_reading in (("centres", "centres"), ("auto", "auto"), ("boundary", "boundary")):
         plan = PlanMap.from_ros_map(DATA / f"{name}.yaml", edge_detector=ros_reading)
         image_plan = PlanMap.from_image(DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold,
                                         edge_detector=image_reading)
         np.testing.assert_array_equal(plan.points, image_plan.points)
-    assert len(PlanMap.from_ros_map(DATA / f"{name}.yaml")) < len(plan)  # thin walls: one point per cell, not two
+    by_default = PlanMap.from_ros_map(DATA / f"{name}.yaml")
+    occupied = int(np.count_nonzero(ros.wall_raster().walls))
+    assert len(by_default) == occupied < len(plan)  # one point per occupied cell, not one per face
     rows, cols = ros.occupancy.shape
     xmin, ymin, xmax, ymax = plan.extent
     assert ros.origin[0] <= xmin and xmax <= ros.origin[0] + cols * ros.resolution
@@ -444,7 +454,11 @@ def test_a_map_server_map_defaults_to_the_surface_reading(tmp_path: Path) -> Non
     cv2.imwrite(str(tmp_path / "m.pgm"), walls)
     (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
                                      "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    walls[12:15, 2:28] = 0  # a wall three cells thick: every cell a surface point, as beams ended there
+    cv2.imwrite(str(tmp_path / "m.pgm"), walls)
     plan = PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
-    np.testing.assert_allclose(plan.points[:, 1], (20 - 5 - 0.5) * 0.05)  # on the cells' centre line
+    assert len(plan) == 4 * 26
+    ys = np.round(plan.points[:, 1], 9)
+    assert set(ys) == {0.725, 0.375, 0.325, 0.275}  # on the cells' centre lines
     faces = PlanMap.from_ros_map(tmp_path / "m.yaml", edge_detector="boundary", cache=False)
-    assert set(np.round(faces.points[:, 1], 9)) == {0.7, 0.725, 0.75}
+    assert {0.7, 0.75, 0.25, 0.4} <= set(np.round(faces.points[:, 1], 9))

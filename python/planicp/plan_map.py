@@ -38,9 +38,10 @@ class PlanMap:
     number of alignments, from any number of threads.
     """
 
-    __slots__ = ("_native", "_points", "raster", "from_cache")
+    __slots__ = ("_native", "_points", "raster", "from_cache", "edge_detector")
 
-    def __init__(self, native: _core.PointMap, raster: PlanRaster | None = None, from_cache: bool = False) -> None:
+    def __init__(self, native: _core.PointMap, raster: PlanRaster | None = None, from_cache: bool = False,
+                 edge_detector: str | None = None) -> None:
         """Wraps a native map; use a `from_*` constructor instead."""
         if not isinstance(native, _core.PointMap):
             raise TypeError("use PlanMap.from_points(...) (or another from_* constructor) to build a PlanMap")
@@ -52,6 +53,9 @@ class PlanMap:
         """The wall raster the plan was extracted from (None for plans built from points)."""
         self.from_cache = from_cache
         """Whether the wall points were loaded from the on-disk cache."""
+        self.edge_detector = edge_detector
+        """How the points were read from `raster` (see `PlanRaster.surface_points`; None for
+        plans built from points)."""
 
     @classmethod
     def from_points(cls, xy: Any, *, resolution: float | None = None) -> PlanMap:
@@ -76,7 +80,8 @@ class PlanMap:
     def from_raster(cls, raster: PlanRaster, *, edge_detector: str = "boundary") -> PlanMap:
         """A plan from a wall raster: one point per pixel face of wall surface (see `PlanRaster`).
         The visibility raster uses 1.5 pixels."""
-        return cls._from_raster_points(raster, raster.surface_points(edge_detector), from_cache=False)
+        return cls._from_raster_points(raster, raster.surface_points(edge_detector), from_cache=False,
+                                       edge_detector=edge_detector)
 
     @classmethod
     def _from_raster_points(
@@ -85,11 +90,12 @@ class PlanMap:
         points: NDArray[np.float64],
         from_cache: bool,
         normals: NDArray[np.float64] | None = None,
+        edge_detector: str | None = None,
     ) -> PlanMap:
         pts = np.ascontiguousarray(points, dtype=np.float64)
         nrm = None if normals is None else np.ascontiguousarray(normals, dtype=np.float64)
         native = _core.PointMap(pts, 1.5 * raster.resolution, nrm)
-        return cls(native, raster, from_cache)
+        return cls(native, raster, from_cache, edge_detector)
 
     @classmethod
     def from_image(
@@ -141,14 +147,16 @@ class PlanMap:
             return cls._prepared(PlanRaster(walls, res, pose), edge_detector)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("image", params, contents), build)
-        return cls._from_cached(arrays, res, pose, hit)
+        return cls._from_cached(arrays, res, pose, hit, edge_detector)
 
     @classmethod
-    def _from_cached(cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool) -> PlanMap:
+    def _from_cached(cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool,
+                     edge_detector: str) -> PlanMap:
         rows, cols = (int(v) for v in arrays["shape"])
         walls = np.unpackbits(arrays["walls"], count=rows * cols).reshape(rows, cols).astype(bool)
         raster = PlanRaster(walls, resolution, origin)
-        return cls._from_raster_points(raster, arrays["points"], from_cache=hit, normals=arrays["normals"])
+        return cls._from_raster_points(raster, arrays["points"], from_cache=hit, normals=arrays["normals"],
+                                       edge_detector=edge_detector)
 
     @staticmethod
     def _prepared(raster: PlanRaster, edge_detector: str) -> dict[str, NDArray[Any]]:
@@ -160,26 +168,33 @@ class PlanMap:
                 "shape": np.array(raster.walls.shape)}
 
     @classmethod
-    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str = "auto", cache: CacheSetting = True) -> PlanMap:
+    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str | None = None,
+                     cache: CacheSetting = True) -> PlanMap:
         """A plan from a ROS map_server map (YAML + image), with map_server's semantics: occupied
         cells are walls; `resolution`, `origin`, `negate`, thresholds and `mode` from the YAML.
 
-        An occupancy grid's occupied cell is one where a surface was seen, so the default
-        `edge_detector="auto"` takes the centres of the cells of walls one or two cells thick (a
-        SLAM map's walls; there the faces would put the surface half a cell to a cell in front of
-        where the beams ended) and the faces of thicker walls (a drawn plan saved as a map). See
-        `PlanRaster.surface_points` for the other choices."""
+        An occupancy grid's occupied cell is one where a surface was seen (a beam ended in it), so
+        by default (`edge_detector=None`) the centre of every occupied cell is taken
+        (`"centres"`), as a likelihood-field particle filter reads the grid: where a SLAM tool's
+        beams ended over two or three cells of a wall, its surface is the middle of those cells,
+        and faces would put it half a cell to a cell in front of where the beams ended. The ICP's
+        visibility cast sees a wall's first layer (the cell a ray stops in and the one behind it),
+        so cells deep inside a thick wall and its far side stay hidden. A map that says otherwise
+        (its YAML's `planicp_edge_detector`, which `to_ros_map` writes for a plan drawn as walls
+        of material) is read as it says; an `edge_detector` given here overrides both (see
+        `PlanRaster.surface_points` for the readings)."""
         ros_map = read_ros_map(yaml_path)
+        reading = edge_detector or ros_map.edge_detector or "centres"
         params = {"resolution": ros_map.resolution, "origin": ros_map.origin, "mode": ros_map.mode,
                   "negate": ros_map.negate, "occupied": ros_map.occupied_thresh, "free": ros_map.free_thresh,
-                  "edge_detector": edge_detector}
+                  "edge_detector": reading}
         contents = [ros_map.image_path.read_bytes()]
 
         def build() -> dict[str, NDArray[Any]]:
-            return cls._prepared(ros_map.wall_raster(), edge_detector)
+            return cls._prepared(ros_map.wall_raster(), reading)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
-        return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit)
+        return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit, reading)
 
     @classmethod
     def from_segments(cls, segments: Any, spacing: float = 0.02) -> PlanMap:
@@ -220,13 +235,16 @@ class PlanMap:
     def to_ros_map(self, yaml_path: str | Path, resolution: float | None = None) -> Path:
         """Writes the plan as a map_server map (YAML + PGM beside it): walls occupied (0), the
         rest free (254). A plan read from an image or ROS map writes its own wall raster, which
-        `from_ros_map` reads back to the same points; a plan built from points is rasterised at
-        `resolution` (default: its visibility raster's), which moves points by up to a pixel."""
-        raster = self.raster
+        `from_ros_map` reads back to the same points (the YAML says how its cells were read,
+        `planicp_edge_detector`); a plan built from points is rasterised at `resolution` (default:
+        its visibility raster's), which moves points by up to a pixel, and read back as an
+        occupancy grid (cell centres)."""
+        raster, reading = self.raster, self.edge_detector
         if raster is None or resolution is not None:
             raster = PlanRaster.from_points(self._points, resolution or self.raster_resolution)
+            reading = None
         occupancy = np.where(raster.walls, 100, 0).astype(np.int8)
-        return write_ros_map(yaml_path, occupancy, raster.resolution, raster.origin)
+        return write_ros_map(yaml_path, occupancy, raster.resolution, raster.origin, edge_detector=reading)
 
     @property
     def points(self) -> NDArray[np.float64]:

@@ -2,7 +2,9 @@
 
 Keys (map_server / nav2_map_server): `image` (path, relative to the YAML), `resolution` (metres per
 pixel), `origin` ([x, y, yaw] of the lower-left pixel corner), `negate` (0/1), `occupied_thresh`,
-`free_thresh`, optional `mode` (trinary (default), scale, raw). A pixel value v in 0..255 becomes
+`free_thresh`, optional `mode` (trinary (default), scale, raw), and planicp's optional
+`planicp_edge_detector`: how `PlanMap.from_ros_map` reads the occupied cells by default (a plan
+drawn as walls of material and saved as a map says "boundary"; see `PlanRaster.surface_points`). A pixel value v in 0..255 becomes
 p = (255 - v) / 255 (v / 255 when negate); trinary: p > occupied_thresh -> 100, p < free_thresh
 -> 0, else -1 (unknown); scale: as trinary but between the thresholds 99 * (p - free) / (occ -
 free); raw: the value v itself (0..100, anything else unknown). Image row 0 is the top of the map.
@@ -24,6 +26,8 @@ from ._validation import Pose
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")
+EDGE_DETECTOR_KEY = "planicp_edge_detector"
+EDGE_DETECTORS = ("centres", "auto", "boundary", "canny")
 REQUIRED_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh")
 
 
@@ -38,6 +42,7 @@ class RosMap:
         resolution: metres per pixel.
         origin: (x, y, yaw) of the lower-left image corner in the map frame.
         mode, negate, occupied_thresh, free_thresh: as in the YAML.
+        edge_detector: the YAML's `planicp_edge_detector`, None when it has none.
     """
 
     yaml_path: Path
@@ -49,6 +54,7 @@ class RosMap:
     negate: bool
     occupied_thresh: float
     free_thresh: float
+    edge_detector: str | None = None
 
     def wall_raster(self) -> PlanRaster:
         """The occupied cells (100, or above `occupied_thresh` in raw mode) as plan walls."""
@@ -117,7 +123,12 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         raise FileNotFoundError(f"ROS map {path} names image {meta['image']!r}, which does not exist ({image_path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
-    return RosMap(path, image_path, occupancy, resolution, origin_pose, mode, bool(negate), occ, free)  # type: ignore[arg-type]
+    edge_detector = meta.get(EDGE_DETECTOR_KEY)
+    if edge_detector is not None and edge_detector not in EDGE_DETECTORS:
+        raise ValueError(f"ROS map {path}: {EDGE_DETECTOR_KEY} must be one of {EDGE_DETECTORS}, got {edge_detector!r} "
+                         f"(or leave it out: occupied cells are then read as an occupancy grid's)")
+    return RosMap(path, image_path, occupancy, resolution, origin_pose, mode, bool(negate), occ, free,  # type: ignore[arg-type]
+                  edge_detector)
 
 
 def occupancy_from_gray(
@@ -149,10 +160,13 @@ def write_ros_map(
     *,
     occupied_thresh: float = 0.65,
     free_thresh: float = 0.196,
+    edge_detector: str | None = None,
 ) -> Path:
     """Writes a trinary map the way map_saver does: PGM beside the YAML (same stem), occupied
     (> occupied_thresh*100) 0, free (0..free_thresh*100) 254, unknown 205. `occupancy` is in image
-    order (row 0 = top). Both files are written to temporary names first and then renamed, so a
+    order (row 0 = top). `edge_detector` (one of `EDGE_DETECTORS`) is written as
+    `planicp_edge_detector`, how `PlanMap.from_ros_map` reads the occupied cells back (map_server
+    ignores the key). Both files are written to temporary names first and then renamed, so a
     failure leaves no half-written map. Returns the YAML path."""
     path = Path(yaml_path)
     if path.suffix.lower() not in (".yaml", ".yml"):
@@ -175,6 +189,10 @@ def write_ros_map(
         f"occupied_thresh: {occupied_thresh!r}\n"
         f"free_thresh: {free_thresh!r}\n"
     )
+    if edge_detector is not None:
+        if edge_detector not in EDGE_DETECTORS:
+            raise ValueError(f"edge_detector must be one of {EDGE_DETECTORS} or None, got {edge_detector!r}")
+        meta += f"{EDGE_DETECTOR_KEY}: {edge_detector}\n"
     _atomic_write(pgm_path, header + image.tobytes())
     _atomic_write(path, meta.encode())
     return path

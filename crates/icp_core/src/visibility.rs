@@ -142,6 +142,16 @@ pub fn visible_cells(
                 // Wall cells bordering the last free cell are seen too: an inner corner's cell
                 // can only be entered through its two wall neighbours, so no ray stops in it.
                 if let Some((fx, fy)) = came_from {
+                    // The beam ends within the wall's first layer, not at its first cell's edge:
+                    // the cell behind the stop along the step that entered it is seen too when it
+                    // is a wall. An occupancy grid marks every cell where beams ended, so a wall
+                    // two grid cells thick has two rows of points, and the far one can lie in the
+                    // next raster cell; hiding it moved fits on real logs 3-4 cm towards the
+                    // sensor. The far face of a thick wall lies beyond free cells and stays hidden.
+                    let (bx, by) = (2 * cx - fx, 2 * cy - fy);
+                    if raster.is_wall(bx, by) {
+                        out.push(by as usize * cols + bx as usize);
+                    }
                     for (nx, ny) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
                         let (x, y) = (fx + nx, fy + ny);
                         if (x, y) != (cx, cy) && raster.is_wall(x, y) {
@@ -465,6 +475,40 @@ mod tests {
         let inner_total = inner.iter().filter(|&&b| b).count();
         // Nearly every inner point is seen (corner cells may hold two points, both seen).
         assert!(vis.len() as f64 > 0.95 * inner_total as f64, "{} of {}", vis.len(), inner_total);
+    }
+
+    /// An occupancy grid's wall two 5 cm cells thick, seen from a robot 1.5 m in front of it: its
+    /// two rows of cell centres (y = 2.06 and 2.11, every 5 cm in x) fall into neighbouring raster
+    /// cells of 7.5 cm (the raster starts one cell below the floor row at y = 0), and a solid block
+    /// lies behind them beyond a free cell.
+    #[test]
+    fn the_first_layer_of_a_grid_wall_is_seen_whole_and_what_lies_deeper_is_not() {
+        let mut pts = Vec::new();
+        for i in 0..=60 {
+            let x = i as f64 * 0.05;
+            pts.extend([[x, 2.06], [x, 2.11]]);
+        }
+        let two_rows = pts.len();
+        for i in 0..=60 {
+            for y in [2.3, 2.35, 2.4, 0.0] {
+                pts.push([i as f64 * 0.05, y]);
+            }
+        }
+        let raster = WallRaster::new(&pts, RES).unwrap();
+        let row = |y: f64| ((y - raster.origin()[1]) / RES).floor();
+        assert_eq!(row(2.11), row(2.06) + 1.0);
+        let seen = visible_points(&raster, [1.5, 0.5], 10.0).unwrap();
+        let count = |y: f64| seen.iter().filter(|&&i| pts[i as usize][1] == y).count();
+        assert!(
+            count(2.06) > 55 && count(2.11) > 55,
+            "near row {}, far row {} of 61 each",
+            count(2.06),
+            count(2.11)
+        );
+        assert!(
+            seen.iter().all(|&i| (i as usize) < two_rows || pts[i as usize][1] == 0.0),
+            "the block behind was seen"
+        );
     }
 
     #[test]
