@@ -566,8 +566,8 @@ def test_readers_on_garbled_text(reader: str) -> None:
 @FUZZ
 @given(st.data())
 def test_robustness_api(data: Any) -> None:
-    """DegeneracyRule, LostRule, FusionRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize and
-    Localizer.relocalize/covariance with random settings, scans and poses."""
+    """DegeneracyRule, LostRule, FusionRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize,
+    SearchInSteps and Localizer.relocalize/covariance with random settings, scans and poses."""
     number = st.one_of(values, anything, st.integers(-3, 100))
     call(planicp.DegeneracyRule, data.draw(number))
     call(planicp.ContinuityRule, data.draw(number), data.draw(number), data.draw(number))
@@ -589,6 +589,15 @@ def test_robustness_api(data: Any) -> None:
         for c in found.candidates:
             check_pose(c.pose)
             assert 0.0 <= c.inlier_ratio <= 1.0
+    ok_steps, steps = call(planicp.SearchInSteps, data.draw(scans()), plan, region=region if ok else None)
+    if ok_steps:
+        for _ in range(3):
+            ok_step, stepped = call(steps.advance, data.draw(st.one_of(st.integers(-1, 50_000), anything)))
+            if ok_step and stepped is not None:
+                for c in stepped.candidates:
+                    check_pose(c.pose)
+                break
+    call(planicp.RecoveryConfig, search_nodes=data.draw(st.one_of(st.none(), number)))
     ok, loc = call(Localizer, plan, data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)), None,
                    initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)),
                    fusion=fusion if fusion_ok else data.draw(st.one_of(st.none(), anything)))
@@ -610,8 +619,8 @@ def test_every_public_name_is_fuzzed() -> None:
     covered = {"AcceptanceGate", "EnhancedOccupancyGrid", "IcpConfig", "IcpResult", "Localizer", "PlanMap",
                "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
                "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
-               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "relocalize",
-               "ContinuityRule", "OcclusionRule", "FusionRule", "WallView"}
+               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "SearchInSteps",
+               "relocalize", "ContinuityRule", "OcclusionRule", "FusionRule", "WallView"}
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
     elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",

@@ -404,3 +404,32 @@ def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> No
         error = math.hypot(estimate.pose[0] - truth[0], estimate.pose[1] - truth[1])
         assert estimate.accepted and not estimate.relocalized, (sd, estimate.reason)
         assert error < 0.05 and abs(se2.wrap_angle(estimate.pose[2] - truth[2])) < math.radians(1.0), (sd, error)
+
+
+def test_returns_through_walls_are_judged_against_what_sound_tracking_showed(
+        plan: PlanMap, path: list[Pose], scans: list[np.ndarray], tracking: Any) -> None:
+    """A place through whose walls more of a scan's returns pass than the recovery allows is not
+    taken: `max_beyond`, or the share the soundly tracked scans showed at their own poses when that
+    is more (a SLAM map's sparse cells let beams through at the right place too)."""
+    _, estimates, loc = tracking
+    recovery = loc._recovery
+    assert len(recovery.beyond_shares) >= 0.8 * len(estimates)  # every sound fit was recorded
+    assert recovery.beyond_limit == recovery.config.max_beyond  # this plan's walls stop the beams
+    scan = scans[20]
+    ranges = np.hypot(scan[:, 0], scan[:, 1])[:, None]
+
+    def through(share: float) -> np.ndarray:
+        """`scan` with the first `share` of its returns 2 m farther along their beams."""
+        moved = scan.copy()
+        n = int(share * len(scan))
+        moved[:n] *= (ranges[:n] + 2.0) / ranges[:n]
+        return moved
+
+    assert not recovery._contradicted(scan, path[20])
+    assert recovery._contradicted(through(0.3), path[20])
+    for _ in range(60):
+        recovery.observe_beyond(0.35)  # tracking in a map whose walls the beams pass
+    assert recovery.beyond_limit == pytest.approx(0.35)
+    assert not recovery._contradicted(through(0.3), path[20])
+    assert recovery._contradicted(through(0.6), path[20])
+    recovery.beyond_shares.clear()

@@ -32,6 +32,7 @@ from planicp import (
     PlanRaster,
     Relocalization,
     RelocalizationConfig,
+    SearchInSteps,
     SearchRegion,
     read_ros_map,
     relocalize,
@@ -41,6 +42,7 @@ from planicp import (
 from planicp._core import OccupancyGrid
 from planicp.default_plan import load_default_plan
 from planicp.se2 import between
+from planicp.sim.experiment import ExperimentConfig, run_experiment
 
 DATA = Path(__file__).parent / "data"
 FOV = math.radians(270.0)
@@ -287,3 +289,24 @@ def test_rejects_bad_arguments(office: tuple[PlanMap, Simulator]) -> None:
         relocalize(scan, plan, region=SearchRegion((1.0, 1.0, 0.0), radius=1e12))
     with pytest.raises(PlanicpError, match="resolution"):
         relocalize(scan, plan, config=RelocalizationConfig(resolution=1e-4))
+
+
+def test_a_search_in_steps_finds_what_one_search_finds_within_its_budget_per_call() -> None:
+    """`SearchInSteps` spreads `relocalize` over calls: each scores at most its budget of nodes
+    (three more: an expansion scores four children), and the last returns the same candidates."""
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=3.0, seed=4))
+    scan = recording.scans[20]
+    whole = relocalize(scan, plan)
+    steps = SearchInSteps(scan, plan)
+    found, calls, before = None, 0, 0
+    while found is None:
+        found = steps.advance(5_000)
+        calls += 1
+        assert steps.nodes - before <= 5_003
+        before = steps.nodes
+    assert calls >= whole.nodes // 5_000 and found.nodes == whole.nodes
+    assert [c.pose for c in found.candidates] == [c.pose for c in whole.candidates]
+    assert math.dist(found.candidates[0].pose[:2], recording.truth[20][:2]) < 0.1
+    with pytest.raises(ValueError, match="budget"):
+        steps.advance(0)

@@ -34,7 +34,7 @@ from .plan_map import PlanMap
 from .recovery import RecoveryConfig
 from .plan_raster import PlanRaster, resolution_from_pixels
 from .scan_continuity import ContinuityRule
-from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchRegion, relocalize
+from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
 from .ros_map import RosMap, read_ros_map
 
 __all__ = [
@@ -64,6 +64,7 @@ __all__ = [
     "RecoveryConfig",
     "Relocalization",
     "RelocalizationConfig",
+    "SearchInSteps",
     "SearchRegion",
     "WallView",
     "__version__",

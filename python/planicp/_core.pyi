@@ -17,6 +17,7 @@ __all__ = [
     "PointMap",
     "Relocalization",
     "RelocalizationCandidate",
+    "SearchRun",
     "WallView",
     "__version__",
     "_panic_for_tests",
@@ -225,6 +226,20 @@ class GlobalMatcher:
     @property
     def levels(self) -> int: ...
     def score_at(self, scan: NDArray[np.float64], pose: tuple[float, float, float]) -> float: ...
+    def start(
+        self, scan: NDArray[np.float64], window: tuple[float, float, float, float, float] | None
+    ) -> SearchRun: ...
+
+@final
+class SearchRun:
+    """A global search in progress: `advance` a budget of nodes at a time, then `finish`."""
+
+    def advance(self, budget: int) -> bool: ...
+    @property
+    def finished(self) -> bool: ...
+    @property
+    def nodes(self) -> int: ...
+    def finish(self, settings: IcpSettings, max_candidates: int, ambiguity_margin: float) -> Relocalization: ...
 
 @final
 class RelocalizationCandidate:

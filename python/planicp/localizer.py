@@ -177,7 +177,7 @@ class Localizer:
         # recovery refines its candidates with it.
         self._wide_config = self.config.replace(correspondence_search="kd_tree")
         self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self._wide_config,
-                                  self.gate, self._occlusion)
+                                  self.gate, self._occlusion, self.motion_noise)
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.
         prepare_search(plan, self._recovery.config.search)
@@ -313,6 +313,8 @@ class Localizer:
             self._last_odom = odom
             if accepted and (continues or not poor):
                 self._anchor = (points, odom)
+            if accepted and not poor and not relocalized and fit.beyond is not None and not lost:
+                self._recovery.observe_beyond(float(np.mean(fit.beyond)))
             hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan

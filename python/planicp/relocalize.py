@@ -235,18 +235,66 @@ def relocalize(
     window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
     raw = _core.relocalize(_matcher(plan, config), points, window, config.icp._native, count,
                            float(config.ambiguity_margin))
+    return _relocalization(raw, config, time.perf_counter() - start)
+
+
+def _relocalization(raw: _core.Relocalization, config: RelocalizationConfig, seconds: float) -> Relocalization:
     candidates = tuple(_candidate(c, config.icp.covariance_scale) for c in raw.candidates)
-    return Relocalization(
-        candidates=candidates,
-        ambiguity=raw.ambiguity,
-        ambiguous=raw.ambiguous,
-        complete=raw.complete,
-        rotations=raw.rotations,
-        angular_step=raw.angular_step,
-        nodes=raw.nodes,
-        scan_points=raw.scan_points,
-        seconds=time.perf_counter() - start,
-    )
+    return Relocalization(candidates=candidates, ambiguity=raw.ambiguity, ambiguous=raw.ambiguous,
+                          complete=raw.complete, rotations=raw.rotations, angular_step=raw.angular_step,
+                          nodes=raw.nodes, scan_points=raw.scan_points, seconds=seconds)
+
+
+class SearchInSteps:
+    """A `relocalize` spread over calls, for a loop that must not stall (a tracker's updates).
+
+    Made with the scan and settings of `relocalize`; each `advance(budget)` scores up to `budget`
+    nodes of the branch and bound (about a microsecond each for a scan thinned to 120 points, on
+    the real logs' plans) and returns None until the search has ended, then the `Relocalization`
+    of the scan it was made with: the same one `relocalize` returns for it. The result's
+    `seconds` is the time spent in the calls. The GIL is released while a call works.
+    """
+
+    def __init__(self, scan_xy: Any, plan: PlanMap, *, region: SearchRegion | None = None,
+                 config: RelocalizationConfig | None = None, max_candidates: int = 5) -> None:
+        """Arguments as for `relocalize`; no node is scored yet.
+
+        Raises:
+            TypeError, ValueError: as `relocalize`.
+        """
+        start = time.perf_counter()
+        if not isinstance(plan, PlanMap):
+            raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
+        if config is None:
+            config = _default_config()
+        elif not isinstance(config, RelocalizationConfig):
+            raise TypeError(f"config must be a planicp.RelocalizationConfig, got {type(config).__name__}")
+        if region is not None and not isinstance(region, SearchRegion):
+            raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
+        self._count = whole_number(max_candidates, "max_candidates", 1, 1000)
+        self._config = config
+        self.scan = as_points(scan_xy, "scan_xy")
+        """The scan searched for, (N, 2) robot-frame metres."""
+        window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
+        self._run = _matcher(plan, config).start(self.scan, window)
+        self._seconds = time.perf_counter() - start
+
+    @property
+    def nodes(self) -> int:
+        """Search nodes scored so far."""
+        return self._run.nodes
+
+    def advance(self, budget: int) -> Relocalization | None:
+        """Scores up to `budget` (>= 1) more nodes; the result once the search has ended, else None."""
+        nodes = whole_number(budget, "budget", 1, 2**62)
+        start = time.perf_counter()
+        if not self._run.advance(nodes):
+            self._seconds += time.perf_counter() - start
+            return None
+        config = self._config
+        raw = self._run.finish(config.icp._native, self._count, float(config.ambiguity_margin))
+        self._seconds += time.perf_counter() - start
+        return _relocalization(raw, config, self._seconds)
 
 
 def prepare_search(plan: PlanMap, config: RelocalizationConfig | None = None) -> None:

@@ -360,6 +360,15 @@ impl GlobalMatcher {
     /// Searches the whole plan (`window` `None`) or a window for the poses that best explain
     /// `scan` (points in the robot frame, metres).
     pub fn search(&self, scan: &[[f64; 2]], window: Option<&SearchWindow>) -> Result<SearchOutcome> {
+        let mut run = self.start(scan, window)?;
+        run.advance(self, u64::MAX);
+        Ok(run.outcome())
+    }
+
+    /// A search of the whole plan (`window` `None`) or a window for `scan` (robot frame, metres)
+    /// that has not scored any node yet: [`SearchRun::advance`] does the work a budget of nodes
+    /// at a time, and a run advanced to its end finds what [`GlobalMatcher::search`] finds.
+    pub fn start(&self, scan: &[[f64; 2]], window: Option<&SearchWindow>) -> Result<SearchRun> {
         if let Some(w) = window {
             w.validate()?;
         }
@@ -407,14 +416,17 @@ impl GlobalMatcher {
                 RotatedScan { yaw, cells }
             })
             .collect();
-        let mut search = Search {
-            pyramid: &self.pyramid,
-            rotated: &rotated,
+        let top = self.config.levels - 1;
+        let block = 1i64 << top;
+        let blocks = |w: i32| ((2 * i64::from(w)) / block + 1) as usize;
+        Ok(SearchRun {
+            rotated,
             inv_n: 1.0 / (255.0 * points.len() as f32),
             limits: [wx, wy],
             nodes: 0,
             max_nodes: self.config.max_nodes,
             complete: true,
+            finished: false,
             best: BestList {
                 entries: Vec::new(),
                 capacity: self.config.max_candidates,
@@ -425,29 +437,13 @@ impl GlobalMatcher {
             },
             center,
             res,
-        };
-        let top = self.config.levels - 1;
-        let block = 1i32 << top;
-        let mut roots = Vec::new();
-        for r in 0..rotated.len() {
-            let mut ix = -wx;
-            while ix <= wx {
-                let mut iy = -wy;
-                while iy <= wy {
-                    roots.push(search.node(r as u32, ix, iy, top));
-                    iy += block;
-                }
-                ix += block;
-            }
-        }
-        search.branch(roots);
-        Ok(SearchOutcome {
-            candidates: search.best.entries,
-            rotations: rotated.len(),
-            angular_step: step,
-            nodes: search.nodes,
-            complete: search.complete,
+            step,
             scan_points: points.len(),
+            top,
+            root_blocks: [blocks(wx), blocks(wy)],
+            next_root: 0,
+            roots: Vec::new(),
+            queue: BinaryHeap::new(),
         })
     }
 }
@@ -470,62 +466,141 @@ fn full_circle(step: f64) -> Result<Vec<f64>> {
     Ok((0..n).map(|k| wrap_angle(k as f64 * 2.0 * PI / n as f64)).collect())
 }
 
-/// State of one branch-and-bound run.
-struct Search<'a> {
-    pyramid: &'a LikelihoodPyramid,
-    rotated: &'a [RotatedScan],
+/// A branch-and-bound search in progress (see the module documentation), made by
+/// [`GlobalMatcher::start`]: each [`SearchRun::advance`] scores up to a budget of nodes and stops
+/// where it is, so a search of seconds can be spread over many short calls (a tracker's updates).
+/// The roots (every rotation's coarsest blocks) are scored first, in order; then the node with the
+/// highest bound is expanded next, exactly as one uninterrupted search would. Memory: the queue
+/// holds up to `max_nodes` nodes of 20 bytes.
+pub struct SearchRun {
+    rotated: Vec<RotatedScan>,
     inv_n: f32,
     limits: [i32; 2],
     nodes: u64,
     max_nodes: u64,
     complete: bool,
+    finished: bool,
     best: BestList,
     center: [f64; 2],
     res: f64,
+    step: f64,
+    scan_points: usize,
+    /// Level of the roots.
+    top: usize,
+    /// Roots per rotation along x and y.
+    root_blocks: [usize; 2],
+    /// Index of the next root to score, over rotations x x-blocks x y-blocks.
+    next_root: usize,
+    /// The roots scored so far, until all are and become the queue.
+    roots: Vec<Node>,
+    queue: BinaryHeap<Node>,
 }
 
-impl Search<'_> {
+impl SearchRun {
+    /// Scores `budget` more nodes of the search (three more at most: an expansion scores four
+    /// children) with `matcher`'s pyramid (the matcher that started the run); returns whether the
+    /// search has ended (every node that could beat the
+    /// candidates expanded, or `max_nodes` scored in all).
+    pub fn advance(&mut self, matcher: &GlobalMatcher, budget: u64) -> bool {
+        let pyramid = &matcher.pyramid;
+        let stop_at = self.nodes.saturating_add(budget.max(1));
+        let [bx, by] = self.root_blocks;
+        let roots = self.rotated.len() * bx * by;
+        let block = 1i32 << self.top;
+        while self.next_root < roots {
+            if self.nodes >= stop_at {
+                return false;
+            }
+            let k = self.next_root;
+            self.next_root += 1;
+            let (r, rest) = (k / (bx * by), k % (bx * by));
+            let (ix, iy) =
+                (-self.limits[0] + (rest / by) as i32 * block, -self.limits[1] + (rest % by) as i32 * block);
+            let root = self.node(pyramid, r as u32, ix, iy, self.top);
+            self.roots.push(root);
+        }
+        if !self.roots.is_empty() {
+            // One heap of every root, as an uninterrupted search builds it (the order of ties).
+            self.queue = BinaryHeap::from(std::mem::take(&mut self.roots));
+        }
+        while !self.finished {
+            if self.nodes >= stop_at {
+                return false;
+            }
+            self.expand_next(pyramid);
+        }
+        true
+    }
+
+    /// Whether the search has ended.
+    pub fn finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Nodes scored so far.
+    pub fn nodes(&self) -> u64 {
+        self.nodes
+    }
+
+    /// The candidates so far (the search's result once it has ended) and what they cost.
+    pub fn outcome(&self) -> SearchOutcome {
+        SearchOutcome {
+            candidates: self.best.entries.clone(),
+            rotations: self.rotated.len(),
+            angular_step: self.step,
+            nodes: self.nodes,
+            complete: self.complete,
+            scan_points: self.scan_points,
+        }
+    }
+
     /// Scores the node at `level`: the mean of the level's values under the scan's cells.
-    fn node(&mut self, rotation: u32, ix: i32, iy: i32, level: usize) -> Node {
+    fn node(&mut self, pyramid: &LikelihoodPyramid, rotation: u32, ix: i32, iy: i32, level: usize) -> Node {
         self.nodes += 1;
         let cells = &self.rotated[rotation as usize].cells;
         let (dx, dy) = (ix as i64, iy as i64);
-        let sum: u32 = cells.iter().map(|c| self.pyramid.get(level, c[0] + dx, c[1] + dy) as u32).sum();
+        let sum: u32 = cells.iter().map(|c| pyramid.get(level, c[0] + dx, c[1] + dy) as u32).sum();
         Node { rotation, ix, iy, level: level as u8, score: sum as f32 * self.inv_n }
     }
 
-    /// Best-first expansion from `roots`: the node with the highest bound is expanded next, so
-    /// leaves come out best first and only nodes whose bound beats the threshold are expanded.
-    fn branch(&mut self, roots: Vec<Node>) {
-        let mut queue: BinaryHeap<Node> = roots.into();
-        while let Some(n) = queue.pop() {
-            let threshold = self.best.threshold();
-            if (n.score as f64) <= threshold {
-                return;
-            }
-            if n.level == 0 {
-                let yaw = self.rotated[n.rotation as usize].yaw;
-                let pose = Pose2::new(
-                    self.center[0] + n.ix as f64 * self.res,
-                    self.center[1] + n.iy as f64 * self.res,
-                    yaw,
-                );
-                self.best.insert(Candidate { pose, score: n.score as f64 });
-                continue;
-            }
-            if self.nodes >= self.max_nodes {
-                self.complete = false;
-                return;
-            }
-            let level = n.level as usize - 1;
-            let half = 1i32 << level;
-            for (ox, oy) in [(0, 0), (half, 0), (0, half), (half, half)] {
-                let (ix, iy) = (n.ix + ox, n.iy + oy);
-                if ix <= self.limits[0] && iy <= self.limits[1] {
-                    let child = self.node(n.rotation, ix, iy, level);
-                    if child.score as f64 > threshold {
-                        queue.push(child);
-                    }
+    /// One step of the best-first expansion: the node with the highest bound is a leaf (a
+    /// candidate) or is split into its four children; the search ends when no node's bound beats
+    /// the threshold, or at `max_nodes`.
+    fn expand_next(&mut self, pyramid: &LikelihoodPyramid) {
+        let Some(n) = self.queue.pop() else {
+            self.finished = true;
+            return;
+        };
+        let threshold = self.best.threshold();
+        if (n.score as f64) <= threshold {
+            self.finished = true;
+            self.queue = BinaryHeap::new();
+            return;
+        }
+        if n.level == 0 {
+            let yaw = self.rotated[n.rotation as usize].yaw;
+            let pose = Pose2::new(
+                self.center[0] + n.ix as f64 * self.res,
+                self.center[1] + n.iy as f64 * self.res,
+                yaw,
+            );
+            self.best.insert(Candidate { pose, score: n.score as f64 });
+            return;
+        }
+        if self.nodes >= self.max_nodes {
+            self.complete = false;
+            self.finished = true;
+            self.queue = BinaryHeap::new();
+            return;
+        }
+        let level = n.level as usize - 1;
+        let half = 1i32 << level;
+        for (ox, oy) in [(0, 0), (half, 0), (0, half), (half, half)] {
+            let (ix, iy) = (n.ix + ox, n.iy + oy);
+            if ix <= self.limits[0] && iy <= self.limits[1] {
+                let child = self.node(pyramid, n.rotation, ix, iy, level);
+                if child.score as f64 > threshold {
+                    self.queue.push(child);
                 }
             }
         }
@@ -683,6 +758,37 @@ pub(crate) mod tests {
         let away = SearchWindow { center: Pose2::new(2.0, 2.0, -2.0), half_width: 0.5, half_angle: 0.1 };
         let out = matcher.search(&scan, Some(&away)).unwrap();
         assert!(out.candidates.iter().all(|c| c.score < full.candidates[0].score - 0.2));
+    }
+
+    #[test]
+    fn a_run_advanced_in_small_budgets_finds_what_one_search_finds() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
+        let whole = matcher.search(&scan, None).unwrap();
+        let mut run = matcher.start(&scan, None).unwrap();
+        let mut calls = 0;
+        let mut before = 0;
+        while !run.advance(&matcher, 500) {
+            calls += 1;
+            // An expansion scores up to four children: a call ends at most three past its budget.
+            assert!(
+                (500..=503).contains(&(run.nodes() - before)),
+                "{} nodes in one call",
+                run.nodes() - before
+            );
+            before = run.nodes();
+        }
+        assert!(
+            run.finished() && calls as u64 >= whole.nodes / 500 - 1,
+            "{calls} calls for {} nodes",
+            whole.nodes
+        );
+        assert_eq!(run.outcome(), whole);
+        // A finished run stays finished and scores nothing more.
+        assert!(run.advance(&matcher, 500));
+        assert_eq!(run.nodes(), whole.nodes);
     }
 
     #[test]

@@ -85,6 +85,22 @@ pub fn relocalize(
     icp.validate()?;
     ranking.validate()?;
     let search = matcher.search(scan, window)?;
+    refine(map, matcher, scan, search, icp, ranking)
+}
+
+/// The candidates of a finished search (`search`, of `scan` with `matcher`; see
+/// [`crate::global_search::SearchRun`]) refined by ICP on `map` and ranked, as [`relocalize`]
+/// does after its search.
+pub fn refine(
+    map: &PointMap,
+    matcher: &GlobalMatcher,
+    scan: &[[f64; 2]],
+    search: SearchOutcome,
+    icp: &IcpConfig,
+    ranking: &RankingConfig,
+) -> Result<Relocalization> {
+    icp.validate()?;
+    ranking.validate()?;
     let mut refined = Vec::with_capacity(search.candidates.len());
     for c in &search.candidates {
         let alignment = align(map, scan, c.pose, icp)?;

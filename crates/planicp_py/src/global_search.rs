@@ -2,8 +2,10 @@
 //! (`icp_core::global_search`, `icp_core::relocalization`). `planicp.relocalize` wraps them.
 
 use crate::{guarded, points_from, Alignment, IcpSettings, PyPointMap};
-use icp_core::global_search::{GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchWindow};
-use icp_core::relocalization::{relocalize as core_relocalize, RankingConfig};
+use icp_core::global_search::{
+    GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
+};
+use icp_core::relocalization::{refine as core_refine, relocalize as core_relocalize, RankingConfig};
 use icp_core::{PointMap, Pose2};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
@@ -93,6 +95,20 @@ impl GlobalMatcher {
         self.inner.pyramid().num_levels()
     }
 
+    /// A search of scan points (N, 2, robot frame, metres) over the whole plan, or within
+    /// `window` (x, y, yaw, half_width, half_angle), that has scored no node yet: see `SearchRun`.
+    #[pyo3(signature = (scan, window))]
+    fn start(
+        &self,
+        scan: PyReadonlyArray2<'_, f64>,
+        window: Option<(f64, f64, f64, f64, f64)>,
+    ) -> PyResult<SearchRun> {
+        let pts = points_from("scan points", &scan)?;
+        let window = window_from(window);
+        let run = guarded(|| self.inner.start(&pts, window.as_ref()))?;
+        Ok(SearchRun { run, scan: pts, map: Arc::clone(&self.map), matcher: Arc::clone(&self.inner) })
+    }
+
     /// Mean likelihood (0..1) of scan points (N, 2, robot frame) at pose (x, y, yaw).
     fn score_at(&self, scan: PyReadonlyArray2<'_, f64>, pose: PoseTuple) -> PyResult<f64> {
         let pts = points_from("scan points", &scan)?;
@@ -100,6 +116,59 @@ impl GlobalMatcher {
             icp_core::error::check_finite("scan", &pts)?;
             Ok(self.inner.score_at(&pts, Pose2::new(pose.0, pose.1, pose.2)))
         })
+    }
+}
+
+/// A global search in progress (`GlobalMatcher.start`): `advance` scores a budget of search nodes
+/// at a time (releasing the GIL), so that a search of seconds is spread over many short calls;
+/// `finish` refines and ranks the candidates as `relocalize` does. Advanced to its end, it finds
+/// what `relocalize` finds for the same scan.
+#[pyclass(module = "planicp._core")]
+pub struct SearchRun {
+    run: CoreRun,
+    scan: Vec<[f64; 2]>,
+    map: Arc<PointMap>,
+    matcher: Arc<CoreMatcher>,
+}
+
+#[pymethods]
+impl SearchRun {
+    /// Scores `budget` (>= 1) more nodes (up to three more: an expansion scores four children);
+    /// returns whether the search has ended.
+    fn advance(&mut self, py: Python<'_>, budget: u64) -> PyResult<bool> {
+        let (run, matcher) = (&mut self.run, &self.matcher);
+        py.detach(|| guarded(|| Ok(run.advance(matcher, budget))))
+    }
+
+    /// Whether the search has ended.
+    #[getter]
+    fn finished(&self) -> bool {
+        self.run.finished()
+    }
+
+    /// Nodes scored so far.
+    #[getter]
+    fn nodes(&self) -> u64 {
+        self.run.nodes()
+    }
+
+    /// The candidates so far refined by ICP with `settings` and ranked (see `relocalize`).
+    /// Releases the GIL.
+    #[pyo3(signature = (settings, max_candidates, ambiguity_margin))]
+    fn finish(
+        &self,
+        py: Python<'_>,
+        settings: &IcpSettings,
+        max_candidates: usize,
+        ambiguity_margin: f64,
+    ) -> PyResult<Relocalization> {
+        let icp = settings.inner.clone();
+        let ranking = RankingConfig { max_candidates, ambiguity_margin };
+        let outcome = self.run.outcome();
+        let out = py.detach(|| {
+            guarded(|| core_refine(&self.map, &self.matcher, &self.scan, outcome, &icp, &ranking))
+        })?;
+        wrap(py, out)
     }
 }
 
@@ -159,6 +228,11 @@ pub fn relocalize(
     let window = window_from(window);
     let out =
         py.detach(|| guarded(|| core_relocalize(&map, &core, &pts, window.as_ref(), &icp, &ranking)))?;
+    wrap(py, out)
+}
+
+/// The Python view of a core relocalization.
+fn wrap(py: Python<'_>, out: icp_core::relocalization::Relocalization) -> PyResult<Relocalization> {
     let candidates = out
         .candidates
         .into_iter()

@@ -399,6 +399,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<global_search::GlobalMatcher>()?;
     m.add_class::<global_search::Relocalization>()?;
     m.add_class::<global_search::RelocalizationCandidate>()?;
+    m.add_class::<global_search::SearchRun>()?;
     m.add_function(wrap_pyfunction!(global_search::relocalize, m)?)?;
     m.add_function(wrap_pyfunction!(align, m)?)?;
     m.add_function(wrap_pyfunction!(visibility_range, m)?)?;
