@@ -199,6 +199,26 @@ def test_a_symmetric_room_keeps_the_localizer_lost_with_its_hypotheses() -> None
     assert min(math.dist(h[:2], truth[:2]) for h in estimate.hypotheses) < 0.1
 
 
+def test_places_followed_while_lost_move_with_the_odometry_over_a_scan_too_small_to_align() -> None:
+    """A scan with too few points is not aligned; while lost, the places the recovery follows move
+    with the odometry over it, so that they are where the robot is when the next scan comes."""
+    res = 0.05
+    walls = np.zeros((int(6.4 / res), int(10.4 / res)), dtype=bool)
+    walls[:4, :] = walls[-4:, :] = walls[:, :4] = walls[:, -4:] = True
+    plan = PlanMap.from_raster(PlanRaster(walls, res, (-0.2, -0.2, 0.0)))
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=8.0, seed=1, furnishing=Furnishing(0, 0, 0, 0)))
+    localizer = Localizer(plan, (5.0, 3.0, 0.0))
+    localizer.relocalize(recording.scans[40])
+    estimate = localizer.update(recording.scans[41], tuple(recording.odometry_in_odom[41]))
+    assert estimate.lost and len(estimate.hypotheses) >= 2  # the room and the room turned round
+    assert math.dist(recording.truth[41, :2], recording.truth[46, :2]) > 0.2  # the robot drives on
+    estimate = localizer.update(np.zeros((0, 2)), tuple(recording.odometry_in_odom[46]))
+    assert estimate.lost and estimate.result is None
+    assert min(math.dist(h[:2], recording.truth[46, :2]) for h in estimate.hypotheses) < 0.05
+    estimate = localizer.update(recording.scans[47], tuple(recording.odometry_in_odom[47]))
+    assert min(math.dist(h[:2], recording.truth[47, :2]) for h in estimate.hypotheses) < 0.05
+
+
 def test_lost_detector_rules() -> None:
     detector = LostDetector(LostRule(window=3, min_score=0.5, max_rejections=2))
     assert not detector.update(0.9, True) and not detector.update(0.1, True)  # window not full yet

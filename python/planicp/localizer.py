@@ -306,7 +306,9 @@ class Localizer:
                     covariance = _finite_or(found.result.covariance, predicted_covariance)
                     reason = ""
                     self._detector.reset()
-            elif not lost:
+            elif lost:
+                self._recovery.coast(motion)
+            else:
                 self._recovery.clear()
             self._pose = pose
             self._covariance = covariance

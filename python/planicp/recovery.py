@@ -159,6 +159,14 @@ class Recovery:
             return found
         return None
 
+    def coast(self, motion: Pose) -> None:
+        """A scan too small to align while lost: the hypotheses, and the odometry motion since
+        the running search's scan, follow `motion` alone."""
+        self.hypotheses = [Hypothesis(compose(h.pose, motion), h.result, h.streak, h.total) for h in self.hypotheses]
+        if self._running is not None:
+            steps, since, spread = self._running
+            self._running = (steps, compose(since, motion), self.motion_noise.propagate(spread, since, motion))
+
     def clear(self) -> None:
         """Forgets every hypothesis and any search in progress (the pose was given or found)."""
         self.hypotheses = []
