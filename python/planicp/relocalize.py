@@ -20,6 +20,9 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from . import _core
 from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
 from .icp_config import IcpConfig
@@ -222,17 +225,7 @@ def relocalize(
     The GIL is released while the search runs.
     """
     start = time.perf_counter()
-    if not isinstance(plan, PlanMap):
-        raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
-    if config is None:
-        config = _default_config()
-    elif not isinstance(config, RelocalizationConfig):
-        raise TypeError(f"config must be a planicp.RelocalizationConfig, got {type(config).__name__}")
-    if region is not None and not isinstance(region, SearchRegion):
-        raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
-    count = whole_number(max_candidates, "max_candidates", 1, 1000)
-    points = as_points(scan_xy, "scan_xy")
-    window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
+    config, count, points, window = _search_arguments(scan_xy, plan, region, config, max_candidates)
     raw = _core.relocalize(_matcher(plan, config), points, window, config.icp._native, count,
                            float(config.ambiguity_margin))
     return _relocalization(raw, config, time.perf_counter() - start)
@@ -263,20 +256,10 @@ class SearchInSteps:
             TypeError, ValueError: as `relocalize`.
         """
         start = time.perf_counter()
-        if not isinstance(plan, PlanMap):
-            raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
-        if config is None:
-            config = _default_config()
-        elif not isinstance(config, RelocalizationConfig):
-            raise TypeError(f"config must be a planicp.RelocalizationConfig, got {type(config).__name__}")
-        if region is not None and not isinstance(region, SearchRegion):
-            raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
-        self._count = whole_number(max_candidates, "max_candidates", 1, 1000)
-        self._config = config
-        self.scan = as_points(scan_xy, "scan_xy")
-        """The scan searched for, (N, 2) robot-frame metres."""
-        window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
-        self._run = _matcher(plan, config).start(self.scan, window)
+        self._config, self._count, self.scan, window = _search_arguments(scan_xy, plan, region, config,
+                                                                         max_candidates)
+        """`scan`: the scan searched for, (N, 2) robot-frame metres."""
+        self._run = _matcher(plan, self._config).start(self.scan, window)
         self._seconds = time.perf_counter() - start
 
     @property
@@ -295,6 +278,28 @@ class SearchInSteps:
         raw = self._run.finish(config.icp._native, self._count, float(config.ambiguity_margin))
         self._seconds += time.perf_counter() - start
         return _relocalization(raw, config, self._seconds)
+
+
+_Window = tuple[float, float, float, float, float]
+"""A native search window: (x, y, yaw, half_width, half_angle)."""
+
+
+def _search_arguments(scan_xy: Any, plan: PlanMap, region: SearchRegion | None,
+                      config: RelocalizationConfig | None, max_candidates: int
+                      ) -> tuple[RelocalizationConfig, int, NDArray[np.float64], _Window | None]:
+    """The checked arguments of a search: (config, candidate count, scan points, native window)."""
+    if not isinstance(plan, PlanMap):
+        raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
+    if config is None:
+        config = _default_config()
+    elif not isinstance(config, RelocalizationConfig):
+        raise TypeError(f"config must be a planicp.RelocalizationConfig, got {type(config).__name__}")
+    if region is not None and not isinstance(region, SearchRegion):
+        raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
+    count = whole_number(max_candidates, "max_candidates", 1, 1000)
+    points = as_points(scan_xy, "scan_xy")
+    window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
+    return config, count, points, window
 
 
 def prepare_search(plan: PlanMap, config: RelocalizationConfig | None = None) -> None:
