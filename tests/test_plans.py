@@ -12,6 +12,7 @@ import pytest
 import planicp
 from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels, synthetic
 from planicp.cli import main as cli_main
+from planicp.ros_map import write_ros_map
 
 DATA = Path(__file__).parent / "data"
 
@@ -68,6 +69,10 @@ def test_image_ros_map_round_trip(floor: synthetic.Floor, tmp_path: Path) -> Non
     yaml_path.write_text(text.replace("planicp_edge_detector: boundary", "planicp_edge_detector: faces"))
     with pytest.raises(ValueError, match="planicp_edge_detector must be one of"):
         PlanMap.from_ros_map(yaml_path, cache=False)
+    with pytest.raises(ValueError, match="edge_detector must be one of"):
+        write_ros_map(tmp_path / "bad.yaml", np.zeros((4, 4), dtype=np.int8), 0.05, (0.0, 0.0, 0.0),
+                      edge_detector="faces")
+    assert not (tmp_path / "bad.yaml").exists()  # refused before anything is written
 
 
 @pytest.mark.parametrize("name", ["tb3_sandbox", "depot"])

@@ -310,3 +310,7 @@ def test_a_search_in_steps_finds_what_one_search_finds_within_its_budget_per_cal
     assert math.dist(found.candidates[0].pose[:2], recording.truth[20][:2]) < 0.1
     with pytest.raises(ValueError, match="budget"):
         steps.advance(0)
+    with pytest.raises(ValueError, match="search_nodes"):
+        planicp.RecoveryConfig(search_nodes=0)
+    with pytest.raises(TypeError, match="plan must be a planicp.PlanMap"):
+        SearchInSteps(scan, "plan.yaml")  # type: ignore[arg-type]

@@ -171,6 +171,8 @@ def write_ros_map(
     path = Path(yaml_path)
     if path.suffix.lower() not in (".yaml", ".yml"):
         raise ValueError(f"ROS map path {path} must end in .yaml or .yml")
+    if edge_detector is not None and edge_detector not in EDGE_DETECTORS:
+        raise ValueError(f"edge_detector must be one of {EDGE_DETECTORS} or None, got {edge_detector!r}")
     occ = np.asarray(occupancy)
     if occ.ndim != 2 or occ.size == 0:
         raise ValueError(f"occupancy must be a non-empty 2-D array, got shape {occ.shape}")
@@ -190,8 +192,6 @@ def write_ros_map(
         f"free_thresh: {free_thresh!r}\n"
     )
     if edge_detector is not None:
-        if edge_detector not in EDGE_DETECTORS:
-            raise ValueError(f"edge_detector must be one of {EDGE_DETECTORS} or None, got {edge_detector!r}")
         meta += f"{EDGE_DETECTOR_KEY}: {edge_detector}\n"
     _atomic_write(pgm_path, header + image.tobytes())
     _atomic_write(path, meta.encode())
