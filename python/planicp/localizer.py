@@ -56,7 +56,12 @@ class Estimate:
         relocalized: this update adopted a pose found by a search of the plan (`pose` is it): by
             the recovery while lost, or around a prediction the acceptance gate cannot vouch for.
         hypotheses: places the recovery is following while lost (more than one: the building is
-            symmetric there and the localizer does not pretend to know which).
+            symmetric there and the localizer does not pretend to know which), or, while `pose`
+            is `provisional`, the places that rival it.
+        provisional: `pose` follows a place the recovery adopted before its search of the whole
+            plan had ended (a place near where the localizer lost track that explains the scans
+            as well as sound tracking did); that search goes on, and a place it finds that
+            explains the next scans better replaces it (see `Recovery.verify`).
     """
 
     pose: Pose
@@ -72,6 +77,7 @@ class Estimate:
     relocalized: bool = False
     hypotheses: tuple[Pose, ...] = ()
     kept: NDArray[np.bool_] | None = None
+    provisional: bool = False
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
@@ -258,6 +264,7 @@ class Localizer:
         points = as_points(scan_xy, "scan_xy", allow_empty=True)
         odom = as_pose(odom_pose, "odom_pose")
         with self._lock:
+            self._recovery.new_update()
             was_lost = self._detector.lost
             motion = (0.0, 0.0, 0.0) if self._last_odom is None else between(self._last_odom, odom)
             predicted = compose(self._pose, motion)
@@ -299,17 +306,21 @@ class Localizer:
                 clears = not was_lost or searched or score >= self._recovery.config.min_inlier_ratio
                 lost = self._detector.update(score, accepted and clears)
             relocalized = searched
-            if lost and fit.usable:
-                found = self._recovery.step(points, motion, predicted)
-                if found is not None:
-                    pose, result, accepted, relocalized, lost = found.pose, found.result, True, True, False
-                    covariance = _finite_or(found.result.covariance, predicted_covariance)
-                    reason = ""
-                    self._detector.reset()
-            elif lost:
+            found = None
+            if (lost or self._recovery.on_trial) and not fit.usable:
                 self._recovery.coast(motion)
+            elif lost:
+                found = self._recovery.step(points, motion, predicted)
+            elif self._recovery.on_trial:
+                # A place adopted before the whole plan was searched: that search goes on.
+                found = self._recovery.verify(points, motion, pose)
             else:
                 self._recovery.clear()
+            if found is not None:
+                pose, result, accepted, relocalized, lost = found.pose, found.result, True, True, False
+                covariance = _finite_or(found.result.covariance, predicted_covariance)
+                reason = ""
+                self._detector.reset()
             self._pose = pose
             self._covariance = covariance
             self._last_odom = odom
@@ -317,11 +328,15 @@ class Localizer:
                 self._anchor = (points, odom)
             if accepted and not poor and not relocalized and fit.beyond is not None and not lost:
                 self._recovery.observe_beyond(float(np.mean(fit.beyond)))
+            if accepted and not poor and not relocalized and not lost and result is not None:
+                # Over the whole scan, as the recovery's fits count theirs: returns left out in
+                # front of the walls are not explained.
+                self._recovery.observe_explained(result.num_inliers / len(points))
             hypotheses = tuple(h.pose for h in self._recovery.hypotheses)
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan
             return Estimate(pose, accepted, result, predicted, odom, reason, covariance.copy(), degeneracy, lost,
-                            self._detector.score, relocalized, hypotheses, kept)
+                            self._detector.score, relocalized, hypotheses, kept, self._recovery.on_trial)
 
     def _confirmed(self, points: NDArray[np.float64], odom: Pose, pending: tuple[Pose, Pose], result: IcpResult,
                    reason: str) -> IcpResult | None:
@@ -509,7 +524,10 @@ class Localizer:
         headings within as many of its heading's, each widened by the reach of the refinement from
         a lattice pose (the ICP's correspondence distance, two heading steps), inside the
         recovery's `local_radius`. A search of every heading around the prediction took 35-120 ms
-        on a real log whose scans were 2 m apart, and then refused every place outside that region."""
+        on a real log whose scans were 2 m apart, and then refused every place outside that region.
+
+        The search scores at most what is left of the update's `search_nodes` (`SearchBudget`);
+        one that would need more finds nothing (the fit's own place then waits for the next scan)."""
         config = self._recovery.config
         radius, yaw_tolerance = config.local_radius, math.pi
         if consistent_with is not None:
@@ -517,11 +535,11 @@ class Localizer:
             reach = self.config.max_correspondence_distance
             radius = min(radius, k * _largest_position_std(consistent_with) + reach)
             yaw_std = math.sqrt(max(float(consistent_with[2, 2]), 0.0))
-            yaw_tolerance = min(math.pi, k * yaw_std + 2.0 * config.search.max_angular_step)
-        found = relocalize(points, self.plan, region=SearchRegion(predicted, radius, yaw_tolerance),
-                           config=config.search, max_candidates=config.max_hypotheses)
-        best = found.best
-        if best is None or found.ambiguous or best.inlier_ratio < config.min_inlier_ratio:
+            yaw_tolerance = min(math.pi, k * yaw_std + 2.0 * config.search.heading_step)
+        found = self._recovery.budget.search(points, self.plan, SearchRegion(predicted, radius, yaw_tolerance),
+                                             config.search, config.max_hypotheses)
+        best = None if found is None else found.best
+        if found is None or best is None or found.ambiguous or best.inlier_ratio < config.min_inlier_ratio:
             return None
         refined = localize(points, self.plan, best.pose, self.config)
         if self.gate.rejection(refined, best.pose) or refined.inlier_ratio < config.min_inlier_ratio:

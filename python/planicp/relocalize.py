@@ -36,12 +36,16 @@ class RelocalizationConfig:
 
     Attributes:
         resolution: cell size of the likelihood field and step of the position lattice. The
-            search only has to land within ICP's reach (a few cells), so 0.1 m is enough.
+            search only has to land within ICP's reach (a few cells), so 0.2 m is enough (0.1 m
+            found the same places on the real logs at 2.8 times the time, docs/benchmarks.md).
         sigma: width of the Gaussian likelihood around each wall (`exp(-d^2 / (2 sigma^2))`).
         levels: levels of the max-pooled pyramid of branch and bound; the coarsest block is
             `2^(levels-1)` cells wide (6.4 m at the defaults).
-        angular_step: heading step; None: the step that moves the scan's far points (95th
-            percentile of the ranges) by one cell, at most `max_angular_step`.
+        angular_step: heading step. 2 degrees: ICP refines a heading from far wider, and a finer
+            step multiplies the nodes (on the real logs' plans a whole-plan search at the step
+            that moves the far points by one cell scored 1.5-4 times as many, and on the outdoor
+            log ran out of `max_nodes`, docs/benchmarks.md). None: that step, at most
+            `max_angular_step`.
         max_angular_step: largest automatic heading step.
         search_candidates: distinct hypotheses the search hands to ICP (more than are returned,
             since refined hypotheses may merge).
@@ -58,20 +62,26 @@ class RelocalizationConfig:
             visible walls, whose basin suits coarse candidates).
     """
 
-    resolution: float = 0.1
-    sigma: float = 0.1
-    levels: int = 7
-    angular_step: float | None = None
+    resolution: float = 0.2
+    sigma: float = 0.2
+    levels: int = 6
+    angular_step: float | None = math.radians(2.0)
     max_angular_step: float = math.radians(2.0)
     search_candidates: int = 8
     min_score: float = 0.2
     relative_score: float = 0.8
     nms_distance: float = 1.0
     nms_angle: float = math.radians(20.0)
-    max_scan_points: int = 200
+    max_scan_points: int = 100
     max_nodes: int = 4_000_000
     ambiguity_margin: float = 0.05
     icp: IcpConfig = field(default_factory=lambda: IcpConfig(correspondence_search="kd_tree"))
+
+    @property
+    def heading_step(self) -> float:
+        """The largest heading step of a search, radians: `angular_step`, or `max_angular_step`
+        when the step is chosen from the scan."""
+        return self.max_angular_step if self.angular_step is None else min(self.angular_step, math.pi)
 
     def __post_init__(self) -> None:
         positive(self.resolution, "resolution", "metres")
@@ -259,6 +269,8 @@ class SearchInSteps:
         self._config, self._count, self.scan, window = _search_arguments(scan_xy, plan, region, config,
                                                                          max_candidates)
         """`scan`: the scan searched for, (N, 2) robot-frame metres."""
+        self.region = region
+        """`region`: where the search looks (None: the whole plan)."""
         self._run = _matcher(plan, self._config).start(self.scan, window)
         self._seconds = time.perf_counter() - start
 

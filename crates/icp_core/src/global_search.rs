@@ -3,8 +3,9 @@
 //! The fast correlative scan matcher of Olson (2009), as in Cartographer's
 //! `FastCorrelativeScanMatcher2D` (Hess et al. 2016):
 //! 1. The scan is thinned on a voxel grid of the search resolution (at most `max_scan_points`).
-//! 2. Rotations are swept at a step that moves the far scan points by about one cell
-//!    (`acos(1 - res^2 / (2 r^2))`, `r` the 95th percentile of the scan's ranges).
+//! 2. Rotations are swept at `angular_step` (2 degrees by default), or at a step that moves the
+//!    far scan points by about one cell (`acos(1 - res^2 / (2 r^2))`, `r` the 95th percentile of
+//!    the scan's ranges).
 //! 3. For each rotation, translations on the cell lattice of the window are searched by branch
 //!    and bound over the [`LikelihoodPyramid`]: a node covering a `2^h x 2^h` block of
 //!    translations is bounded by the mean of the level-`h` values under the scan's cells, which no
@@ -43,7 +44,8 @@ pub struct GlobalSearchConfig {
     pub sigma: f64,
     /// Pyramid levels; the coarsest block is `2^(levels-1)` cells wide.
     pub levels: usize,
-    /// Rotation step; `None`: from the resolution and the scan's extent (see the module docs).
+    /// Rotation step (default 2 degrees: ICP refines a heading from far wider); `None`: from the
+    /// resolution and the scan's extent (see the module docs).
     pub angular_step: Option<f64>,
     /// Largest automatic rotation step.
     pub max_angular_step: f64,
@@ -67,17 +69,17 @@ pub struct GlobalSearchConfig {
 impl Default for GlobalSearchConfig {
     fn default() -> Self {
         Self {
-            resolution: 0.1,
-            sigma: 0.1,
-            levels: 7,
-            angular_step: None,
+            resolution: 0.2,
+            sigma: 0.2,
+            levels: 6,
+            angular_step: Some(2f64.to_radians()),
             max_angular_step: 2f64.to_radians(),
             max_candidates: 8,
             min_score: 0.2,
             relative_score: 0.8,
             nms_distance: 1.0,
             nms_angle: 20f64.to_radians(),
-            max_scan_points: 200,
+            max_scan_points: 100,
             max_nodes: 4_000_000,
         }
     }

@@ -30,6 +30,8 @@ class NodeDiagnostics:
         recent_accepted_share: share of accepted scans over the last `window` processed scans.
         recent_inlier_ratio: mean inlier ratio over them.
         lost: the plan no longer explains the scans (`planicp.Estimate.lost`).
+        provisional: the pose follows a place adopted before the search of the whole plan ended,
+            which may still replace it (`planicp.Estimate.provisional`).
         last_reason: why the last rejected scan was rejected ("" if none was).
         last_problem: the last malformed message or internal error ("" if none).
     """
@@ -50,6 +52,7 @@ class NodeDiagnostics:
     recent_accepted_share: float
     recent_inlier_ratio: float
     lost: bool
+    provisional: bool
     last_reason: str
     last_problem: str
 

@@ -224,8 +224,12 @@ class PlanicpNodeCore:
             ratios = [r for _, r in recent if math.isfinite(r)]
             mean_ratio = sum(ratios) / len(ratios) if ratios else math.nan
             lost = last is not None and last.estimate.lost
+            provisional = last is not None and last.estimate.provisional
             if lost:
                 level, message = ERROR, "lost: the plan no longer explains the scans; searching the plan"
+            elif provisional:
+                level, message = WARN, ("provisional: tracking a place found near where track was lost, "
+                                        "while the search of the whole plan goes on")
             elif last is None:
                 level, message = WARN, "waiting for scans and odometry"
             elif share < MIN_ACCEPTED_SHARE:
@@ -238,7 +242,7 @@ class PlanicpNodeCore:
                 level, message, c["scans_received"], c["scans_processed"], c["accepted"], c["rejected"],
                 c["malformed_scans"], c["malformed_odometry"], c["malformed_initial_poses"],
                 c["scans_without_odometry"], c["scans_without_laser_pose"], c["out_of_order"],
-                last.inlier_ratio if last is not None else math.nan, share, mean_ratio, lost,
+                last.inlier_ratio if last is not None else math.nan, share, mean_ratio, lost, provisional,
                 self._last_reason, self._last_problem)
 
     # --- internals -------------------------------------------------------------------------------
