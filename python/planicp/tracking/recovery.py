@@ -34,17 +34,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, real_number, whole_number
+from .._validation import Pose, real_number, whole_number
+from ..plan_map import PlanMap
+from ..se2 import compose, wrap_angle
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
 from .occlusion_rule import OcclusionFilter
 from .acceptance_gate import AcceptanceGate
-from .plan_map import PlanMap
 from .motion_noise import MotionNoise
-from .prediction_fusion import CHI2_3_999
+from .fusion_rule import CHI2_3_999
 from .relocalize import Candidate, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
-from .se2 import compose, wrap_angle
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, as_pose, real_number
+from .._validation import Pose, as_pose, real_number
 
 
 @dataclass(frozen=True)

@@ -10,22 +10,22 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
-from ._validation import Pose, as_pose, as_points
+from .. import _core
+from .._validation import Pose, as_pose, as_points
+from ..plan_map import PlanMap
+from ..se2 import between, compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate
-from .degeneracy import Degeneracy, DegeneracyRule, fuse_along_weak_axis
+from .degeneracy_rule import Degeneracy, DegeneracyRule, fuse_along_weak_axis
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
-from .lost_detection import LostDetector, LostRule
+from .lost_rule import LostDetector, LostRule
 from .motion_noise import MotionNoise
-from .plan_map import PlanMap
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
-from .prediction_fusion import CHI2_3_999, FusionRule
-from .scan_continuity import ContinuityRule
+from .fusion_rule import CHI2_3_999, FusionRule
+from .continuity_rule import ContinuityRule
 from .relocalize import Relocalization, SearchRegion, prepare_search, relocalize
-from .se2 import between, compose, inverse, pose_to_matrix, wrap_angle
 
 
 @dataclass(frozen=True)
