@@ -20,7 +20,7 @@ from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
 from .lost_rule import LostDetector, LostRule
-from .motion_noise import MotionNoise
+from .motion_noise import MotionNoise, largest_position_std
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .occlusion_rule import OcclusionFilter, OcclusionRule
 from .fusion_rule import CHI2_3_999, FusionRule
@@ -470,7 +470,7 @@ class Localizer:
         if self._occlusion is None or self._detector.lost:
             return None, None, False, None
         rule = self._occlusion.rule
-        if 3.0 * _largest_position_std(predicted_covariance) >= rule.margin:
+        if 3.0 * largest_position_std(predicted_covariance) >= rule.margin:
             return None, None, False, None
         uses_view = self.config.correspondence_search == "kd_tree" and self.config.use_visibility
         view = self._occlusion.view(points, predicted, self.config) if uses_view else None
@@ -492,7 +492,7 @@ class Localizer:
             return None
         if reason != "" and self.gate.fit_rejection(result) == "":
             return "jump"
-        if 3.0 * _largest_position_std(predicted_covariance) > self.gate.max_translation_jump:
+        if 3.0 * largest_position_std(predicted_covariance) > self.gate.max_translation_jump:
             return "uncertain"
         return None
 
@@ -515,7 +515,7 @@ class Localizer:
         if consistent_with is not None:
             k = math.sqrt(CHI2_3_999)
             reach = self.config.max_correspondence_distance
-            radius = min(radius, k * _largest_position_std(consistent_with) + reach)
+            radius = min(radius, k * largest_position_std(consistent_with) + reach)
             yaw_std = math.sqrt(max(float(consistent_with[2, 2]), 0.0))
             yaw_tolerance = min(math.pi, k * yaw_std + 2.0 * config.search.max_angular_step)
         found = relocalize(points, self.plan, region=SearchRegion(predicted, radius, yaw_tolerance),
@@ -557,14 +557,6 @@ class _Fit:
 def _distance(a: Pose, b: Pose) -> float:
     """Metres between the positions of two poses."""
     return math.hypot(a[0] - b[0], a[1] - b[1])
-
-
-def _largest_position_std(covariance: NDArray[np.float64]) -> float:
-    """Square root of the largest eigenvalue of the position block of a 3x3 covariance, metres
-    (closed form for a symmetric 2x2)."""
-    a, b, c = float(covariance[0, 0]), float(covariance[0, 1]), float(covariance[1, 1])
-    largest = (a + c) / 2.0 + math.hypot((a - c) / 2.0, b)
-    return math.sqrt(largest) if largest > 0.0 else 0.0
 
 
 DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))
