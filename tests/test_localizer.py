@@ -347,16 +347,16 @@ def test_a_search_for_an_uncertain_prediction_covers_only_what_it_allows(
     99.9 % bound (sqrt(16.266) = 4.03 sigma, widened by the refinement's reach), not every
     heading within the recovery's radius; a search after a rejected jump (odometry may have
     faulted) still covers the whole neighbourhood."""
-    import planicp.tracking.localizer as localizer_module
+    import planicp.tracking.stages as stages_module  # the search stage's module
 
     regions: list[Any] = []
-    search = localizer_module.relocalize
+    search = stages_module.relocalize
 
     def recording(*args: Any, **kwargs: Any) -> Any:
         regions.append(kwargs["region"])
         return search(*args, **kwargs)
 
-    monkeypatch.setattr(localizer_module, "relocalize", recording)
+    monkeypatch.setattr(stages_module, "relocalize", recording)
     off = se2.compose(path[0], (0.7, -0.7, 8 * DEG))
     wide = np.diag([0.4**2, 0.4**2, (5 * DEG) ** 2])
     est = Localizer(plan, off, initial_covariance=wide).update(scans[0], (0.0, 0.0, 0.0))
