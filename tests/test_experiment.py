@@ -13,7 +13,7 @@ from planicp.cli import main as cli_main
 from planicp.default_plan import load_default_plan
 from planicp.plan_loading import load_plan
 from planicp.sim.experiment import ExperimentConfig, LidarModel, replay, run_experiment
-from planicp.icp_config import IcpConfig
+from planicp.tracking.icp_config import IcpConfig
 
 
 def check_flat(metrics: dict[str, float]) -> None:

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
-from planicp.prediction_fusion import finite_covariance
-from planicp.recovery import RecoveryConfig
+from planicp.tracking.fusion_rule import finite_covariance
+from planicp.tracking.recovery import RecoveryConfig
 from planicp import synthetic as syn
 
 DEG = math.pi / 180.0
@@ -347,7 +347,7 @@ def test_a_search_for_an_uncertain_prediction_covers_only_what_it_allows(
     99.9 % bound (sqrt(16.266) = 4.03 sigma, widened by the refinement's reach), not every
     heading within the recovery's radius; a search after a rejected jump (odometry may have
     faulted) still covers the whole neighbourhood."""
-    from planicp.recovery import SearchBudget
+    from planicp.tracking.recovery import SearchBudget
 
     regions: list[Any] = []
     search = SearchBudget.search

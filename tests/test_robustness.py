@@ -27,8 +27,8 @@ from planicp import (
 )
 from planicp.default_plan import load_default_plan
 from planicp import se2
-from planicp.lost_detection import LostDetector
-from planicp.prediction_fusion import fuse_with_prediction
+from planicp.tracking.lost_rule import LostDetector
+from planicp.tracking.fusion_rule import fuse_with_prediction
 from planicp.se2 import between, compose
 from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, LidarModel, Recording, run_experiment
@@ -162,7 +162,7 @@ def test_no_update_scores_more_search_nodes_than_its_budget(monkeypatch: pytest.
     stale search's places again) draws on one budget of `search_nodes`: over a kidnap and its
     recovery no update scores more (but for the three nodes an expansion may add to each search),
     and the search of the whole plan is spread over updates."""
-    from planicp.recovery import Recovery, SearchBudget
+    from planicp.tracking.recovery import Recovery, SearchBudget
 
     spent: list[int] = []
     spend = SearchBudget.spend
@@ -452,8 +452,8 @@ def test_a_crowd_taking_half_of_the_returns() -> None:
 def test_the_recovery_refuses_places_the_scan_sees_through() -> None:
     """A place whose walls the scan's returns pass through is contradicted (`max_beyond`): the
     true place of a scan is not, a place 2 m off in the corridor is."""
-    from planicp.occlusion_rule import OcclusionFilter, OcclusionRule
-    from planicp.recovery import Recovery
+    from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
+    from planicp.tracking.recovery import Recovery
 
     plan = load_default_plan()
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=2.0, seed=3, furnishing=Furnishing(0, 0, 0, 0)))
@@ -515,7 +515,7 @@ def test_a_views_ranges_classify_returns_almost_as_an_exact_cast_does() -> None:
     visibility cell (0.11 m) of a wall's end, where the coarser raster lengthens the wall: the
     view's answer is then one the exact cast gives for a direction within that distance."""
     from planicp import _core
-    from planicp.occlusion_rule import OcclusionFilter, OcclusionRule
+    from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
 
     plan = load_default_plan()
     rule = OcclusionRule()
@@ -634,7 +634,7 @@ def test_a_view_gives_the_alignment_its_visible_points() -> None:
 
 def test_occlusion_rule_leaves_out_returns_in_front_of_walls() -> None:
     from planicp import OcclusionRule
-    from planicp.occlusion_rule import OcclusionFilter
+    from planicp.tracking.occlusion_rule import OcclusionFilter
 
     plan = _corridor(length=10.0)  # interior x 0..10, y 0..2
     filt = OcclusionFilter(plan, OcclusionRule())

@@ -17,24 +17,24 @@ from __future__ import annotations
 from . import se2, synthetic, vector_plan
 from ._core import PlanicpError, PlanicpInternalError, WallView
 from ._core import __version__ as __version__
-from .degeneracy import Degeneracy, DegeneracyRule
+from .tracking.degeneracy_rule import Degeneracy, DegeneracyRule
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState, OccupancyGridMessage, OccupancyModel
 from .grid_agreement import GridAgreement, compare_grids
-from .icp_config import IcpConfig
-from .icp_result import IcpResult
+from .tracking.icp_config import IcpConfig
+from .tracking.icp_result import IcpResult
 from .laser_scan import scan_to_points
-from .localize import localize
-from .acceptance_gate import AcceptanceGate
-from .localizer import Estimate, Localizer
-from .lost_detection import LostRule
-from .motion_noise import MotionNoise
-from .prediction_fusion import FusionRule
-from .occlusion_rule import OcclusionRule
+from .tracking.localize import localize
+from .tracking.acceptance_gate import AcceptanceGate
+from .tracking.localizer import Estimate, Localizer
+from .tracking.lost_rule import LostRule
+from .tracking.motion_noise import MotionNoise
+from .tracking.fusion_rule import FusionRule
+from .tracking.occlusion_rule import OcclusionRule
 from .plan_map import PlanMap
-from .recovery import RecoveryConfig
+from .tracking.recovery import RecoveryConfig
 from .plan_raster import PlanRaster, resolution_from_pixels
-from .scan_continuity import ContinuityRule
-from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
+from .tracking.continuity_rule import ContinuityRule
+from .tracking.relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
 from .ros_map import RosMap, read_ros_map
 
 __all__ = [

@@ -65,7 +65,7 @@ def _read_log(args: argparse.Namespace) -> Any:
 
 
 def _icp_config(args: argparse.Namespace) -> Any:
-    from .icp_config import IcpConfig
+    from .tracking.icp_config import IcpConfig
 
     return IcpConfig.for_tracking(max_correspondence_distance=args.max_distance)
 

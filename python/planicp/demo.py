@@ -30,8 +30,8 @@ import numpy as np
 from . import __version__, figures
 from .default_plan import load_default_plan
 from .grid_agreement import compare_grids
-from .icp_config import IcpConfig
-from .localize import localize
+from .tracking.icp_config import IcpConfig
+from .tracking.localize import localize
 from .plan_figure import plot_plan_overlay
 from .plan_loading import load_plan
 from .plan_map import PlanMap

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from ._validation import Pose, positive, whole_number
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-from .icp_config import IcpConfig
+from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame
 from .log_replay import TrackedLog, track_log
 from .plan_map import PlanMap

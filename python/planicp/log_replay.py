@@ -19,10 +19,10 @@ from numpy.typing import NDArray
 
 from ._validation import Pose, as_pose
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-from .icp_config import IcpConfig
+from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame
-from .acceptance_gate import AcceptanceGate
-from .localizer import Localizer
+from .tracking.acceptance_gate import AcceptanceGate
+from .tracking.localizer import Localizer
 from .plan_map import PlanMap
 from .se2 import between, compose
 from .trajectory_metrics import error_summary

@@ -10,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, as_pose, real_number
-from ..localizer import Estimate
+from ..tracking.localizer import Estimate
 from .message_layout import covariance_to_6x6
 
 BEAM_COUNT_SLACK = 1

@@ -23,8 +23,8 @@ from .. import _core
 from .._validation import Pose, as_pose
 from ..enhanced_occupancy_grid import EnhancedOccupancyGrid, OccupancyGridMessage
 from ..laser_scan import scan_to_points
-from ..localizer import Localizer
-from ..localizer import _covariance as validated_covariance
+from ..tracking.localizer import Localizer
+from ..tracking.localizer import _covariance as validated_covariance
 from ..plan_map import PlanMap
 from ..se2 import between, compose, matrix_to_pose
 from .message_layout import covariance_from_6x6

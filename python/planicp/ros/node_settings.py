@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .._validation import Pose, as_pose, positive, real_number, unknown_fields
-from ..acceptance_gate import AcceptanceGate
-from ..icp_config import IcpConfig
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
 from ..plan_loading import load_plan
 from ..plan_map import PlanMap
 

@@ -27,7 +27,7 @@ from ..plan_loading import house_expo_files, load_plan
 from ..plan_map import PlanMap
 from ..sim.experiment import ExperimentConfig
 from ..sim.world import Furnishing
-from ..icp_config import IcpConfig
+from ..tracking.icp_config import IcpConfig
 from .study import DEFAULT_PLAN, FURNITURE_UNIT, OdometrySetting, PlanSource, SensorSetting, Study, StudyError
 
 __all__ = ["HOUSE_EXPO_RESOLUTION", "METRIC_COLUMNS", "RunSpec", "execute_run", "expand_runs"]

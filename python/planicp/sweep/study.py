@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import unknown_fields
-from ..icp_config import IcpConfig
+from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
 from ..sim.world import Furnishing

@@ -8,9 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
-from ._validation import Pose
-from .se2 import pose_to_matrix
+from .. import _core
+from .._validation import Pose
+from ..se2 import pose_to_matrix
 
 
 @dataclass(frozen=True, repr=False)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ._validation import Pose, positive, real_number, whole_number
+from .._validation import Pose, positive, real_number, whole_number
+from ..se2 import between
 from .icp_result import IcpResult
-from .se2 import between
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-from ._validation import real_number, whole_number
+from .._validation import real_number, whole_number
 
 
 @dataclass(frozen=True)

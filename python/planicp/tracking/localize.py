@@ -5,11 +5,11 @@ from __future__ import annotations
 from typing import Any
 
 
-from . import _core
-from ._validation import as_pose, as_points
+from .. import _core
+from .._validation import as_pose, as_points
+from ..plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
-from .plan_map import PlanMap
 
 
 def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig | None = None, *,

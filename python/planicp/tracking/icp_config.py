@@ -10,8 +10,8 @@ from typing import Any, Literal
 
 CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
-from . import _core
-from ._validation import positive, real_number, unknown_fields, whole_number
+from .. import _core
+from .._validation import positive, real_number, unknown_fields, whole_number
 
 
 @dataclass(frozen=True)

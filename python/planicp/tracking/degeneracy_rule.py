@@ -3,7 +3,7 @@
 Point-to-point ICP in a corridor slides along it on noise, furniture and people; its covariance
 grows along the axis but its pose is still moved. `DegeneracyRule` detects the case from the fit's
 wall-normal constraint (`IcpResult.translation_constraint`). The `Localizer` fuses every accepted
-fit with the odometry prediction (`prediction_fusion`), which keeps the prediction along a
+fit with the odometry prediction (`fusion_rule`), which keeps the prediction along a
 direction the fit does not constrain; when odometry faulted and the two are not fused,
 `fuse_along_weak_axis` still takes ICP's correction in full only across the weak axis: along it the
 odometry prediction is kept, corrected by ICP only as much as their variances say.
@@ -17,10 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, real_number
+from .._validation import Pose, real_number
+from ..se2 import wrap_angle
 from .icp_result import IcpResult
-from .prediction_fusion import finite_covariance
-from .se2 import wrap_angle
+from .fusion_rule import finite_covariance
 
 
 @dataclass(frozen=True)

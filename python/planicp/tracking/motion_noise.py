@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, as_pose, real_number
+from .._validation import Pose, as_pose, real_number
 
 
 @dataclass(frozen=True)
@@ -72,3 +72,12 @@ class MotionNoise:
             raise ValueError(f"the covariance propagated over motion {(dx, dy, dyaw)} from {pose} is not finite "
                              f"(motion or covariance too large, or not finite)")
         return (out + out.T) / 2.0
+
+
+def largest_position_std(covariance: NDArray[np.float64]) -> float:
+    """Square root of the largest eigenvalue of the position block of a 3x3 covariance, metres
+    (closed form for a symmetric 2x2): the standard deviation along the widest axis of the position
+    uncertainty (0 when that eigenvalue is not positive)."""
+    a, b, c = float(covariance[0, 0]), float(covariance[0, 1]), float(covariance[1, 1])
+    largest = (a + c) / 2.0 + math.hypot((a - c) / 2.0, b)
+    return math.sqrt(largest) if largest > 0.0 else 0.0

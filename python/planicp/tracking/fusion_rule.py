@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, real_number
+from .._validation import Pose, real_number
+from ..se2 import wrap_angle
 from .icp_result import IcpResult
-from .se2 import wrap_angle
 
 CHI2_3_999 = 16.266
 """The 99.9 % quantile of a chi-square with 3 degrees of freedom."""

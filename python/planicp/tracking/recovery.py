@@ -42,17 +42,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, real_number, whole_number
+from .._validation import Pose, real_number, whole_number
+from ..plan_map import PlanMap
+from ..se2 import compose, wrap_angle
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
 from .occlusion_rule import OcclusionFilter
 from .acceptance_gate import AcceptanceGate
-from .plan_map import PlanMap
-from .motion_noise import MotionNoise
-from .prediction_fusion import CHI2_3_999
+from .motion_noise import MotionNoise, largest_position_std
+from .fusion_rule import CHI2_3_999
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
-from .se2 import compose, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -343,9 +343,7 @@ class Recovery:
         if since == (0.0, 0.0, 0.0):
             return Hypothesis(candidate.pose, candidate.result, 1, candidate.inlier_ratio, near)
         k = math.sqrt(CHI2_3_999)
-        a, b, c = float(spread[0, 0]), float(spread[0, 1]), float(spread[1, 1])
-        position_std = math.sqrt(max((a + c) / 2.0 + math.hypot((a - c) / 2.0, b), 0.0))
-        radius = min(self.config.local_radius, k * position_std + self.icp.max_correspondence_distance)
+        radius = min(self.config.local_radius, k * largest_position_std(spread) + self.icp.max_correspondence_distance)
         yaw = min(math.pi, k * math.sqrt(max(float(spread[2, 2]), 0.0)) + 2.0 * self.config.search.heading_step)
         here = compose(candidate.pose, since)
         fit = localize(scan, self.plan, here, self.icp)

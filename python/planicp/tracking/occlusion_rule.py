@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
-from ._validation import Pose, positive, whole_number
+from .. import _core
+from .._validation import Pose, positive, whole_number
+from ..plan_map import PlanMap
+from ..plan_raster import PlanRaster
 from .icp_config import IcpConfig
-from .plan_map import PlanMap
-from .plan_raster import PlanRaster
 
 
 @dataclass(frozen=True)

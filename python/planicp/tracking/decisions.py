@@ -1,0 +1,354 @@
+"""What each stage of a `Localizer.update` decided, and why: the typed records of the pipeline.
+
+`Localizer.update` runs the stages of `planicp.tracking.stages` in order; each returns one of these
+frozen records, and `Estimate.decisions` lists them in that order:
+
+1. `Prediction`: the odometry motion applied to the last pose, and the grown covariance.
+2. `FitDecision`: the scan aligned from the prediction (occlusion rule, ICP, KD-tree retry) and
+   the acceptance gate's verdict.
+3. `PendingDecision`: whether this scan confirms the place a rejected jump left pending.
+4. `SearchDecision`: whether the plan was searched around the prediction, why, and what was found.
+5. `ScoreDecision`: how much of the whole scan the plan explains, and whether a poor fit
+   continues the last well explained scan.
+6. `Correction`: the pose and covariance the fit leads to (fusion, weak axis, fit alone), or the
+   prediction's.
+7. `LostDecision`: what the lost rule concluded.
+8. `RecoveryDecision`: what the recovery did (searched, coasted, cleared) and the place it
+   adopted, if any.
+9. `Bookkeeping`: what the update remembers for the next ones.
+
+Each record has a `why` property: one sentence for a person reading a log.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._validation import Pose
+from .degeneracy_rule import Degeneracy
+from .icp_result import IcpResult
+from .recovery import Hypothesis
+
+SearchCause = Literal["jump", "uncertain"]
+"""Why the plan is searched around the prediction: "jump", a good fit rejected only for the size of
+its correction; "uncertain", a prediction whose 3-sigma position uncertainty exceeds the gate's
+translation limit."""
+
+CorrectionKind = Literal["fused", "weak_axis", "fit", "prediction"]
+"""How `Correction.pose` was made: "fused", the Kalman update of the prediction with the fit
+(`FusionRule`); "weak_axis", the fit, except along a degenerate axis where the prediction is
+corrected as far as the variances say (`fuse_along_weak_axis`); "fit", the fit alone; "prediction",
+no accepted fit: the prediction."""
+
+RecoveryAction = Literal["step", "coast", "verify", "clear"]
+"""What the recovery did: "step", it searched or followed its places with the scan; "coast", the
+scan was too small to align and its places followed the odometry; "verify", a place it adopted
+before the whole plan was searched is on trial, and that search went on (`Recovery.verify`);
+"clear", not lost: it forgot its places and any search in progress."""
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Stage 1: the last pose moved by the odometry motion since the previous update.
+
+    Attributes:
+        odom: the odometry pose (T_odom_base) this update received.
+        motion: the odometry motion since the previous update (base frame at its start); the
+            identity at the first update after a start or reset (`first`).
+        pose: the predicted pose (T_map_base): ICP's initial guess.
+        covariance: 3x3 covariance of `pose`: the last one propagated through `motion` by
+            `MotionNoise`.
+        first: no odometry pose came before this one.
+    """
+
+    odom: Pose
+    motion: Pose
+    pose: Pose
+    covariance: NDArray[np.float64]
+    first: bool
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.first:
+            return "first update: the prediction is the last pose"
+        dx, dy, dyaw = self.motion
+        return f"the odometry moved the robot by ({dx:.3f} m, {dy:.3f} m, {math.degrees(dyaw):.2f} deg)"
+
+
+@dataclass(frozen=True)
+class FitDecision:
+    """Stage 2: the scan aligned from the prediction and judged by the acceptance gate.
+
+    Attributes:
+        result: the ICP result; None when the scan had too few usable points to align.
+        kept: (N,) bool over the scan's points aligned after `OcclusionRule` left out the returns
+            in front of the plan's walls; None when every point was aligned.
+        beyond: (N,) bool over the scan's points beyond the walls seen from the prediction; None
+            when the occlusion rule did not apply.
+        occluded: the occlusion rule left fewer than its `min_points`, so every point was aligned.
+        reason: the gate's rejection ("" when the fit passes), or why the scan was not aligned.
+        usable: the scan had enough points to align.
+        realigned: the fit landed more than a quarter of the occlusion rule's margin from the
+            prediction, so every return was aligned again from the prediction.
+        retried: the nearest-wall index's fit explained the scan poorly and the KD-tree's fit,
+            which paired more points, replaced it.
+    """
+
+    result: IcpResult | None
+    kept: NDArray[np.bool_] | None
+    beyond: NDArray[np.bool_] | None
+    occluded: bool
+    reason: str
+    usable: bool
+    realigned: bool = False
+    retried: bool = False
+
+    @property
+    def passed(self) -> bool:
+        """The fit exists and the gate passed it."""
+        return self.result is not None and self.reason == ""
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.result is None:
+            return f"not aligned: {self.reason}"
+        how = " (KD-tree retry)" if self.retried else (" (every return, again)" if self.realigned else "")
+        verdict = "passed the gate" if self.reason == "" else f"rejected: {self.reason}"
+        return f"fit from the prediction{how} explains {100 * self.result.inlier_ratio:.0f} % of the aligned points, {verdict}"
+
+
+@dataclass(frozen=True)
+class PendingDecision:
+    """Stage 3: the place a rejected jump left pending, checked against this scan.
+
+    Attributes:
+        place: the pending place followed with the odometry to this scan (T_map_base); None when
+            no place was pending (or this scan could not be aligned, so it was not checked).
+        confirmed: the fit at `place` when this scan confirms it (a sound fit there that explains
+            the scan better than the prediction's fit by the recovery's `margin`, or the
+            prediction's was rejected); the update goes on with it. None otherwise.
+    """
+
+    place: Pose | None
+    confirmed: IcpResult | None
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.place is None:
+            return "no place pending"
+        if self.confirmed is None:
+            return "this scan does not confirm the pending place: forgotten"
+        return "this scan confirms the pending place: taken"
+
+
+@dataclass(frozen=True)
+class SearchDecision:
+    """Stage 4: the search around the prediction when the gate cannot vouch for this update.
+
+    Attributes:
+        cause: why the plan was searched (see `SearchCause`); None: no search.
+        found: the refined fit at the unambiguous place the search found, when one passed its
+            checks; None otherwise.
+        result: the fit the update goes on with: the search's place for an uncertain prediction,
+            the confirmed pending place (stage 3), else the fit from the prediction.
+        reason: why `result` is not accepted ("" when it is, so far); after a rejected jump, the
+            gate's reason and where the pending place is.
+        searched: `result` is a search's or a confirmed place's fit, over the whole scan (not
+            fused with the prediction; adopted as `Estimate.relocalized`).
+        pending: the place the next scan is to confirm (T_map_base) with this scan's odometry
+            pose, after a rejected jump; None otherwise.
+    """
+
+    cause: SearchCause | None
+    found: IcpResult | None
+    result: IcpResult | None
+    reason: str
+    searched: bool
+    pending: tuple[Pose, Pose] | None = None
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.cause is None:
+            return "the place a pending jump led to was confirmed" if self.searched else "no search"
+        if self.cause == "uncertain":
+            return ("uncertain prediction: the search found a place, taken" if self.found is not None
+                    else "uncertain prediction: the search found no place that passes")
+        return f"jump rejected: {self.reason}"
+
+
+@dataclass(frozen=True)
+class ScoreDecision:
+    """Stage 5: how much of the whole scan the plan explains, and what a poor fit means.
+
+    Attributes:
+        score: the share of the whole scan the plan explains: returns the occlusion rule left out,
+            and returns beyond the walls seen from the prediction, count as unexplained (0 when the
+            scan was not aligned).
+        poor: the plan explains the fit poorly: rejected for its fit, or accepted with a `score`
+            below the lost rule's `min_score`.
+        continues: for a poor fit while not lost, whether the scan is clutter or a crowd
+            (continues the last well explained scan, or the plan explains the kept returns well):
+            True, it does not count towards being lost; False, the fit is not trusted. None: not
+            checked.
+        reason: why the fit is not accepted ("" when it is): the search stage's, or, for an
+            accepted poor fit that does not continue the last well explained scan, that.
+    """
+
+    score: float
+    poor: bool
+    continues: bool | None
+    reason: str
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        text = f"the plan explains {100 * self.score:.0f} % of the scan"
+        if self.continues is True:
+            text += ", poorly, but the scan is clutter (it continues the last well explained scan or a crowd hides the walls)"
+        elif self.continues is False:
+            text += ", poorly, and the scan does not continue the last well explained one"
+        elif self.poor:
+            text += ", poorly"
+        return text
+
+
+@dataclass(frozen=True)
+class Correction:
+    """Stage 6: the pose and covariance this update leads to, before the recovery.
+
+    Attributes:
+        pose: (x, y, yaw), T_map_base.
+        covariance: 3x3 covariance of `pose`.
+        accepted: a fit was accepted (`kind` is not "prediction").
+        degeneracy: the weak axis of the accepted fit, or None.
+        kind: how `pose` was made (see `CorrectionKind`).
+    """
+
+    pose: Pose
+    covariance: NDArray[np.float64]
+    accepted: bool
+    degeneracy: Degeneracy | None
+    kind: CorrectionKind
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        return {
+            "fused": "the fit fused with the prediction",
+            "weak_axis": "the fit, with the prediction kept along its degenerate axis as far as the variances say",
+            "fit": "the fit alone",
+            "prediction": "no accepted fit: the prediction",
+        }[self.kind]
+
+
+@dataclass(frozen=True)
+class LostDecision:
+    """Stage 7: the lost rule's verdict on this update.
+
+    Attributes:
+        lost: the lost rule says the plan no longer explains the scans.
+        held: the scan tells nothing about being lost (clutter or a crowd): the state was kept
+            and the scan not counted.
+        counted_accepted: the lost rule counted the scan as accepted (an accepted fit that, while
+            lost, explains as much of the scan as the recovery asks of a place it adopts).
+        window_score: the mean score over the lost rule's window after this scan.
+        rejections: scans in a row the lost rule counts as rejected.
+    """
+
+    lost: bool
+    held: bool
+    counted_accepted: bool
+    window_score: float
+    rejections: int
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        state = "lost" if self.lost else "tracking"
+        if self.held:
+            return f"{state}: the scan is not counted (clutter)"
+        return f"{state}: mean score {self.window_score:.2f}, {self.rejections} rejection(s) in a row"
+
+
+@dataclass(frozen=True)
+class RecoveryDecision:
+    """Stage 8: what the recovery did with this update.
+
+    Attributes:
+        action: see `RecoveryAction`.
+        adopted: the place the recovery confirmed and the update adopts (its pose and fit); None
+            when none.
+        covariance: the covariance of the adopted place (its fit's, or the prediction's when that
+            is not finite); None when none was adopted.
+        hypotheses: the places the recovery is following after this update (while lost), or
+            the places that rival the one on trial.
+        on_trial: after this update the pose follows a place adopted before the search of the
+            whole plan ended, which goes on (`Estimate.provisional`).
+    """
+
+    action: RecoveryAction
+    adopted: Hypothesis | None
+    covariance: NDArray[np.float64] | None
+    hypotheses: tuple[Pose, ...]
+    on_trial: bool = False
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.adopted is not None:
+            trial = (", on trial while the search of the whole plan goes on" if self.on_trial else "")
+            if self.action == "verify":
+                return (f"a place the search of the whole plan found explained {self.adopted.streak} scans "
+                        f"better than the one on trial: adopted")
+            return f"the recovery confirmed a place over {self.adopted.streak} scans: adopted{trial}"
+        if self.action == "verify":
+            return (f"the pose is on trial: the search of the whole plan goes on, "
+                    f"{len(self.hypotheses)} rival place(s) followed")
+        if self.action == "clear":
+            return "not lost: the recovery is idle"
+        if self.action == "coast":
+            return "lost, scan too small to align: the recovery's places follow the odometry"
+        return f"lost: the recovery follows {len(self.hypotheses)} place(s)"
+
+
+@dataclass(frozen=True)
+class Bookkeeping:
+    """Stage 9: what this update leaves for the next ones (besides pose, covariance, odometry and
+    the pending place of `SearchDecision.pending`).
+
+    Attributes:
+        anchored: the scan becomes the one later scans are checked against for continuity (an
+            accepted fit the plan explains well, or clutter that continues the last one).
+        beyond_share: the share of the scan's returns beyond the walls seen from the prediction,
+            recorded for `Recovery.beyond_limit` (a soundly tracked scan); None when not recorded.
+        explained_share: the share of the scan's returns its fit explained, recorded for
+            `Recovery.explained_seen` (a soundly tracked scan); None when not recorded.
+    """
+
+    anchored: bool
+    beyond_share: float | None
+    explained_share: float | None = None
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        parts = ["the scan is the new continuity anchor" if self.anchored else "the continuity anchor is kept"]
+        if self.beyond_share is not None:
+            parts.append(f"{100 * self.beyond_share:.0f} % of its returns beyond the walls recorded")
+        if self.explained_share is not None:
+            parts.append(f"{100 * self.explained_share:.0f} % of its returns explained recorded")
+        return "; ".join(parts)
+
+
+Decision = (Prediction | FitDecision | PendingDecision | SearchDecision | ScoreDecision | Correction | LostDecision
+            | RecoveryDecision | Bookkeeping)
+"""Any stage's decision (the items of `Estimate.decisions`)."""

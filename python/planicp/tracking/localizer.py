@@ -1,0 +1,362 @@
+"""Scan-by-scan tracking: odometry predicts, ICP against the plan corrects, a gate decides."""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._validation import Pose, as_pose, as_points
+from ..plan_map import PlanMap
+from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
+from .acceptance_gate import AcceptanceGate
+from .continuity_rule import ContinuityRule
+from .decisions import Decision
+from .degeneracy_rule import Degeneracy, DegeneracyRule
+from .fusion_rule import FusionRule
+from .icp_config import IcpConfig
+from .icp_result import IcpResult
+from .lost_rule import LostDetector, LostRule
+from .motion_noise import MotionNoise
+from .occlusion_rule import OcclusionFilter, OcclusionRule
+from .recovery import Hypothesis, Recovery, RecoveryConfig
+from .relocalize import Relocalization, prepare_search, relocalize
+from .stages import (
+    Rules,
+    confirm_pending,
+    correct,
+    finite_or,
+    fit_from_prediction,
+    judge_lost,
+    judge_score,
+    keep_records,
+    predict,
+    recover,
+    search_near_prediction,
+)
+
+@dataclass(frozen=True)
+class Estimate:
+    """The outcome of one `Localizer.update`.
+
+    Attributes:
+        pose: (x, y, yaw) of the robot in the map (T_map_base) after this update.
+        accepted: the ICP result passed the gate, and `pose` is its fusion with the odometry
+            prediction (see `FusionRule`); otherwise `pose` is the odometry prediction.
+        result: the ICP result (None when the scan had too few points to align at all).
+        predicted_pose: last pose plus the odometry motion since then: ICP's initial guess.
+        odom_pose: the odometry pose (T_odom_base) this update received.
+        reason: why the result was not accepted ("" when it was).
+        covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): the fusion of ICP's and
+            the odometry prediction's when accepted (ICP's alone after an odometry fault), the
+            prediction's otherwise.
+        degeneracy: the weak axis of an accepted fit that does not fix the position along it
+            (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
+            there allows: the fusion does so), or None.
+        lost: the plan no longer explains the scans (see `LostRule`); while lost, the
+            `Recovery` searches the plan for the robot.
+        score: mean match score over the `LostRule` window: the share of the scan the plan
+            explains (see `LostRule`).
+        kept: (N,) bool over the scan's points: those aligned to the plan, after `OcclusionRule`
+            left out the returns in front of the plan's walls (people, furniture); None when every
+            point was aligned. `result.inlier_mask` is over the kept points.
+        relocalized: this update adopted a pose found by a search of the plan (`pose` is it): by
+            the recovery while lost, or around a prediction the acceptance gate cannot vouch for.
+        hypotheses: places the recovery is following while lost (more than one: the building is
+            symmetric there and the localizer does not pretend to know which), or, while `pose`
+            is `provisional`, the places that rival it.
+        provisional: `pose` follows a place the recovery adopted before its search of the whole
+            plan had ended (a place near where the localizer lost track that explains the scans
+            as well as sound tracking did); that search goes on, and a place it finds that
+            explains the next scans better replaces it (see `Recovery.verify`).
+        decisions: why the pose is what it is: the typed decision of each stage of this update, in
+            the order `update` runs them (`planicp.tracking.decisions`): `Prediction`,
+            `FitDecision`, `PendingDecision`, `SearchDecision`, `ScoreDecision`, `Correction`,
+            `LostDecision`, `RecoveryDecision`, `Bookkeeping`; each has a `why` sentence. Empty for an
+            `Estimate` made by hand. (Not part of the estimate's repr or equality.)
+    """
+
+    pose: Pose
+    accepted: bool
+    result: IcpResult | None
+    predicted_pose: Pose
+    odom_pose: Pose
+    reason: str
+    covariance: NDArray[np.float64]
+    degeneracy: Degeneracy | None
+    lost: bool
+    score: float
+    relocalized: bool = False
+    hypotheses: tuple[Pose, ...] = ()
+    kept: NDArray[np.bool_] | None = None
+    provisional: bool = False
+    decisions: tuple[Decision, ...] = field(default=(), repr=False, compare=False)
+
+    @property
+    def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
+        """3x3 transform of `pose`."""
+        return pose_to_matrix(self.pose)
+
+    @property
+    def T_map_odom(self) -> NDArray[np.float64]:  # noqa: N802
+        """The map -> odom correction a ROS node publishes (REP-105): T_map_base * inv(T_odom_base)."""
+        return pose_to_matrix(compose(self.pose, inverse(self.odom_pose)))
+
+
+class Localizer:
+    """Tracks the robot's pose in the plan from scans and odometry.
+
+    Each `update` applies the odometry motion since the previous update to the last pose (the
+    prediction), aligns the scan from there, and accepts the result only if it passes the
+    `AcceptanceGate`; otherwise the pose follows odometry and the estimate says why. A scan
+    that is malformed raises and changes nothing; a scan with too few points is not aligned.
+
+    Along the weak axis of a degenerate fit (`DegeneracyRule`: a long corridor) the pose keeps the
+    odometry motion. A covariance is carried along: propagated through each motion with
+    `MotionNoise`, replaced by ICP's when a fit is accepted. `LostRule` decides when the scans no
+    longer match the plan (`Estimate.lost`); a scan rejected because the plan explains too little of
+    it does not count towards that while it continues the previous scan (`ContinuityRule`: clutter,
+    not a kidnapped robot). While lost, a `Recovery` searches the whole plan and
+    confirms a place over several scans before the pose jumps there (`Estimate.relocalized`).
+
+    The gate's jump limits are the span ICP is trusted to correct from the prediction. Beyond it,
+    a fit is neither taken nor dismissed on ICP's word alone: when the gate rejects a good fit only
+    for the size of its correction (a bad odometry step), or when the prediction's own 3-sigma
+    position uncertainty exceeds the translation limit (odometry integrated over a long gap in the
+    scans: ICP's position basin is about its correspondence distance, while its heading converges
+    from well beyond the rotation limit, so position is what makes a prediction a poor start), the
+    plan is searched around the prediction (the recovery's `local_radius`, any heading; for an
+    uncertain prediction, only the places its covariance allows) and an unambiguous place that
+    explains at least the recovery's `min_inlier_ratio` of the scan, and the scan better than the
+    fit from the prediction, is adopted: at once for an uncertain prediction. After a rejected jump
+    the place (or, when the search finds none, the fit's) is taken only when the next scan, aligned
+    from it moved by the odometry, fits there soundly and better than from the prediction, since a
+    corrupted scan fits some place beyond the gate too.
+
+    `update` runs these steps as an ordered pipeline of stages (`planicp.tracking.stages`: predict,
+    fit, confirm a pending place, search, score, correct, judge lost, recover, keep records), and
+    `Estimate.decisions` holds what each stage decided and why.
+
+    Thread-safe: updates are serialised by a lock.
+    """
+
+    def __init__(
+        self,
+        plan: PlanMap,
+        initial_pose: Any,
+        config: IcpConfig | None = None,
+        *,
+        gate: AcceptanceGate | None = None,
+        motion_noise: MotionNoise | None = None,
+        degeneracy: DegeneracyRule | None = None,
+        lost_rule: LostRule | None = None,
+        initial_covariance: Any = None,
+        recovery: RecoveryConfig | None = None,
+        continuity: ContinuityRule | None = None,
+        occlusion: OcclusionRule | Literal[False] | None = None,
+        fusion: FusionRule | None = None,
+    ) -> None:
+        """
+        Args:
+            plan: the plan to localize in.
+            initial_pose: (x, y, yaw) of the robot in the map at the first update.
+            config: ICP settings (None: `IcpConfig.for_tracking()`).
+            gate: acceptance rules (None: `AcceptanceGate()`).
+            motion_noise: odometry uncertainty for the covariance (None: `MotionNoise()`).
+            degeneracy: when a fit is degenerate (None: `DegeneracyRule()`).
+            lost_rule: when the localizer is lost (None: `LostRule()`).
+            initial_covariance: 3x3 covariance of `initial_pose` (None: 10 cm and 5 degrees).
+            recovery: how to find the robot again when lost (None: `RecoveryConfig()`).
+            continuity: when a scan the plan explains too little of still continues the previous
+                scan (clutter, not a kidnapped robot: it does not count towards `lost`; None:
+                `ContinuityRule()`).
+            occlusion: which returns stand in front of the plan's walls and are left out of the
+                alignment (None: `OcclusionRule()`; False: align every return).
+            fusion: when an accepted fit is fused with the odometry prediction (a Kalman update;
+                None: `FusionRule()`).
+        """
+        if not isinstance(plan, PlanMap):
+            raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
+        if config is not None and not isinstance(config, IcpConfig):
+            raise TypeError(f"config must be a planicp.IcpConfig, got {type(config).__name__}")
+        if gate is not None and not isinstance(gate, AcceptanceGate):
+            raise TypeError(f"gate must be a planicp.AcceptanceGate, got {type(gate).__name__}")
+        self.plan = plan
+        self.config = config if config is not None else IcpConfig.for_tracking()
+        self.gate = gate if gate is not None else AcceptanceGate()
+        self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
+        self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()
+        self.continuity = continuity if continuity is not None else ContinuityRule()
+        if fusion is not None and not isinstance(fusion, FusionRule):
+            raise TypeError(f"fusion must be a planicp.FusionRule or None, got {type(fusion).__name__}")
+        self.fusion = fusion if fusion is not None else FusionRule()
+        if occlusion is not False and occlusion is not None and not isinstance(occlusion, OcclusionRule):
+            raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
+        self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
+        self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
+        # The nearest-wall index refuses pairs with hidden wall faces where the KD-tree finds the
+        # nearest visible one, so its basin is narrower from a poor start (a 15-degree odometry
+        # step, a candidate place): fits it cannot make are tried again with the KD-tree, and the
+        # recovery refines its candidates with it.
+        self._wide_config = self.config.replace(correspondence_search="kd_tree")
+        self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self._wide_config,
+                                  self.gate, self._occlusion, self.motion_noise)
+        # The searches' likelihood pyramid is part of preparing the plan, not of the first update
+        # that needs a search.
+        prepare_search(plan, self._recovery.config.search)
+        self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
+        self._covariance = _covariance(initial_covariance)
+        self._last_odom: Pose | None = None
+        # The last scan the plan explained, with its odometry pose.
+        self._anchor: tuple[NDArray[np.float64], Pose] | None = None
+        # The place a scan put the robot at after a rejected jump (a search's, or the sound fit's),
+        # with the odometry pose of that scan: taken only when the next scan confirms it (see
+        # `update`).
+        self._pending: tuple[Pose, Pose] | None = None
+        self._lock = threading.Lock()
+
+    @property
+    def pose(self) -> Pose:
+        """Current (x, y, yaw) of the robot in the map."""
+        return self._pose
+
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Current 3x3 covariance of `pose` (m^2, m rad, rad^2)."""
+        return self._covariance.copy()
+
+    @property
+    def lost(self) -> bool:
+        """Whether the last updates say the plan no longer explains the scans."""
+        return self._detector.lost
+
+    def reset(self, pose: Any, covariance: Any = None) -> None:
+        """Sets the pose (e.g. from RViz's initial pose) and its covariance (None: 10 cm and 5
+        degrees); the next update's odometry pairs with it, and the lost state is cleared."""
+        new_pose = _wrapped(as_pose(pose, "pose"))
+        new_covariance = _covariance(covariance)
+        with self._lock:
+            self._pose = new_pose
+            self._covariance = new_covariance
+            self._last_odom = None
+            self._anchor = None
+            self._pending = None
+            self._detector.reset()
+            self._recovery.clear()
+
+    def relocalize(self, scan_xy: Any) -> Relocalization:
+        """Searches the whole plan for the robot from one scan (base-frame points, metres), now.
+
+        When the best place is unambiguous and explains at least the recovery's
+        `min_inlier_ratio` of the scan, the pose and covariance jump there and the lost state is
+        cleared. Otherwise the localizer becomes lost and follows the candidates with the next
+        scans until one is confirmed (`Estimate.relocalized`). Returns the search's result.
+        """
+        points = as_points(scan_xy, "scan_xy")
+        config = self._recovery.config
+        with self._lock:
+            found = relocalize(points, self.plan, config=config.search, max_candidates=config.max_hypotheses)
+            best = found.best
+            self._recovery.clear()
+            if best is not None and not found.ambiguous and best.inlier_ratio >= config.min_inlier_ratio:
+                self._pose = best.pose
+                self._covariance = finite_or(best.result.covariance, self._covariance)
+                self._detector.reset()
+            else:
+                self._recovery.hypotheses = [Hypothesis(c.pose, c.result, 1, c.inlier_ratio) for c in found.candidates
+                                             if c.inlier_ratio >= config.min_inlier_ratio]
+                self._detector.declare_lost()
+            return found
+
+    def update(self, scan_xy: Any, odom_pose: Any) -> Estimate:
+        """One tracking step: the stages of `planicp.tracking.stages`, in order (each returns the
+        decision `Estimate.decisions` lists).
+
+        Args:
+            scan_xy: (N, 2) scan points in the robot frame, metres (see `scan_to_points`).
+            odom_pose: (x, y, yaw) of the robot in the odom frame at the scan's time.
+
+        Raises:
+            TypeError, ValueError: a malformed scan or odometry pose; the state is unchanged.
+        """
+        points = as_points(scan_xy, "scan_xy", allow_empty=True)
+        odom = as_pose(odom_pose, "odom_pose")
+        with self._lock:
+            rules = self._rules()
+            budget = self._recovery.new_update()  # the search nodes this update may score
+            was_lost = self._detector.lost
+            # 1. Odometry predicts. 2. ICP from the prediction, judged by the gate.
+            prediction = predict(self._pose, self._covariance, self._last_odom, odom, rules.motion_noise)
+            fit = fit_from_prediction(points, prediction, rules, was_lost)
+            # 3. A place a rejected jump left pending is taken if this scan confirms it; 4. else the
+            # plan is searched around a prediction the gate cannot vouch for (which may leave a
+            # place pending for the next scan).
+            pending, self._pending = self._pending, None
+            confirmation = confirm_pending(points, prediction, pending, fit, rules)
+            search = search_near_prediction(points, prediction, fit, confirmation, rules, was_lost, budget)
+            self._pending = search.pending
+            # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
+            score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
+            correction = correct(prediction, search, score, rules)
+            # 7. Lost or not. 8. While lost, the recovery, which may adopt a place.
+            lost = judge_lost(self._detector, score, correction, search, was_lost, rules)
+            recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
+            adopted = recovery.adopted
+            if adopted is None:
+                pose, covariance, result, reason = correction.pose, correction.covariance, search.result, score.reason
+                accepted, now_lost = correction.accepted, lost.lost
+            else:
+                assert recovery.covariance is not None  # given with every adopted place
+                pose, covariance, result, reason = adopted.pose, recovery.covariance, adopted.result, ""
+                accepted, now_lost = True, False
+            relocalized = search.searched or adopted is not None
+            # 9. What the next updates need.
+            records = keep_records(self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost)
+            self._pose = pose
+            self._covariance = covariance.copy()  # the decisions hold `covariance`: a caller may change them
+            self._last_odom = odom
+            if records.anchored:
+                self._anchor = (points, odom)
+            kept = fit.kept
+            if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
+                kept = None  # a search's result is over the whole scan
+            return Estimate(pose, accepted, result, prediction.pose, odom, reason, covariance.copy(),
+                            correction.degeneracy, now_lost, self._detector.score, relocalized, recovery.hypotheses,
+                            kept, recovery.on_trial, decisions=(prediction, fit, confirmation, search, score, correction, lost, recovery,
+                                             records))
+
+    def _rules(self) -> Rules:
+        """The plan and rules as this update reads them (a caller may replace `gate` and the
+        others between updates)."""
+        return Rules(self.plan, self.config, self._wide_config, self.gate, self.motion_noise, self.degeneracy,
+                     self.continuity, self.fusion, self._occlusion, self._detector.rule, self._recovery.config)
+
+
+DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))
+"""Standard deviations (m, m, rad) of a start or reset pose given without a covariance."""
+
+
+def _covariance(value: Any) -> NDArray[np.float64]:
+    """A validated 3x3 covariance (None: `DEFAULT_INITIAL_STD` squared on the diagonal)."""
+    if value is None:
+        return np.diag(np.square(DEFAULT_INITIAL_STD))
+    cov = np.asarray(value)
+    if cov.dtype.kind not in "fiu":
+        raise TypeError(f"covariance must hold real numbers, got dtype {cov.dtype}")
+    cov = cov.astype(np.float64)
+    if cov.shape != (3, 3):
+        raise ValueError(f"covariance must be 3x3 over (x, y, yaw), got shape {cov.shape}")
+    if not np.isfinite(cov).all() or not np.allclose(cov, cov.T, atol=1e-12) or np.linalg.eigvalsh(cov).min() < 0:
+        raise ValueError(f"covariance must be finite, symmetric and positive semi-definite, got {cov.tolist()}")
+    return cov
+
+
+def _wrapped(pose: Pose) -> Pose:
+    """`pose` with its yaw wrapped to (-pi, pi], as every pose the localizer reports (a yaw already
+    in range is kept exactly)."""
+    yaw = pose[2]
+    return (pose[0], pose[1], yaw if -math.pi < yaw <= math.pi else wrap_angle(yaw))

@@ -1,0 +1,244 @@
+"""The stages of `Localizer.update` one by one (`planicp.tracking.stages`), each with real scans of
+a synthetic office, and the decisions an `Estimate` lists."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from planicp import AcceptanceGate, IcpConfig, Localizer, LostRule, MotionNoise, PlanMap, RecoveryConfig, se2
+from planicp import synthetic as syn
+from planicp.tracking import stages
+from planicp.tracking.decisions import (
+    Bookkeeping,
+    Correction,
+    FitDecision,
+    LostDecision,
+    PendingDecision,
+    Prediction,
+    RecoveryDecision,
+    ScoreDecision,
+    SearchDecision,
+)
+from planicp.tracking.lost_rule import LostDetector
+from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
+from planicp.tracking.recovery import Recovery, SearchBudget
+from test_localizer import DEG, clear_path, error
+
+Pose = tuple[float, float, float]
+SMALL = np.diag([0.02**2, 0.02**2, (1 * DEG) ** 2])
+
+
+@pytest.fixture(scope="module")
+def office() -> Any:
+    return syn.generate_floor(3, "office")
+
+
+@pytest.fixture(scope="module")
+def plan(office: Any) -> PlanMap:
+    return PlanMap.from_points(office.wall_points())
+
+
+@pytest.fixture(scope="module")
+def path(office: Any) -> list[Pose]:
+    return clear_path(office, np.random.default_rng(42), steps=40, step=0.1, clearance=0.6)
+
+
+@pytest.fixture(scope="module")
+def scans(office: Any, path: list[Pose]) -> list[np.ndarray]:
+    rng = np.random.default_rng(7)
+    return [syn.simulate_scan(office, p, rng)[0] for p in path]
+
+
+def rules(plan: PlanMap, **changes: Any) -> stages.Rules:
+    """The rules of a default `Localizer` on `plan`, with `changes`."""
+    return Localizer(plan, (0.0, 0.0, 0.0), **changes)._rules()
+
+
+def prediction_at(pose: Pose, covariance: np.ndarray = SMALL) -> Prediction:
+    return Prediction((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose, covariance, True)
+
+
+def test_the_prediction_composes_the_odometry_motion_and_grows_the_covariance() -> None:
+    a, b = 0.01, 0.002
+    covariance = np.diag([a, a, b])
+    prediction = stages.predict((2.0, 3.0, math.pi / 2), covariance, (5.0, 5.0, 0.0), (6.0, 5.0, math.pi / 2),
+                                MotionNoise())
+    assert not prediction.first
+    np.testing.assert_allclose(prediction.motion, (1.0, 0.0, math.pi / 2), atol=1e-15)
+    np.testing.assert_allclose(prediction.pose, (2.0, 4.0, math.pi), atol=1e-12)
+    # Heading pi/2 and 1 m forward: the heading's variance b moves x by -1 m per radian; the
+    # motion's own noise is 5 % of 1 m + 1 mm in x and y, 5 % of 90 deg + 1 deg + 0.05 deg in yaw.
+    sigma_t = 0.05 * 1.0 + 0.001
+    sigma_r = 0.05 * math.pi / 2 + math.radians(1.0) + math.radians(0.05)
+    expected = np.array([[a + b + sigma_t**2, 0.0, -b], [0.0, a + sigma_t**2, 0.0], [-b, 0.0, b + sigma_r**2]])
+    np.testing.assert_allclose(prediction.covariance, expected, rtol=1e-12, atol=1e-15)
+    assert np.linalg.det(prediction.covariance) > np.linalg.det(covariance)
+    first = stages.predict((2.0, 3.0, 0.5), covariance, None, (6.0, 5.0, 1.0), MotionNoise())
+    assert first.first and first.motion == (0.0, 0.0, 0.0) and first.pose == (2.0, 3.0, 0.5)
+
+
+def test_the_fit_stage_gives_the_gates_reason_for_a_prediction_beyond_the_jump_limit(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    off = se2.compose(path[1], (0.25, 0.0, 0.0))
+    strict = rules(plan, gate=AcceptanceGate(max_translation_jump=0.1))
+    fit = stages.fit_from_prediction(scans[1], prediction_at(off), strict, False)
+    assert fit.usable and fit.result is not None and not fit.passed
+    assert error(path[1], fit.result.pose)[0] < 0.05  # ICP found the truth...
+    assert fit.reason.startswith("correction of 0.2") and fit.reason.endswith(" m exceeds 0.100 m"), fit.reason
+    same = stages.fit_from_prediction(scans[1], prediction_at(off), rules(plan), False)
+    assert same.passed and same.reason == ""  # ...which the default 0.5 m limit accepts
+    tiny = stages.fit_from_prediction(scans[1][:2], prediction_at(path[1]), rules(plan), False)
+    assert tiny.result is None and not tiny.usable and tiny.reason == "scan has 2 usable points (need 3)"
+
+
+def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    truth = path[0]
+    clutter = np.column_stack([np.full(100, 0.4), np.linspace(-0.2, 0.2, 100)])  # a person 40 cm ahead
+    points = np.vstack([scans[0], clutter])
+    the_rules = rules(plan)
+    fit = stages.fit_from_prediction(points, prediction_at(truth), the_rules, False)
+    assert fit.passed and fit.kept is not None and fit.beyond is not None and fit.result is not None
+    assert not fit.kept[-100:].any()  # the person is left out
+    search = stages.search_near_prediction(points, prediction_at(truth), fit, PendingDecision(None, None),
+                                           the_rules, False, SearchBudget(None))
+    assert search.cause is None and search.result is fit.result and not search.searched
+    score = stages.judge_score(points, prediction_at(truth), fit, search, the_rules, False, None)
+    inliers = np.zeros(len(points), dtype=bool)
+    inliers[fit.kept] = fit.result.inlier_mask
+    assert score.score == np.count_nonzero(inliers & ~fit.beyond) / len(points)
+    assert score.score <= np.count_nonzero(fit.kept) / len(points) <= (len(points) - 100) / len(points)
+    assert score.score < fit.result.inlier_ratio - 0.1  # the ratio over the kept points alone is higher
+    assert not score.poor and score.continues is None and score.reason == ""
+
+
+def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    the_rules = rules(plan)
+    wide = np.diag([0.05**2, 0.05**2, (2 * DEG) ** 2])
+    prediction = prediction_at(se2.compose(path[2], (0.04, -0.03, 1 * DEG)), wide)
+    fit = stages.fit_from_prediction(scans[2], prediction, the_rules, False)
+    search = stages.search_near_prediction(scans[2], prediction, fit, PendingDecision(None, None), the_rules, False,
+                                           SearchBudget(None))
+    score = stages.judge_score(scans[2], prediction, fit, search, the_rules, False, None)
+    correction = stages.correct(prediction, search, score, the_rules)
+    assert correction.accepted and correction.kind == "fused" and correction.degeneracy is None
+    assert error(path[2], correction.pose)[0] < 0.01
+    assert np.trace(correction.covariance) < np.trace(prediction.covariance) / 10
+    assert np.linalg.det(correction.covariance) < np.linalg.det(prediction.covariance)
+    rejected = ScoreDecision(score.score, False, None, "some reason")
+    kept = stages.correct(prediction, search, rejected, the_rules)
+    assert not kept.accepted and kept.kind == "prediction" and kept.pose == prediction.pose
+    assert kept.covariance is prediction.covariance
+
+
+def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    the_rules = rules(plan, gate=AcceptanceGate(max_translation_jump=0.1), lost_rule=LostRule(max_rejections=3))
+    detector = LostDetector(the_rules.lost)
+    prediction = prediction_at(se2.compose(path[1], (0.25, 0.0, 0.0)))
+    fit = stages.fit_from_prediction(scans[1], prediction, the_rules, False)
+    search = stages.search_near_prediction(scans[1], prediction, fit, PendingDecision(None, None), the_rules, False,
+                                           SearchBudget(None))
+    score = stages.judge_score(scans[1], prediction, fit, search, the_rules, False, None)
+    correction = stages.correct(prediction, search, score, the_rules)
+    assert not correction.accepted and search.cause == "jump" and search.pending is not None
+    verdicts = [stages.judge_lost(detector, score, correction, search, False, the_rules) for _ in range(3)]
+    assert [(v.lost, v.rejections, v.held, v.counted_accepted) for v in verdicts] == [
+        (False, 1, False, False), (False, 2, False, False), (True, 3, False, False)]
+    # Lost for the rejections alone: the score is above the rule's 0.35.
+    assert verdicts[-1].window_score == pytest.approx(score.score) and score.score > 0.5
+    clutter = ScoreDecision(0.1, True, True, "")
+    held = stages.judge_lost(detector, clutter, correction, search, True, the_rules)
+    assert held.held and held.lost and held.rejections == 3 and len(detector.scores) == 3
+
+
+def idle_pose(prediction: Prediction) -> Correction:
+    """The correction of an update without an accepted fit: the prediction's pose."""
+    return Correction(prediction.pose, prediction.covariance, False, None, "prediction")
+
+
+def test_the_recovery_stage_reports_the_place_it_adopts(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    config = RecoveryConfig(confirmations=2, search_nodes=None)  # each search within its update
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+    detector = LostDetector(LostRule())
+    detector.declare_lost()
+    lost = LostDecision(True, False, False, math.nan, detector.rejections)
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    wrong = (path[0][0] + 4.0, path[0][1] - 3.0, path[0][2] + 2.0)
+    decisions = []
+    for i in range(3):
+        motion = (0.0, 0.0, 0.0) if i == 0 else se2.between(path[i - 1], path[i])
+        prediction = Prediction((0.0, 0.0, 0.0), motion, wrong, SMALL, i == 0)
+        decisions.append(stages.recover(recovery, detector, scans[i], prediction, fit, idle_pose(prediction), lost))
+        if decisions[-1].adopted is not None:
+            break
+    assert [d.action for d in decisions] == ["step", "step"]
+    assert decisions[0].adopted is None and len(decisions[0].hypotheses) >= 1
+    adopted = decisions[-1].adopted
+    assert adopted is not None and adopted.streak == 2
+    assert error(path[1], adopted.pose)[0] < 0.05 and error(path[1], adopted.pose)[1] < 1 * DEG
+    assert decisions[-1].covariance is not None and np.isfinite(decisions[-1].covariance).all()
+    assert decisions[-1].hypotheses == () and detector.rejections == 0 and not detector.lost
+    coasting = stages.recover(recovery, detector, scans[2], prediction,
+                              FitDecision(None, None, None, False, "x", usable=False), idle_pose(prediction), lost)
+    assert coasting.action == "coast" and coasting.adopted is None
+    idle = stages.recover(recovery, detector, scans[2], prediction, fit, idle_pose(prediction),
+                          LostDecision(False, False, True, 1.0, 0))
+    assert idle.action == "clear" and idle.hypotheses == ()
+
+
+def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    loc = Localizer(plan, path[0])
+    loc.update(scans[0], (0.0, 0.0, 0.0))
+    est = loc.update(scans[1], se2.between(path[0], path[1]))
+    assert [type(d) for d in est.decisions] == [Prediction, FitDecision, PendingDecision, SearchDecision,
+                                                 ScoreDecision, Correction, LostDecision, RecoveryDecision,
+                                                 Bookkeeping]
+    prediction, fit, pending, search, score, correction, lost, recovery, records = est.decisions
+    assert isinstance(prediction, Prediction) and prediction.pose == est.predicted_pose and not prediction.first
+    assert isinstance(fit, FitDecision) and fit.passed and fit.result is est.result
+    assert isinstance(pending, PendingDecision) and pending.place is None
+    assert isinstance(search, SearchDecision) and search.cause is None and not search.searched
+    assert isinstance(score, ScoreDecision) and 0.7 < score.score < 1.0 and not score.poor
+    assert isinstance(correction, Correction) and correction.kind == "fused" and correction.pose == est.pose
+    np.testing.assert_array_equal(correction.covariance, est.covariance)
+    assert isinstance(lost, LostDecision) and not lost.lost and lost.rejections == 0 and lost.counted_accepted
+    assert lost.window_score == est.score  # the mean over both scans
+    assert isinstance(recovery, RecoveryDecision) and recovery.action == "clear" and recovery.adopted is None
+    assert isinstance(records, Bookkeeping) and records.anchored and records.beyond_share is not None
+    assert all(isinstance(d.why, str) and d.why for d in est.decisions)
+
+
+def test_the_decisions_say_why_a_jump_was_taken_a_scan_later(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """The 15-degree odometry fault of
+    `test_localizer.py::test_a_good_fit_beyond_the_gate_is_checked_by_a_search_and_taken`, read
+    from the decisions."""
+    loc = Localizer(plan, path[0])
+    loc.update(scans[0], (0.0, 0.0, 0.0))
+    claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG))
+    est = loc.update(scans[1], claimed)
+    search = est.decisions[3]
+    assert isinstance(search, SearchDecision) and search.cause == "jump" and search.pending is not None
+    assert search.pending[1] == claimed and search.reason == est.reason
+    est = loc.update(scans[2], se2.compose(claimed, se2.between(path[1], path[2])))
+    pending, search, correction = est.decisions[2], est.decisions[3], est.decisions[5]
+    assert isinstance(pending, PendingDecision) and pending.confirmed is not None and pending.place is not None
+    assert isinstance(search, SearchDecision) and search.cause is None and search.searched
+    assert search.result is pending.confirmed is est.result
+    assert isinstance(correction, Correction) and correction.kind == "fit" and est.relocalized
