@@ -258,9 +258,13 @@ pub fn align_seen(
 
     // Matching against the visible subset: the plan's index still answers every look-up whose
     // nearest wall point is visible (the same pairs, at a fraction of the cost).
-    let through_index = match indexed {
-        None => map.wall_index().ok().and_then(|w| VisibleThroughIndex::new(w, &target, largest_distance)),
-        Some(_) => None,
+    // (Only for a subset: the index is built on first use, which a plan aligned against once,
+    // such as the previous scan of the continuity check, should not pay for.)
+    let through_index = match (indexed, &target) {
+        (None, TargetSet::Subset { .. }) => {
+            map.wall_index().ok().and_then(|w| VisibleThroughIndex::new(w, &target, largest_distance))
+        }
+        _ => None,
     };
 
     let tolerances = config.tolerances();

@@ -164,15 +164,17 @@ def _unoccluded(points: NDArray[np.float64], prediction: Prediction, rules: Rule
     all: align them all), the points beyond the walls seen from the prediction, whether fewer
     than the rule's `min_points` remain, and, for the KD-tree search, the view from the
     prediction over the arc the whole scan spans, whose visible points it matches against.
-    (None, None, False, None) otherwise."""
+    (None, None, False, view) otherwise."""
     occlusion = rules.occlusion
-    if occlusion is None or lost:
-        return None, None, False, None
-    if 3.0 * largest_position_std(prediction.covariance) >= occlusion.rule.margin:
-        return None, None, False, None
     config = rules.config
-    uses_view = config.correspondence_search == "kd_tree" and config.use_visibility
-    view = occlusion.view(points, prediction.pose, config) if uses_view else None
+    uses_view = occlusion is not None and config.correspondence_search == "kd_tree" and config.use_visibility
+    # Cast over the scan's arc even where the rule does not apply: the alignment's own cast covers
+    # every direction (on freiburg-campus, 80 m ranges, it took 7.4 ms of a 8.5 ms alignment).
+    view = occlusion.view(points, prediction.pose, config) if occlusion is not None and uses_view else None
+    if occlusion is None or lost:
+        return None, None, False, view
+    if 3.0 * largest_position_std(prediction.covariance) >= occlusion.rule.margin:
+        return None, None, False, view
     in_front, beyond = occlusion.classify(points, prediction.pose)
     kept: NDArray[np.bool_] = ~in_front
     remaining = int(np.count_nonzero(kept))
