@@ -118,6 +118,12 @@ impl PointMap {
         Ok(self)
     }
 
+    /// The nearest-wall index if it has been built (by [`Self::wall_index`], perhaps on another
+    /// thread), without building it: for look-ups the KD-tree can answer too.
+    pub fn built_wall_index(&self) -> Option<&NearestWallIndex> {
+        self.wall_index.get().and_then(|built| built.as_ref().ok())
+    }
+
     /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
     /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
     /// plan's extent at its cell size.

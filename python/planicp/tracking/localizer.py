@@ -10,7 +10,6 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .. import _core
 from .._validation import Pose, as_pose, as_points
 from ..plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
@@ -209,13 +208,6 @@ class Localizer:
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.
         prepare_search(plan, self._recovery.config.search)
-        # So is the nearest-wall index (the index search's, and the KD-tree's look-ups of the
-        # visible walls): built on first use, it stalled the first update 0.3-1.5 s on the real
-        # logs' plans. A plan too large for it is aligned without it.
-        try:
-            plan._native.wall_index_stats()
-        except _core.PlanicpError:
-            pass
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
