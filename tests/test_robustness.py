@@ -179,12 +179,13 @@ def test_no_update_scores_more_search_nodes_than_its_budget(monkeypatch: pytest.
 
     monkeypatch.setattr(SearchBudget, "spend", counting)
     monkeypatch.setattr(Recovery, "new_update", per_update)
-    lost, back = _kidnap(2, recovery=RecoveryConfig(search_nodes=5_000))
+    lost, back = _kidnap(3, recovery=RecoveryConfig(search_nodes=10_000))
     assert lost is not None and back is not None, (lost, back)
     searching = [n for n in spent if n > 0]
-    # A search may score three nodes past its share: an expansion scores four children.
-    assert max(spent) <= 5_000 + 2 * 3 and len(searching) >= 8, searching
-    assert sum(n >= 5_000 for n in searching) >= 5, searching
+    # A search may score three nodes past its share (an expansion scores four children), and an
+    # update runs up to four: around the prediction, near the last pose, the whole plan, a re-search.
+    assert max(spent) <= 10_000 + 4 * 3 and len(searching) >= 5, searching
+    assert sum(n >= 10_000 for n in searching) >= 3, searching
 
 
 def test_a_place_adopted_before_the_whole_plan_was_searched_stays_on_trial() -> None:
@@ -192,13 +193,16 @@ def test_a_place_adopted_before_the_whole_plan_was_searched_stays_on_trial() -> 
     adopted before the spread search of the whole plan has ended (a robot whose odometry broke
     is back at once), and that search goes on: here (kidnap run 0) the place adopted is a
     look-alike 7 m from the robot, and the place the search of the whole plan finds explains the
-    next scans better, so it replaces it."""
+    next scans better, so it replaces it. (Where the look-alike explains the scans as well as the
+    right place, by the recovery's margin, the pose stays provisional with the rival listed.)"""
     plan = load_default_plan()
     before, _ = run_experiment(plan, ExperimentConfig(duration_s=10.0, seed=0))
     after, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=1000))
     start = next(j for j in range(1, len(after.times) - 30)
                  if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - 10.3) > 1.5)
-    localizer = Localizer(plan, tuple(before.truth[0]))
+    # 15,000 nodes an update: the whole plan's search ends three updates after the place nearby is
+    # adopted (at the default 20,000 the two searches end together and the right place is found).
+    localizer = Localizer(plan, tuple(before.truth[0]), recovery=RecoveryConfig(search_nodes=15_000))
     for scan, odom in zip(before.scans, before.odometry_in_odom):
         localizer.update(scan, tuple(odom))
     last, origin = tuple(before.odometry_in_odom[-1]), tuple(after.odometry_in_odom[start - 1])

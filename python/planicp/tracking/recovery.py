@@ -2,14 +2,16 @@
 
 While the `Localizer` is lost, every scan goes to a `Recovery`:
 
-1. Without hypotheses, a scan is searched for around the last pose (within `local_radius`, any
-   heading: a slip or a bad odometry step), then the scan of the update where that search ends
-   over the whole plan (`relocalize`: the robot was carried elsewhere). A search takes up to
-   seconds on a large plan, so all the searches of an update score at most `search_nodes` of
-   their branch and bound together (`SearchBudget`, `SearchInSteps`) and a search runs over as
-   many updates as it needs: an update never stalls. Every distinct candidate of a search that
-   explains at least `min_inlier_ratio` of its scan, moved with the odometry since that scan and
-   aligned again, becomes a hypothesis when the search ends.
+1. Without hypotheses, two searches start side by side (`_search`): one around the last pose
+   (within `local_radius`, any heading: a slip or a bad odometry step) and one of the whole plan
+   (`relocalize`: the robot was carried elsewhere). A search takes up to seconds on a large plan,
+   so all the searches of an update score at most `search_nodes` of their branch and bound
+   together (`SearchBudget`, half of it kept for the whole plan's search while it runs,
+   `SearchInSteps`) and a search runs over as many updates as it needs: an update never stalls.
+   Every distinct candidate of a search that explains at least `min_inlier_ratio` of its scan,
+   moved with the odometry since that scan and aligned again, becomes a hypothesis when the
+   search ends. The search near the pose starts again, around the pose and with the scan of
+   that update, while none of its places is followed.
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
    prediction). A hypothesis whose fit explains less than `min_inlier_ratio` of the scan, or needs
    a correction beyond the acceptance gate, is dropped; so is one whose mean inlier ratio over the
@@ -123,15 +125,25 @@ class SearchBudget:
     (A search may score three nodes past what it is given: an expansion scores four children.)"""
 
     left: int | None
+    reserved: int = 0
+    """Nodes kept for the recovery's search of the whole plan, which no other search may take
+    (so that searches around a wrong prediction cannot starve it)."""
+
+    @property
+    def free(self) -> int | None:
+        """What the other searches may still score (None: no limit)."""
+        return None if self.left is None else max(self.left - self.reserved, 0)
 
     def search(self, scan: NDArray[np.float64], plan: PlanMap, region: SearchRegion, config: RelocalizationConfig,
-               max_candidates: int) -> Relocalization | None:
-        """`relocalize` of `scan` in `region` within what is left (None when the search would
-        score more: a search cut short proves nothing), which it spends."""
-        if self.left is not None and self.left <= 0:
+               max_candidates: int, *, whole_plan: bool = False) -> Relocalization | None:
+        """`relocalize` of `scan` in `region` within what is `free` (all that is left for the
+        re-searches of the whole plan's places, `whole_plan`): None when the search would score
+        more (a search cut short proves nothing). Spends what it scored."""
+        nodes = self.left if whole_plan else self.free
+        if nodes is not None and nodes <= 0:
             return None
         steps = SearchInSteps(scan, plan, region=region, config=config, max_candidates=max_candidates)
-        found = steps.advance(_WHOLE_SEARCH if self.left is None else self.left)
+        found = steps.advance(_WHOLE_SEARCH if nodes is None else nodes)
         self.spend(steps.nodes)
         return found
 
@@ -172,10 +184,11 @@ class Recovery:
     beyond_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
     explained_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
     searches: int = 0
-    # The search cycle in progress: the regions still to search (None: the whole plan) and the
-    # search running, with the odometry motion since its scan and that motion's covariance.
-    _regions: list[SearchRegion | None] | None = None
-    _running: tuple[SearchInSteps, Pose, NDArray[np.float64]] | None = None
+    # The search cycle in progress (see `_search`): the search near the last pose and the search
+    # of the whole plan, each with the odometry motion since its scan and that motion's covariance.
+    _cycle: bool = False
+    _near: _Run | None = None
+    _whole: _Run | None = None
     # A place adopted before the whole plan was searched, on trial (see `verify`), and the inlier
     # ratios of the scans since aligned at the place the localizer tracks.
     _trial: bool = False
@@ -204,7 +217,7 @@ class Recovery:
                 return found
             if self._sure_nearby(found):
                 # Adopted on trial: the search of the whole plan goes on (`verify`).
-                self.hypotheses, self._trial = [], True
+                self.hypotheses, self._trial, self._near = [], True, None
                 self._incumbent.clear()
                 return found
         return None
@@ -222,7 +235,7 @@ class Recovery:
         self._incumbent.append(localize(scan, self.plan, pose, self.icp).inlier_ratio)
         self.hypotheses = [h for h in (self._follow(h, scan, motion) for h in self.hypotheses) if h is not None]
         if self.searching:
-            self._search(scan, motion, pose)
+            self._search(scan, motion, pose, near=False)
         self.hypotheses = [h for h in self.hypotheses if not _same(h.pose, pose)]
         if self.hypotheses:
             best = max(h.mean_inlier_ratio for h in self.hypotheses)
@@ -252,12 +265,13 @@ class Recovery:
         be weighed against it; a robot whose odometry broke is back as soon as the searches near
         it end, not when a search of the whole plan does (minutes of driving on a large plan
         with the search spread over updates)."""
-        return (hypothesis.near and self._regions is not None and self._regions == []
+        return (hypothesis.near and self._whole is not None
                 and self.explained_seen > 0.0 and hypothesis.mean_inlier_ratio >= self.explained_seen)
 
     def new_update(self) -> SearchBudget:
         """A fresh `search_nodes` budget for the searches of the update that begins (returned)."""
-        self.budget = SearchBudget(self.config.search_nodes)
+        nodes = self.config.search_nodes
+        self.budget = SearchBudget(nodes, nodes // 2 if nodes is not None and self._whole is not None else 0)
         return self.budget
 
     def coast(self, motion: Pose) -> None:
@@ -265,69 +279,75 @@ class Recovery:
         the running search's scan, follow `motion` alone."""
         self.hypotheses = [Hypothesis(compose(h.pose, motion), h.result, h.streak, h.total, h.near)
                            for h in self.hypotheses]
-        if self._running is not None:
-            steps, since, spread = self._running
-            self._running = (steps, compose(since, motion), self.motion_noise.propagate(spread, since, motion))
+        for run in (self._near, self._whole):
+            if run is not None:
+                run.move(motion, self.motion_noise)
 
     def clear(self) -> None:
         """Forgets every hypothesis and any search in progress (the pose was given or found)."""
         self.hypotheses = []
-        self._regions, self._running, self._trial = None, None, False
+        self._cycle, self._near, self._whole, self._trial = False, None, None, False
 
     @property
     def searching(self) -> bool:
         """Whether a search cycle is in progress (its searches spread over updates)."""
-        return self._regions is not None
+        return self._cycle
 
-    def _search(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose) -> None:
-        """One update's share of the search cycle (see the module documentation): the running
-        search, or the next region's with this scan, scores up to `search_nodes`; the places a
-        search that ends found, followed with the odometry since its scan, join the hypotheses
-        (which are followed while the cycle goes on, but adopted only after it)."""
-        if self._regions is None:
-            self._regions = [None]
-            if self.config.local_radius > 0.0:
-                self._regions.insert(0, SearchRegion(last_pose, self.config.local_radius, math.pi))
-        if self._running is None and self.config.search_nodes is None:
-            # Every search of the cycle within this update, with this scan.
-            while self._regions is not None:
-                self._search_step(scan, motion)
-            return
-        self._search_step(scan, motion)
-
-    def _search_step(self, scan: NDArray[np.float64], motion: Pose) -> None:
-        """Advances the running search (or starts the next region's with `scan`) by
-        `search_nodes`; when it ends, its places join the hypotheses, and when it was the cycle's
-        last, the cycle ends."""
-        assert self._regions is not None
-        if self._running is None:
-            self.searches += 1
-            region = self._regions.pop(0)
-            self._running = (SearchInSteps(scan, self.plan, region=region, config=self.config.search,
-                                           max_candidates=self.config.max_hypotheses), (0.0, 0.0, 0.0),
-                             np.zeros((3, 3)))
+    def _search(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose, near: bool = True) -> None:
+        """One update's share of the search cycle: two searches run side by side, one around
+        `last_pose` (within `local_radius`, any heading; a slip or a bad odometry step) and one of
+        the whole plan (the robot was carried elsewhere). The search near the pose has the first
+        claim on the update's budget but for the half reserved to the whole plan's search while that
+        runs (`SearchBudget.reserved`, which the searches around the prediction cannot take either);
+        when it ends
+        and none of its places is followed, it starts again around the pose of that update, with
+        its scan (a search that ended updates after its scan may find nothing where the robot is
+        now). When the whole plan's search ends, the cycle ends. The places a search that ends
+        found, followed with the odometry since its scan, join the hypotheses. With
+        `near=False` (a place on trial) only the whole plan's search goes on."""
+        if not self._cycle:
+            self._cycle = True
+            self._whole = self._start(scan, None)
         else:
-            steps, since, spread = self._running
-            self._running = (steps, compose(since, motion), self.motion_noise.propagate(spread, since, motion))
-        steps, since, spread = self._running
-        if self.budget.left is not None and self.budget.left <= 0:
-            return
-        before = steps.nodes
-        search = steps.advance(_WHOLE_SEARCH if self.budget.left is None else self.budget.left)
-        self.budget.spend(steps.nodes - before)
-        if search is None:
-            return
-        self._running = None
-        for c in search.candidates:
-            if c.inlier_ratio < self.config.min_inlier_ratio or self._contradicted(steps.scan, c.pose):
-                continue
-            found = self._found_again(scan, c, since, spread, near=steps.region is not None)
-            if found is not None and not any(_same(found.pose, h.pose) for h in self.hypotheses):
-                self.hypotheses.append(found)
-        if not self._regions:
-            self._regions = None
+            for run in (self._near, self._whole):
+                if run is not None:
+                    run.move(motion, self.motion_noise)
+        if (near and self._near is None and self.config.local_radius > 0.0
+                and not any(h.near for h in self.hypotheses)):
+            self._near = self._start(scan, SearchRegion(last_pose, self.config.local_radius, math.pi))
+        if self._near is not None and self._advance(self._near, scan, self.budget.free):
+            self._near = None
+        if self._whole is not None and self._advance(self._whole, scan, self.budget.left):
+            self._whole = None
+            self._cycle, self._near = False, None
             self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
             self.hypotheses = self.hypotheses[:self.config.max_hypotheses]
+
+    def _start(self, scan: NDArray[np.float64], region: SearchRegion | None) -> _Run:
+        """A search of `region` (None: the whole plan) for `scan`, no node scored yet."""
+        self.searches += 1
+        return _Run(SearchInSteps(scan, self.plan, region=region, config=self.config.search,
+                                  max_candidates=self.config.max_hypotheses))
+
+    def _advance(self, run: _Run, scan: NDArray[np.float64], nodes: int | None) -> bool:
+        """Scores up to `nodes` (None: no limit) of `run`, drawn from the update's budget; when the
+        search ends, its places, found again with the current `scan` (`_found_again`), join the
+        hypotheses. Returns whether it ended."""
+        if nodes is not None and nodes <= 0:
+            return False
+        before = run.steps.nodes
+        search = run.steps.advance(_WHOLE_SEARCH if nodes is None else nodes)
+        self.budget.spend(run.steps.nodes - before)
+        if search is None:
+            return False
+        near = run.steps.region is not None
+        for c in search.candidates:
+            if c.inlier_ratio < self.config.min_inlier_ratio or self._contradicted(run.steps.scan, c.pose):
+                continue
+            found = self._found_again(scan, c, run.since, run.spread, near=near)
+            if found is not None and not any(_same(found.pose, h.pose) for h in self.hypotheses):
+                self.hypotheses.append(found)
+        return True
 
     def _found_again(self, scan: NDArray[np.float64], candidate: Candidate, since: Pose,
                      spread: NDArray[np.float64], near: bool) -> Hypothesis | None:
@@ -349,7 +369,8 @@ class Recovery:
         fit = localize(scan, self.plan, here, self.icp)
         metres, radians = _moved(fit.pose, here)
         if fit.inlier_ratio < self.config.min_inlier_ratio or metres > radius or radians > yaw:
-            searched = self.budget.search(scan, self.plan, SearchRegion(here, radius, yaw), self.config.search, 1)
+            searched = self.budget.search(scan, self.plan, SearchRegion(here, radius, yaw), self.config.search, 1,
+                                          whole_plan=not near)
             again = None if searched is None else searched.best
             if again is None:
                 return None
@@ -414,6 +435,22 @@ class Recovery:
         if not self.explained_shares:
             return 0.0
         return float(np.quantile(np.fromiter(self.explained_shares, dtype=np.float64), EXPLAINED_QUANTILE))
+
+
+@dataclass
+class _Run:
+    """A search spread over updates: its steps, and the odometry motion since its scan (the
+    identity while it is scored within the update that started it) with that motion's
+    covariance."""
+
+    steps: SearchInSteps
+    since: Pose = (0.0, 0.0, 0.0)
+    spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
+
+    def move(self, motion: Pose, noise: MotionNoise) -> None:
+        """The robot moved by `motion` since the last update."""
+        self.spread = noise.propagate(self.spread, self.since, motion)
+        self.since = compose(self.since, motion)
 
 
 BEYOND_WINDOW = 50
