@@ -24,7 +24,7 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
 4. A single hypothesis found near the last pose that has survived `confirmations` scans is
    adopted before the search of the whole plan ends when it explained them at least as well as
    sound tracking did (`_sure_nearby`): a robot whose odometry broke is back as soon as the search
-   around it ends (on a 100 x 120 m plan the whole-plan search, spread over updates, ends 20-50
+   around it ends (on a 100 x 120 m plan the whole-plan search, spread over updates, ends 17-66
    scans later). But in an office some partial fit near the old pose explains a scan as well as
    that (adopted for good, 5 of 10 kidnapped robots were kept at such a place), so the place is on
    trial: the search of the whole plan goes on (`verify`), its places are followed beside the
@@ -81,7 +81,7 @@ class RecoveryConfig:
             real logs' plans (docs/benchmarks.md). A search that needs more goes on over the next
             updates (the recovery's), or finds nothing (the search around a prediction, whose
             fit's own place then waits for the next scan). A whole-plan search of a 100 x 120 m
-            building scores 0.3-1 million: places found with an older scan are moved by the
+            building scores 0.3-0.7 million: places found with an older scan are moved by the
             odometry since and aligned again with the current one (`_found_again`), and a place
             found near the last pose that explains the scans as well as sound tracking did is
             adopted before it ends, on trial (`verify`). None: each search runs to its end within

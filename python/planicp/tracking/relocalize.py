@@ -37,7 +37,7 @@ class RelocalizationConfig:
     Attributes:
         resolution: cell size of the likelihood field and step of the position lattice. The
             search only has to land within ICP's reach (a few cells), so 0.2 m is enough (0.1 m
-            found the same places on the real logs at 2.8 times the time, docs/benchmarks.md).
+            found no more places on the real logs, with about twice the nodes; docs/benchmarks.md).
         sigma: width of the Gaussian likelihood around each wall (`exp(-d^2 / (2 sigma^2))`).
         levels: levels of the max-pooled pyramid of branch and bound; the coarsest block is
             `2^(levels-1)` cells wide (6.4 m at the defaults).

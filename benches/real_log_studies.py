@@ -1,0 +1,113 @@
+"""Two studies on the real CARMEN logs, through the peer harness's own loading (the even-numbered
+scans draw the map_server plan, the odd-numbered ones are tracked from its synthetic odometry):
+
+    python benches/real_log_studies.py search       # global search settings: right places, nodes
+    python benches/real_log_studies.py visibility   # the Localizer with and without visibility
+
+`search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
+each log at the search settings compared in docs/benchmarks.md; a search is right when its best
+candidate lies within 0.5 m of the reference pose and is not ambiguous. `visibility` tracks each log
+with the `Localizer`'s defaults and with `IcpConfig.for_tracking(use_visibility=False)`.
+
+The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
+repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import os
+import sys
+import tempfile
+import time
+from typing import Any
+
+import numpy as np
+
+import planicp
+from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, relocalize
+
+SEARCH_SETTINGS = {
+    "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
+        resolution=0.1, sigma=0.1, levels=7, angular_step=None, max_scan_points=200),
+    "0.2 m, heading step from the scan, 100 points": RelocalizationConfig(angular_step=None),
+    "0.2 m, 2 degrees, 100 points (the defaults)": RelocalizationConfig(),
+}
+
+
+def load(harness: Any, name: str, out: str) -> tuple[Any, list[np.ndarray], np.ndarray, np.ndarray]:
+    """(plan image, tracked scans, their reference poses, their odometry poses), as the harness
+    makes them."""
+    path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
+    log = harness.read_carmen_log(path)
+    mapped, tracked = np.arange(0, len(log.scans), 2), np.arange(1, len(log.scans), 2)
+    ends = np.vstack([harness.transform(log.scans[i], log.poses[i]) for i in mapped])
+    plan = harness.render_endpoint_plan(ends, 0.05, 2)
+    harness.save_ros_map(plan, out, f"{name}-plan")
+    times, _ = harness.scan_times(log.times, 0.2)
+    scans = [log.scans[i] for i in tracked]
+    ref = log.poses[tracked]
+    _, odom = harness.synthesize_odometry(ref, times[tracked], np.random.default_rng(7))
+    return plan, scans, ref, odom
+
+
+def search_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | settings | right | nodes (median) | nodes (most) | out of nodes |")
+    print("|---|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, _ = load(harness, name, out)
+        pm = PlanMap.from_ros_map(plan.yaml_path)
+        picked = list(range(5, len(scans), max(1, len(scans) // 12)))[:12]
+        for label, config in SEARCH_SETTINGS.items():
+            relocalize(scans[picked[0]], pm, config=config)  # the likelihood pyramid, once
+            right, nodes, short = 0, [], 0
+            for k in picked:
+                found = relocalize(scans[k], pm, config=config)
+                nodes.append(found.nodes)
+                short += not found.complete
+                best = found.best
+                if best is not None and not found.ambiguous and math.dist(best.pose[:2], ref[k, :2]) < 0.5:
+                    right += 1
+            print(f"| {name} | {label} | {right} of {len(picked)} | {np.median(nodes) / 1e3:.0f}k | "
+                  f"{max(nodes) / 1e3:.0f}k | {short} |", flush=True)
+
+
+def visibility_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | visibility | ATE | lost (> 0.3 m) | ms per update |")
+    print("|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out)
+        pm = PlanMap.from_ros_map(plan.yaml_path)
+        for visible in (True, False):
+            loc = Localizer(pm, tuple(map(float, ref[0])), IcpConfig.for_tracking(use_visibility=visible))
+            loc.update(scans[0], tuple(map(float, odom[0])))
+            est, spent = [ref[0]], []
+            for k in range(1, len(scans)):
+                start = time.perf_counter()
+                est.append(np.array(loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k]))).pose))
+                spent.append(time.perf_counter() - start)
+            m = harness.error_metrics(np.array(est), ref, 0.3)
+            print(f"| {name} | {'on (default)' if visible else 'off'} | {100 * m['ate_rmse_m']:.1f} cm | "
+                  f"{100 * m['lost_frac']:.1f} % | {1e3 * np.mean(spent):.2f} |", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("study", choices=("search", "visibility"))
+    parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
+    parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
+    args = parser.parse_args()
+    spec = importlib.util.spec_from_file_location("real_logs", args.harness)
+    if spec is None or spec.loader is None or not os.path.exists(args.harness):
+        sys.exit(f"no harness at {args.harness}: give its path with --harness")
+    harness = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(harness)
+    print(f"planicp {planicp.__version__}")
+    with tempfile.TemporaryDirectory() as out:
+        (search_study if args.study == "search" else visibility_study)(harness, args.logs, out)
+
+
+if __name__ == "__main__":
+    main()
