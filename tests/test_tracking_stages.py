@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from planicp import AcceptanceGate, IcpConfig, Localizer, LostRule, MotionNoise, PlanMap, RecoveryConfig, se2
-from planicp import synthetic as syn
 from planicp.tracking import stages
 from planicp.tracking.decisions import (
     Bookkeeping,
@@ -26,31 +25,11 @@ from planicp.tracking.decisions import (
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
 from planicp.tracking.recovery import Recovery, SearchBudget
-from test_localizer import DEG, clear_path, error
+# The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
+from test_localizer import DEG, error, office, path, plan, scans  # noqa: F401
 
 Pose = tuple[float, float, float]
 SMALL = np.diag([0.02**2, 0.02**2, (1 * DEG) ** 2])
-
-
-@pytest.fixture(scope="module")
-def office() -> Any:
-    return syn.generate_floor(3, "office")
-
-
-@pytest.fixture(scope="module")
-def plan(office: Any) -> PlanMap:
-    return PlanMap.from_points(office.wall_points())
-
-
-@pytest.fixture(scope="module")
-def path(office: Any) -> list[Pose]:
-    return clear_path(office, np.random.default_rng(42), steps=40, step=0.1, clearance=0.6)
-
-
-@pytest.fixture(scope="module")
-def scans(office: Any, path: list[Pose]) -> list[np.ndarray]:
-    rng = np.random.default_rng(7)
-    return [syn.simulate_scan(office, p, rng)[0] for p in path]
 
 
 def rules(plan: PlanMap, **changes: Any) -> stages.Rules:

@@ -203,15 +203,12 @@ class Recovery:
         if self._trial:
             self.clear()
         followed = bool(self.hypotheses)
-        self.hypotheses = [h for h in (self._follow(h, scan, motion) for h in self.hypotheses) if h is not None]
+        self._follow_all(scan, motion)
         # When the last hypotheses are dropped, the next scan searches again.
         if self.searching or not followed:
             self._search(scan, motion, last_pose)
-        if self.hypotheses:
-            best = max(h.mean_inlier_ratio for h in self.hypotheses)
-            self.hypotheses = [h for h in self.hypotheses if h.mean_inlier_ratio >= best - self.config.margin]
-        if len(self.hypotheses) == 1 and self.hypotheses[0].streak >= self.config.confirmations:
-            found = self.hypotheses[0]
+        found = self._confirmed()
+        if found is not None:
             if not self.searching:
                 self.clear()
                 return found
@@ -233,21 +230,32 @@ class Recovery:
         like the one adopted); when the search has ended and no rival is left, the trial is over
         and None is returned, as while it goes on."""
         self._incumbent.append(localize(scan, self.plan, pose, self.icp).inlier_ratio)
-        self.hypotheses = [h for h in (self._follow(h, scan, motion) for h in self.hypotheses) if h is not None]
+        self._follow_all(scan, motion)
         if self.searching:
             self._search(scan, motion, pose, near=False)
         self.hypotheses = [h for h in self.hypotheses if not _same(h.pose, pose)]
-        if self.hypotheses:
-            best = max(h.mean_inlier_ratio for h in self.hypotheses)
-            self.hypotheses = [h for h in self.hypotheses if h.mean_inlier_ratio >= best - self.config.margin]
-        if len(self.hypotheses) == 1 and self.hypotheses[0].streak >= self.config.confirmations:
-            rival = self.hypotheses[0]
+        rival = self._confirmed()
+        if rival is not None:
             same_scans = list(self._incumbent)[-rival.streak:]
             if rival.mean_inlier_ratio >= sum(same_scans) / len(same_scans) + self.config.margin:
                 self.clear()
                 return rival
         if not self.searching and not self.hypotheses:
             self.clear()
+        return None
+
+    def _follow_all(self, scan: NDArray[np.float64], motion: Pose) -> None:
+        """Every hypothesis followed to `scan` (`_follow`); those it drops are gone."""
+        self.hypotheses = [h for h in (self._follow(h, scan, motion) for h in self.hypotheses) if h is not None]
+
+    def _confirmed(self) -> Hypothesis | None:
+        """Drops the hypotheses whose mean inlier ratio is more than `margin` below the best's;
+        returns the one left when it is alone and has explained `confirmations` scans in a row."""
+        if self.hypotheses:
+            best = max(h.mean_inlier_ratio for h in self.hypotheses)
+            self.hypotheses = [h for h in self.hypotheses if h.mean_inlier_ratio >= best - self.config.margin]
+        if len(self.hypotheses) == 1 and self.hypotheses[0].streak >= self.config.confirmations:
+            return self.hypotheses[0]
         return None
 
     @property
