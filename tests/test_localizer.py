@@ -11,7 +11,7 @@ import pytest
 
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
 from planicp.tracking.fusion_rule import finite_covariance
-from planicp.tracking.recovery import RecoveryConfig
+from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
 from planicp import synthetic as syn
 
 DEG = math.pi / 180.0
@@ -433,3 +433,33 @@ def test_returns_through_walls_are_judged_against_what_sound_tracking_showed(
     assert not recovery._contradicted(through(0.3), path[20])
     assert recovery._contradicted(through(0.6), path[20])
     recovery.beyond_shares.clear()
+
+
+def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked(plan: PlanMap) -> None:
+    """`Recovery.beyond_seen` is the upper bound of a prediction interval for the next sound scan's
+    share, not mean + 3 deviations: six shares say little about the spread (on fhw, whose odometry
+    broke on its seventh scan, mean + 3 deviations refused the true place)."""
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    shares = [0.10, 0.14, 0.18, 0.12, 0.16, 0.20]
+    recovery.observe_beyond(shares[0])
+    assert recovery.beyond_seen == 0.0 and recovery.beyond_limit == recovery.config.max_beyond
+    for share in shares[1:]:
+        recovery.observe_beyond(share)
+    s = float(np.std(shares, ddof=1))
+    # Student's t at 5 degrees of freedom, one-sided 1 in 741 (the normal's 3 sigma): 5.49.
+    assert recovery.beyond_seen == pytest.approx(0.15 + 5.493 * s * math.sqrt(1 + 1 / 6), abs=1e-3)
+    assert recovery.beyond_seen > 0.15 + 3 * float(np.std(shares)) + 0.1
+    for share in shares * 8 + shares[:2]:  # 50 scans of the same spread
+        recovery.observe_beyond(share)
+    many = np.array(recovery.beyond_shares)
+    assert len(many) == 50
+    assert recovery.beyond_seen == pytest.approx(many.mean() + 3.161 * many.std(ddof=1) * math.sqrt(1.02), abs=1e-3)
+
+
+def test_student_t_quantiles() -> None:
+    """Exact for 1 and 2 degrees of freedom, the Cornish-Fisher expansion beyond (table values)."""
+    assert student_t_quantile(0.975, 1) == pytest.approx(12.706, abs=1e-3)
+    assert student_t_quantile(0.995, 2) == pytest.approx(9.925, abs=1e-3)
+    assert student_t_quantile(0.975, 5) == pytest.approx(2.571, abs=2e-3)
+    assert student_t_quantile(0.995, 10) == pytest.approx(3.169, abs=2e-3)
+    assert student_t_quantile(0.975, 1000) == pytest.approx(1.962, abs=2e-3)

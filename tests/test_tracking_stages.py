@@ -221,3 +221,43 @@ def test_the_decisions_say_why_a_jump_was_taken_a_scan_later(
     assert isinstance(search, SearchDecision) and search.cause is None and search.searched
     assert search.result is pending.confirmed is est.result
     assert isinstance(correction, Correction) and correction.kind == "fit" and est.relocalized
+
+
+def test_a_scan_that_says_nothing_keeps_the_jump_pending_for_the_next(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """After the 15-degree odometry fault above, a scan too small to align neither confirms nor
+    refutes the place the fault's scan fitted: it stays pending, followed with the odometry, and
+    the next full scan confirms it."""
+    loc = Localizer(plan, path[0])
+    loc.update(scans[0], (0.0, 0.0, 0.0))
+    claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG))
+    assert loc.update(scans[1], claimed).decisions[3].pending is not None
+    odom2 = se2.compose(claimed, se2.between(path[1], path[2]))
+    est = loc.update(scans[2][:2], odom2)  # two returns: nothing to align
+    pending = est.decisions[2]
+    assert isinstance(pending, PendingDecision) and pending.confirmed is None and pending.kept is not None
+    assert pending.kept[1] == odom2 and error(path[2], pending.kept[0])[0] < 0.05
+    assert pending.why == "this scan says nothing of the pending place: still pending"
+    assert not est.accepted and error(path[2], est.pose)[1] > 10 * DEG  # the faulted prediction meanwhile
+    est = loc.update(scans[3], se2.compose(odom2, se2.between(path[2], path[3])))
+    assert est.decisions[2].confirmed is not None and est.relocalized
+    assert error(path[3], est.pose)[0] < 0.05
+
+
+def test_a_scan_the_pending_place_does_not_explain_better_forgets_it(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A place pending after a jump that the next scan refutes (the fit from the prediction is
+    sound and the place explains the scan no better) is forgotten, not kept."""
+    loc = Localizer(plan, path[0])
+    loc.update(scans[0], (0.0, 0.0, 0.0))
+    truth1 = se2.between(path[0], path[1])
+    pending = (se2.compose(path[1], (0.0, 0.0, 15 * DEG)), truth1)  # a corrupted scan's place
+    odom2 = se2.compose(truth1, se2.between(path[1], path[2]))
+    prediction = stages.predict(path[1], SMALL, truth1, odom2, MotionNoise())
+    fit = stages.fit_from_prediction(scans[2], prediction, loc._rules(), False)
+    assert fit.passed
+    decision = stages.confirm_pending(scans[2], prediction, pending, fit, loc._rules())
+    assert decision.place is not None and decision.confirmed is None and decision.kept is None
+    assert decision.why == "this scan does not confirm the pending place: forgotten"

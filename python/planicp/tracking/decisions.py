@@ -134,14 +134,20 @@ class PendingDecision:
         confirmed: the fit at `place` when this scan confirms it (a sound fit there that explains
             the scan better than the prediction's fit by the recovery's `margin`, or the
             prediction's was rejected); the update goes on with it. None otherwise.
+        kept: the place, with this scan's odometry pose, still pending for the next scan, when
+            this scan says nothing either way: neither the place nor the prediction explains it
+            (both fits rejected) or it could not be aligned. None otherwise.
     """
 
     place: Pose | None
     confirmed: IcpResult | None
+    kept: tuple[Pose, Pose] | None = None
 
     @property
     def why(self) -> str:
         """One sentence on this decision."""
+        if self.kept is not None:
+            return "this scan says nothing of the pending place: still pending"
         if self.place is None:
             return "no place pending"
         if self.confirmed is None:

@@ -298,7 +298,7 @@ class Localizer:
             pending, self._pending = self._pending, None
             confirmation = confirm_pending(points, prediction, pending, fit, rules)
             search = search_near_prediction(points, prediction, fit, confirmation, rules, was_lost, budget)
-            self._pending = search.pending
+            self._pending = search.pending if search.pending is not None else confirmation.kept
             # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
             correction = correct(prediction, search, score, rules)
@@ -306,6 +306,8 @@ class Localizer:
             lost = judge_lost(self._detector, score, correction, search, was_lost, rules)
             recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
             adopted = recovery.adopted
+            if lost.lost:
+                self._pending = None  # the recovery looks for the robot now
             if adopted is None:
                 pose, covariance, result, reason = correction.pose, correction.covariance, search.result, score.reason
                 accepted, now_lost = correction.accepted, lost.lost
