@@ -4,6 +4,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py search       # global search settings: right places, nodes
     python benches/real_log_studies.py visibility   # the Localizer with and without visibility
     python benches/real_log_studies.py seeds        # the Localizer over other draws of the odometry
+    python benches/real_log_studies.py nees         # how honest Estimate.covariance is on real logs
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -11,6 +12,10 @@ candidate lies within 0.5 m of the reference pose and is not ambiguous. `visibil
 with the `Localizer`'s defaults and with `IcpConfig.for_tracking(use_visibility=False)`. `seeds`
 tracks each log with the defaults from the harness's synthetic odometry drawn with other seeds
 (`--seeds`; the harness uses 7): one draw of the drift and the faults decides much on a hard log.
+`nees` tracks each log with the defaults and, over the accepted estimates that are not relocalized
+nor lost, gives the normalised estimation error squared e^T P^-1 e of `Estimate.covariance` (and of
+the fit's own `IcpResult.covariance`) against the reference pose: a consistent estimator's median is
+the chi-square's, 2.366 (the reference poses' own error counts as the estimator's here).
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -103,6 +108,33 @@ def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> No
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
 
 
+def nees_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | estimates | estimate NEES median | times the chi-square's | fit NEES median | times |")
+    print("|---|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out)
+        loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])))
+        loc.update(scans[0], tuple(map(float, odom[0])))
+        estimate_nees: list[float] = []
+        fit_nees: list[float] = []
+        for k in range(1, len(scans)):
+            e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
+            if not e.accepted or e.result is None or e.relocalized or e.lost:
+                continue
+            for pose, cov, into in ((e.pose, e.covariance, estimate_nees), (e.result.pose, e.result.covariance, fit_nees)):
+                d = np.array(pose) - ref[k]
+                d[2] = (d[2] + math.pi) % (2 * math.pi) - math.pi
+                if np.isfinite(cov).all():
+                    into.append(float(d @ np.linalg.solve(cov, d)))
+        a, b = np.median(estimate_nees), np.median(fit_nees)
+        print(f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} | {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
+              flush=True)
+
+
+CHI2_3_MEDIAN = 2.366
+"""The median of a chi-square with 3 degrees of freedom."""
+
+
 def visibility_study(harness: Any, logs: list[str], out: str) -> None:
     print("| log | visibility | ATE | lost (> 0.3 m) | ms per update |")
     print("|---|---|---|---|---|")
@@ -116,7 +148,7 @@ def visibility_study(harness: Any, logs: list[str], out: str) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", choices=("search", "visibility", "seeds"))
+    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees"))
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3, 4, 5, 6, 7],
@@ -131,6 +163,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds)
+        elif args.study == "nees":
+            nees_study(harness, args.logs, out)
         else:
             (search_study if args.study == "search" else visibility_study)(harness, args.logs, out)
 
