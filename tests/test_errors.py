@@ -721,3 +721,79 @@ def test_far_away_pose_returns_instead_of_hanging() -> None:
             crashed.append((case, proc.returncode, err[-500:]))
     assert not hung, f"still running after 5 s (endless loop in the visibility ray caster): {hung}"
     assert not crashed, crashed
+
+
+# --------------------------------------------------------------------------------------------------
+# Sizes from the input: refused or clipped, never an abort (each in its own process: an abort kills it)
+# --------------------------------------------------------------------------------------------------
+
+
+def run_isolated(code: str) -> subprocess.CompletedProcess[str]:
+    """`code` run by this interpreter in a fresh process, with its address space capped at 4 GiB
+    so that an allocation of tens of GB fails there as it would on a small robot computer."""
+    prelude = "import resource\nresource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))\n"
+    return subprocess.run([sys.executable, "-c", prelude + textwrap.dedent(code)], capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_a_search_region_larger_than_the_plan_is_clipped_to_it() -> None:
+    """A 10 km region around the shipped 30 x 20 m plan aborted the process (SIGABRT, "memory
+    allocation of 10737418240 bytes failed"); clipped to the plan, it is the whole plan's search."""
+    done = run_isolated("""
+        import math
+        import numpy as np
+        import planicp
+        from planicp import SearchRegion
+        from planicp.default_plan import load_default_plan
+        from planicp.sim.experiment import ExperimentConfig, run_experiment
+        plan = load_default_plan()
+        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=1.0, seed=2))
+        found = planicp.relocalize(recording.scans[0], plan, region=SearchRegion((15.0, 10.0, 0.0), 1e4, math.pi))
+        best = found.best
+        assert best is not None and math.dist(best.pose[:2], recording.truth[0][:2]) < 0.1, best
+        print("ok")
+    """)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", (done.returncode, done.stderr[-2000:])
+
+
+def test_a_recovery_with_a_huge_local_radius_does_not_abort() -> None:
+    """`RecoveryConfig(local_radius=1e4)` aborted the process after a 0.5 rad odometry step."""
+    done = run_isolated("""
+        import numpy as np
+        import planicp
+        from planicp import Localizer, RecoveryConfig
+        from planicp.default_plan import load_default_plan
+        from planicp.se2 import compose
+        from planicp.sim.experiment import ExperimentConfig, run_experiment
+        plan = load_default_plan()
+        rec, _ = run_experiment(plan, ExperimentConfig(duration_s=2.0, seed=3))
+        loc = Localizer(plan, tuple(rec.truth[0]), recovery=RecoveryConfig(local_radius=1e4))
+        for k in range(10):
+            odom = tuple(rec.odometry_in_odom[k])
+            if k >= 5:
+                odom = compose(odom, (0.0, 0.0, 0.5))
+            loc.update(rec.scans[k], odom)
+        print("ok")
+    """)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", (done.returncode, done.stderr[-2000:])
+
+
+def test_an_occupancy_grid_too_large_for_memory_is_an_error() -> None:
+    """A grid allowed 2^40 cells, grown to a point 3 km away (29 GB), aborted the process."""
+    done = run_isolated("""
+        import planicp
+        from planicp import EnhancedOccupancyGrid
+        from planicp.default_plan import load_default_plan
+        grid = EnhancedOccupancyGrid(load_default_plan(), max_cells=2**40, max_range=1e4)
+        try:
+            grid.integrate([[3000.0, 3000.0]], (5.0, 10.0, 0.0))
+        except planicp.PlanicpError as exc:
+            print("refused:", exc)
+    """)
+    assert done.returncode == 0 and "refused: could not allocate" in done.stdout, (done.returncode,
+                                                                                   done.stderr[-2000:])
+
+
+def test_poses_beyond_a_billion_metres_are_refused_at_the_door(plan: PlanMap, scan: np.ndarray) -> None:
+    with pytest.raises(ValueError, match=r"odom_pose has a coordinate of 3\.0+e\+09 m, beyond \+-1e\+09 m"):
+        Localizer(plan, (1.0, 1.0, 0.0)).update(scan, (3e9, 0.0, 0.0))

@@ -285,8 +285,11 @@ def test_rejects_bad_arguments(office: tuple[PlanMap, Simulator]) -> None:
         SearchRegion((1.0, 1.0, 0.0), yaw_tolerance=math.inf)
     with pytest.raises(ValueError, match="finite"):
         SearchRegion((math.nan, 1.0, 0.0))
-    with pytest.raises(PlanicpError, match="half_width"):
-        relocalize(scan, plan, region=SearchRegion((1.0, 1.0, 0.0), radius=1e12))
+    # A region larger than the plan is clipped to it: the whole plan's search, not an error.
+    huge = relocalize(scan, plan, region=SearchRegion((1.0, 1.0, 0.0), radius=1e12))
+    whole = relocalize(scan, plan)
+    assert huge.nodes == whole.nodes and huge.best is not None and whole.best is not None
+    assert huge.best.pose == whole.best.pose
     with pytest.raises(PlanicpError, match="resolution"):
         relocalize(scan, plan, config=RelocalizationConfig(resolution=1e-4))
 

@@ -79,6 +79,29 @@ pub enum IcpError {
         /// Resolution, metres per cell.
         resolution: f64,
     },
+    /// Memory for an input-sized buffer could not be had.
+    #[error(
+        "could not allocate {bytes} bytes for {what}; the machine has not that much memory free: \
+         give a smaller size (a coarser resolution, a smaller cell budget or region)"
+    )]
+    OutOfMemory {
+        /// What the memory was for.
+        what: &'static str,
+        /// How many bytes were asked for.
+        bytes: u128,
+    },
+}
+
+/// A vector of `n` copies of `value`, allocated fallibly: an error instead of an abort when the
+/// memory cannot be had (`n` comes from the input: a grid's or raster's size).
+pub fn try_filled<T: Clone>(n: usize, value: T, what: &'static str) -> Result<Vec<T>> {
+    let mut v: Vec<T> = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| IcpError::OutOfMemory {
+        what,
+        bytes: (n as u128) * (std::mem::size_of::<T>() as u128),
+    })?;
+    v.resize(n, value);
+    Ok(v)
 }
 
 /// Largest coordinate magnitude accepted, metres. At 1e9 m a double still resolves 0.1 micrometre;
@@ -102,4 +125,17 @@ pub fn check_finite(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
 /// Builds an [`IcpError::InvalidParameter`].
 pub fn invalid(name: &'static str, value: impl std::fmt::Display, requirement: &'static str) -> IcpError {
     IcpError::InvalidParameter { name, value: value.to_string(), requirement }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_allocation_the_machine_cannot_make_is_an_error() {
+        let err = try_filled(usize::MAX / 16, 0u64, "a test buffer").unwrap_err();
+        assert!(matches!(err, IcpError::OutOfMemory { what: "a test buffer", .. }), "{err}");
+        assert!(err.to_string().contains("could not allocate"), "{err}");
+        assert_eq!(try_filled(3, 7u8, "a small buffer").unwrap(), vec![7, 7, 7]);
+    }
 }

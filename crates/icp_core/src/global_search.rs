@@ -385,7 +385,19 @@ impl GlobalMatcher {
                 (center, half, full_circle(step))
             }
             Some(w) => {
-                let half = (w.half_width / res).ceil();
+                // Positions outside the plan's extent are never searched (the whole plan's search
+                // covers exactly that extent): the window is clipped to it, and a window wholly
+                // outside it is searched at the nearest position of the plan's edge.
+                let [lo, hi] = self.bounds;
+                let clip = |c: f64, axis: usize| {
+                    let (a, b) = ((c - w.half_width).max(lo[axis]), (c + w.half_width).min(hi[axis]));
+                    if a <= b {
+                        ((a + b) / 2.0, ((b - a) / 2.0 / res).ceil())
+                    } else {
+                        (c.clamp(lo[axis], hi[axis]), 0.0)
+                    }
+                };
+                let ((cx, hx), (cy, hy)) = (clip(w.center.x, 0), clip(w.center.y, 1));
                 let yaws = if w.half_angle >= PI {
                     full_circle(step)
                 } else {
@@ -397,7 +409,7 @@ impl GlobalMatcher {
                     let d = if m > 0 { w.half_angle / m as f64 } else { 0.0 };
                     Ok((-m..=m).map(|k| w.center.yaw + k as f64 * d).collect())
                 };
-                ([w.center.x, w.center.y], [half, half], yaws)
+                ([cx, cy], [hx, hy], yaws)
             }
         };
         let yaws = yaws?;
@@ -512,6 +524,14 @@ impl SearchRun {
         while self.next_root < roots {
             if self.nodes >= stop_at {
                 return false;
+            }
+            if self.nodes >= self.max_nodes {
+                // More roots than the search may score: it ends without expanding any (and never
+                // holds more than `max_nodes` of them).
+                self.complete = false;
+                self.finished = true;
+                self.roots = Vec::new();
+                return true;
             }
             let k = self.next_root;
             self.next_root += 1;
@@ -666,6 +686,36 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn a_window_larger_than_the_plan_searches_the_plan() {
+        // A 10 km window around a 12 x 8 m plan: clipped to the plan it scores the roots of the
+        // whole plan's search, not 10^9 of them (which aborted the process allocating 10 GB).
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let truth = Pose2::new(2.5, 2.0, 0.7);
+        let scan = scan_from(&map, truth, &mut rng, 0.01);
+        let huge = SearchWindow { center: Pose2::new(6.0, 4.0, 0.0), half_width: 1e4, half_angle: PI };
+        let clipped = matcher.search(&scan, Some(&huge)).unwrap();
+        let whole = matcher.search(&scan, None).unwrap();
+        assert_eq!(clipped.nodes, whole.nodes);
+        assert!(close(&clipped.candidates[0].pose, &truth, 0.3, 0.1), "{:?}", clipped.candidates[0]);
+        // Wholly outside the plan: searched at the plan's nearest edge, no error.
+        let away = SearchWindow { center: Pose2::new(500.0, 4.0, 0.0), half_width: 2.0, half_angle: 0.1 };
+        assert!(matcher.search(&scan, Some(&away)).is_ok());
+    }
+
+    #[test]
+    fn a_search_with_more_roots_than_max_nodes_ends_at_max_nodes() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let config = GlobalSearchConfig { max_nodes: 100, ..GlobalSearchConfig::default() };
+        let matcher = GlobalMatcher::new(&map, config).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
+        let out = matcher.search(&scan, None).unwrap();
+        assert!(!out.complete && out.nodes == 100, "{out:?}");
+    }
+
+    #[test]
     fn finds_the_pose_from_no_guess() {
         let map = PointMap::new(asymmetric_floor(), None).unwrap();
         let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
@@ -796,12 +846,14 @@ pub(crate) mod tests {
     #[test]
     fn the_node_budget_makes_the_search_incomplete() {
         let map = PointMap::new(asymmetric_floor(), None).unwrap();
-        let cfg = GlobalSearchConfig { max_nodes: 1, ..GlobalSearchConfig::default() };
+        // 19 headings of one coarsest cell each: room for the roots, not for expanding them.
+        let cfg = GlobalSearchConfig { max_nodes: 25, ..GlobalSearchConfig::default() };
         let matcher = GlobalMatcher::new(&map, cfg).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(15);
         let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
-        let out = matcher.search(&scan, None).unwrap();
-        assert!(!out.complete);
+        let window = SearchWindow { center: Pose2::new(2.5, 2.0, 0.7), half_width: 1.0, half_angle: 0.3 };
+        let out = matcher.search(&scan, Some(&window)).unwrap();
+        assert!(!out.complete && out.nodes <= 25 + 3, "{out:?}");
     }
 
     #[test]
@@ -822,7 +874,6 @@ pub(crate) mod tests {
             SearchWindow { center: Pose2::new(f64::NAN, 0.0, 0.0), half_width: 1.0, half_angle: 0.1 },
             SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: -1.0, half_angle: 0.1 },
             SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1.0, half_angle: f64::INFINITY },
-            SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1e12, half_angle: 0.1 },
         ] {
             assert!(
                 matches!(matcher.search(&good, Some(&w)), Err(IcpError::InvalidParameter { .. })),

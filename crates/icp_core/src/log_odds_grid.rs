@@ -18,7 +18,7 @@
 //! cell budget; a scan that would need more is refused and the grid is left as it was.
 
 use crate::cell_traversal::for_each_cell;
-use crate::error::{check_finite, invalid, IcpError, Result, MAX_COORDINATE};
+use crate::error::{check_finite, invalid, try_filled, IcpError, Result, MAX_COORDINATE};
 
 /// Finest resolution accepted, metres per cell.
 pub const MIN_RESOLUTION: f64 = 1e-4;
@@ -168,7 +168,7 @@ impl LogOddsGrid {
             first: [0, 0],
             rows,
             cols,
-            cells: vec![Cell::default(); cells],
+            cells: try_filled(cells, Cell::default(), "the occupancy grid's cells")?,
             scan: 0,
             scans: 0,
             model,
@@ -396,7 +396,7 @@ impl LogOddsGrid {
         }
         let cols = (new_last[0] - new_first[0] + 1) as usize;
         let rows = (new_last[1] - new_first[1] + 1) as usize;
-        let mut cells = vec![Cell::default(); rows * cols];
+        let mut cells = try_filled(rows * cols, Cell::default(), "the grown occupancy grid's cells")?;
         let (dc, dr) = ((self.first[0] - new_first[0]) as usize, (self.first[1] - new_first[1]) as usize);
         for r in 0..self.rows {
             let src = r * self.cols..(r + 1) * self.cols;
