@@ -14,8 +14,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
+from planicp import _core
 from planicp.default_plan import load_default_plan
 from planicp.plan_map import PlanMap
+from planicp.ros import odometry_buffer
 from planicp.ros import (
     NodeSettings,
     OdometryBuffer,
@@ -379,3 +381,51 @@ def test_scan_input_keeps_a_read_only_copy() -> None:
     ranges[0] = 7.0
     assert scan.ranges[0] == 1.0 and not scan.ranges.flags.writeable
     assert inverse((0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
+
+
+def test_odometry_far_beyond_any_building_is_refused_and_tracking_goes_on(plan: PlanMap, drive: Recording) -> None:
+    """One odometry message at x = 3e9 m was buffered: every scan interpolated near it failed in the
+    localizer for the buffer's span (1 of 53 scans processed) while the diagnostics said OK. It is
+    now refused as malformed, counted, and the next scans are tracked."""
+    core = make_core(plan, drive)
+    feed(core, drive, 0, 20)
+    stamp = float(drive.times[19]) + 0.001
+    with pytest.raises(ValueError, match="beyond"):
+        core.add_odometry(stamp, (3e9, 0.0, 0.0))
+    d = core.diagnostics()
+    assert d.malformed_odometry == 1 and "beyond" in d.last_problem
+    out = feed(core, drive, 20, 40)
+    assert len(out) == 20 and all(position_error(o.pose, drive.truth[k]) < 0.05 for k, o in out.items())
+
+
+def test_a_scan_the_localizer_refuses_is_counted_and_reported(plan: PlanMap, drive: Recording,
+                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """A well-formed scan the localizer still refuses (a `PlanicpError` from the core, which
+    changes nothing) raises, and is counted as a failed update with a WARN naming it; the
+    diagnostics said OK before, and the next scan is tracked."""
+    core = make_core(plan, drive)
+    feed(core, drive, 0, 10)
+    before = core.localizer.pose
+
+    def refuse(*_: object) -> None:
+        raise _core.PlanicpError("initial_pose has a coordinate of 3e9 m, beyond +-1e9 m")
+
+    with monkeypatch.context() as m:
+        m.setattr(core.localizer, "update", refuse)
+        with pytest.raises(ValueError, match="beyond"):
+            feed(core, drive, 10, 11)
+    d = core.diagnostics()
+    assert d.failed_updates == 1 and d.level == 1 and "refused by the localizer" in d.message, d
+    assert core.localizer.pose == before
+    out = feed(core, drive, 11, 14)
+    assert len(out) == 3 and core.diagnostics().level == 0
+
+
+def test_odometry_whose_stamps_do_not_advance_does_not_grow_the_buffer() -> None:
+    buffer = OdometryBuffer(span=5.0)
+    for i in range(30_000):
+        buffer.add(1.0, (i * 1e-4, 0.0, 0.0))
+    assert len(buffer) == 1 and buffer.latest_pose == (29_999 * 1e-4, 0.0, 0.0)  # the newest reading stands
+    for i in range(30_000):  # 6 kHz for 5 s: the oldest go beyond MAX_SAMPLES
+        buffer.add(2.0 + i / 6000.0, (0.0, 0.0, 0.0))
+    assert len(buffer) == odometry_buffer.MAX_SAMPLES

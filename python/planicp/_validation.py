@@ -57,7 +57,16 @@ def as_pose(value: Any, name: str) -> Pose:
     x, y, yaw = (float(v) for v in arr)
     if not all(math.isfinite(v) for v in (x, y, yaw)):
         raise ValueError(f"{name} must be finite, got {(x, y, yaw)}")
+    for v in (x, y):
+        if abs(v) > MAX_COORDINATE:
+            raise ValueError(f"{name} has a coordinate of {v:e} m, beyond +-{MAX_COORDINATE:.0e} m; planicp works in "
+                             f"metres: express poses in a local frame")
     return (x, y, yaw)
+
+
+MAX_COORDINATE = 1e9
+"""Largest |x| or |y| of a pose, metres: the native core's limit for points and poses (beyond it a
+pose is no place in a building, and float64 arithmetic loses the millimetres)."""
 
 
 def positive(value: Any, name: str, unit: str = "") -> float:

@@ -34,6 +34,9 @@ class NodeDiagnostics:
             which may still replace it (`planicp.Estimate.provisional`).
         last_reason: why the last rejected scan was rejected ("" if none was).
         last_problem: the last malformed message or internal error ("" if none).
+        failed_updates: scans the localizer refused although each message was well formed (the
+            pose they led to lay beyond what it works with, such as odometry that jumped by 1e9 m);
+            none changes the pose.
     """
 
     level: int
@@ -55,6 +58,7 @@ class NodeDiagnostics:
     provisional: bool
     last_reason: str
     last_problem: str
+    failed_updates: int = 0
 
     def values(self) -> dict[str, str]:
         """Every field but level and message as text (`DiagnosticStatus.values` key/value pairs)."""

@@ -80,9 +80,10 @@ class PlanicpNodeCore:
         self._recent: deque[tuple[bool, float]] = deque(maxlen=DIAGNOSTIC_WINDOW)
         self._counts = dict.fromkeys(("scans_received", "scans_processed", "accepted", "rejected", "malformed_scans",
                                       "malformed_odometry", "malformed_initial_poses", "scans_without_odometry",
-                                      "scans_without_laser_pose", "out_of_order"), 0)
+                                      "scans_without_laser_pose", "out_of_order", "failed_updates"), 0)
         self._last_reason = ""
         self._last_problem = ""
+        self._last_failed = False  # the localizer refused the last scan it was given
         self._lock = threading.RLock()
 
     @classmethod
@@ -230,6 +231,8 @@ class PlanicpNodeCore:
             elif provisional:
                 level, message = WARN, ("provisional: tracking a place found near where track was lost, "
                                         "while the search of the whole plan goes on")
+            elif self._last_failed:
+                level, message = WARN, f"the last scan was refused: {self._last_problem}"
             elif last is None:
                 level, message = WARN, "waiting for scans and odometry"
             elif share < MIN_ACCEPTED_SHARE:
@@ -243,7 +246,7 @@ class PlanicpNodeCore:
                 c["malformed_scans"], c["malformed_odometry"], c["malformed_initial_poses"],
                 c["scans_without_odometry"], c["scans_without_laser_pose"], c["out_of_order"],
                 last.inlier_ratio if last is not None else math.nan, share, mean_ratio, lost, provisional,
-                self._last_reason, self._last_problem)
+                self._last_reason, self._last_problem, c["failed_updates"])
 
     # --- internals -------------------------------------------------------------------------------
 
@@ -257,7 +260,14 @@ class PlanicpNodeCore:
             start, cov, odom_ref = self._reset
             self._reset = None
             self.localizer.reset(start if odom_ref is None else compose(start, between(odom_ref, odom)), cov)
-        estimate = self.localizer.update(points, odom)
+        try:
+            estimate = self.localizer.update(points, odom)
+        except (TypeError, ValueError) as exc:  # the localizer changed nothing
+            self._last_stamp = scan.stamp
+            self._last_failed = True
+            self._problem("failed_updates", f"scan at {scan.stamp:.3f} s refused by the localizer: {exc}")
+            raise
+        self._last_failed = False
         self._last_stamp = scan.stamp
         self._counts["scans_processed"] += 1
         self._counts["accepted" if estimate.accepted else "rejected"] += 1

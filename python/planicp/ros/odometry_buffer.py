@@ -12,9 +12,14 @@ from .._validation import Pose, as_pose, real_number
 from ..io.pose_interpolation import interpolate_poses
 
 
+MAX_SAMPLES = 20_000
+"""Most samples kept whatever their stamps (5 s of odometry at 4 kHz); the oldest go first."""
+
+
 class OdometryBuffer:
     """Time-stamped T_odom_base poses (REP-105: x, y metres, yaw radians in the odom frame) over the
-    last `span` seconds, so that a scan gets the odometry pose at its own stamp.
+    last `span` seconds (at most `MAX_SAMPLES` of them; a sample at the newest stamp replaces it),
+    so that a scan gets the odometry pose at its own stamp.
 
     Odometry usually runs faster than the laser (100 Hz against 10 Hz) and its messages arrive
     independently of the scans; `at` interpolates between the two samples around a time (linear in
@@ -69,9 +74,14 @@ class OdometryBuffer:
         p = as_pose(pose, "odometry pose")
         if self._times and t < self._times[-1]:
             raise ValueError(f"odometry stamp {t:.6f} s is older than the previous one ({self._times[-1]:.6f} s)")
+        if self._times and t == self._times[-1]:
+            # Two readings of one instant: the newer stands (a stream whose stamps do not advance
+            # must not grow the buffer).
+            self._poses[-1] = p
+            return
         self._times.append(t)
         self._poses.append(p)
-        while self._times and self._times[0] < t - self.span:
+        while self._times and (self._times[0] < t - self.span or len(self._times) > MAX_SAMPLES):
             self._times.popleft()
             self._poses.popleft()
 
