@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validation import Pose
+from .io.yaml_documents import brief, load_yaml
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")
@@ -77,8 +78,14 @@ def _yaml() -> Any:
 
 def _number(meta: dict[str, Any], key: str, path: Path) -> float:
     value = meta[key]
+    if isinstance(value, str):
+        # YAML 1.1 (PyYAML) reads 5e-2 as text; map_server reads it as the number it is.
+        try:
+            value = float(value.strip())
+        except ValueError:
+            pass
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"ROS map {path}: {key} must be a finite number, got {value!r}")
+        raise ValueError(f"ROS map {path}: {key} must be a finite number, got {brief(value)}")
     return float(value)
 
 
@@ -87,10 +94,12 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     path = Path(yaml_path)
     if not path.is_file():
         raise FileNotFoundError(f"ROS map YAML {path} does not exist")
+    _yaml()  # PyYAML is there, or a message says how to get it
     try:
-        meta = _yaml().safe_load(path.read_text())
-    except Exception as exc:  # yaml.YAMLError, UnicodeDecodeError
-        raise ValueError(f"ROS map {path} is not valid YAML: {exc}") from None
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise ValueError(f"ROS map {path} is not valid YAML: it is not UTF-8 text") from None
+    meta = load_yaml(text, f"ROS map {path}")
     if not isinstance(meta, dict):
         raise ValueError(f"ROS map {path} must be a YAML mapping, got {type(meta).__name__}")
     missing = [k for k in REQUIRED_KEYS if k not in meta]
@@ -101,31 +110,36 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         raise ValueError(f"ROS map {path}: resolution must be positive, got {resolution}")
     origin = meta["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:
-        raise ValueError(f"ROS map {path}: origin must be [x, y, yaw], got {origin!r}")
+        raise ValueError(f"ROS map {path}: origin must be [x, y, yaw], got {brief(origin)}")
     try:
+        if any(isinstance(v, (bool, list, dict)) for v in origin):
+            raise TypeError
         origin_pose = tuple(float(v) for v in origin)
     except (TypeError, ValueError):
-        raise ValueError(f"ROS map {path}: origin must be three numbers, got {origin!r}") from None
+        raise ValueError(f"ROS map {path}: origin must be three numbers, got {brief(origin)}") from None
     if not all(math.isfinite(v) for v in origin_pose):
-        raise ValueError(f"ROS map {path}: origin must be finite, got {origin!r}")
+        raise ValueError(f"ROS map {path}: origin must be finite, got {brief(origin)}")
     occ = _number(meta, "occupied_thresh", path)
     free = _number(meta, "free_thresh", path)
     if not 0.0 <= free <= occ <= 1.0:
         raise ValueError(f"ROS map {path}: need 0 <= free_thresh <= occupied_thresh <= 1, got {free}, {occ}")
-    mode = str(meta.get("mode", "trinary"))
-    if mode not in MODES:
-        raise ValueError(f"ROS map {path}: mode must be one of {MODES}, got {mode!r}")
+    mode = meta.get("mode", "trinary")
+    if not isinstance(mode, str) or mode not in MODES:
+        raise ValueError(f"ROS map {path}: mode must be one of {MODES}, got {brief(mode)}")
     negate = meta["negate"]
-    if negate not in (0, 1, True, False):
-        raise ValueError(f"ROS map {path}: negate must be 0 or 1, got {negate!r}")
-    image_path = (path.parent / str(meta["image"])).resolve()
+    if isinstance(negate, (list, dict)) or negate not in (0, 1, True, False):
+        raise ValueError(f"ROS map {path}: negate must be 0 or 1, got {brief(negate)}")
+    image = meta["image"]
+    if not isinstance(image, str) or not image:
+        raise ValueError(f"ROS map {path}: image must be the image file's name, got {brief(image)}")
+    image_path = (path.parent / image).resolve()
     if not image_path.is_file():
-        raise FileNotFoundError(f"ROS map {path} names image {meta['image']!r}, which does not exist ({image_path})")
+        raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist ({image_path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
     edge_detector = meta.get(EDGE_DETECTOR_KEY)
-    if edge_detector is not None and edge_detector not in EDGE_DETECTORS:
-        raise ValueError(f"ROS map {path}: {EDGE_DETECTOR_KEY} must be one of {EDGE_DETECTORS}, got {edge_detector!r} "
+    if edge_detector is not None and (not isinstance(edge_detector, str) or edge_detector not in EDGE_DETECTORS):
+        raise ValueError(f"ROS map {path}: {EDGE_DETECTOR_KEY} must be one of {EDGE_DETECTORS}, got {brief(edge_detector)} "
                          f"(or leave it out: occupied cells are then read as an occupancy grid's)")
     return RosMap(path, image_path, occupancy, resolution, origin_pose, mode, bool(negate), occ, free,  # type: ignore[arg-type]
                   edge_detector)

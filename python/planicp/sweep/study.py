@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import unknown_fields
+from ..io.yaml_documents import load_yaml
 from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
@@ -380,15 +381,15 @@ def load_study(path: str | Path) -> tuple[Study, Path]:
         FileNotFoundError: no such file.
         StudyError: not YAML, or not a study (the message names the file and the key).
     """
-    import yaml
-
     source = Path(path)
     if not source.is_file():
         raise FileNotFoundError(f"study file {source} does not exist")
     try:
-        data = yaml.safe_load(source.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        raise StudyError(f"study {source} is not valid YAML: {exc}") from None
+        data = load_yaml(source.read_text(encoding="utf-8"), f"study {source}")
+    except UnicodeDecodeError:
+        raise StudyError(f"study {source} is not valid YAML: it is not UTF-8 text") from None
+    except ValueError as exc:
+        raise StudyError(str(exc)) from None
     try:
         return Study.from_dict(data), source.resolve().parent
     except StudyError as exc:

@@ -1,0 +1,104 @@
+"""Files built to exhaust memory or to confuse a reader: each is refused with a short message
+naming the file, in bounded memory and time (issue: hostile input and faults)."""
+
+from __future__ import annotations
+
+import resource
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from planicp import PlanMap
+from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, brief, expanded_size, load_yaml
+from planicp.sweep import StudyError, load_study
+
+MAP_KEYS = "resolution: 0.05\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+
+
+def alias_bomb(levels: int = 9) -> str:
+    """YAML anchors l0..l{levels-1}, each a list of nine aliases of the one before: 9^levels
+    values once expanded, in a few hundred bytes."""
+    lines = ['l0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for i in range(1, levels):
+        lines.append(f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 9) + "]")
+    return "\n".join(lines) + "\n"
+
+
+def a_map_image(folder: Path) -> None:
+    cv2.imwrite(str(folder / "m.pgm"), np.pad(np.zeros((10, 10), np.uint8), 5, constant_values=254))
+
+
+@pytest.mark.parametrize("key", ["origin", "resolution", "negate", "mode", "image"])
+def test_a_ros_map_whose_aliases_expand_to_billions_is_refused_in_bounded_memory(tmp_path: Path, key: str) -> None:
+    """A 437-byte map_server YAML with nested aliases in one value reached 4.7 GB (51 s) when that
+    value was turned into text for an error message. Run in its own process under a 1 GiB address
+    space: it is refused at once."""
+    a_map_image(tmp_path)
+    values = {"image": "m.pgm", "resolution": "0.05", "origin": "[0, 0, 0]", "negate": "0", "mode": "trinary"}
+    values[key] = "*l8"
+    text = alias_bomb() + "".join(f"{k}: {v}\n" for k, v in values.items()) + "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    (tmp_path / "bomb.yaml").write_text(text)
+    assert len(text) < 1000
+    code = f"""
+        import resource
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        import planicp
+        try:
+            planicp.PlanMap.from_ros_map({str(tmp_path / "bomb.yaml")!r})
+        except ValueError as exc:
+            print("refused:", exc)
+    """
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "refused: ROS map" in done.stdout and "aliases" in done.stdout and len(done.stdout) < 400, done.stdout
+
+
+def test_a_study_whose_name_is_an_alias_bomb_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "study.yaml"
+    path.write_text(alias_bomb() + "name: *l8\n")
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(StudyError, match=r"study .*study\.yaml expands to more than 100000 values"):
+        load_study(path)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 100_000  # KiB: under 100 MB more
+
+
+def test_shared_values_are_counted_as_often_as_they_are_referred_to() -> None:
+    shared = [1, 2, 3]
+    assert expanded_size({"a": shared, "b": shared}) == 1 + 2 + 2 * 4
+    # l0: 1 + 9; l1: 1 + 9 * 10; l2: 1 + 9 * 91; l3: 1 + 9 * 820; the mapping and its 4 keys: 5.
+    assert expanded_size(load_yaml(alias_bomb(4), "small")) == 5 + 10 + 91 + 820 + 7381
+    import yaml
+
+    deep = yaml.safe_load(alias_bomb(7))  # 9^7 = 4.8 million values, counted without expanding them
+    assert expanded_size(deep) == MAX_EXPANDED_VALUES + 1
+    with pytest.raises(ValueError, match="deep expands to more than"):
+        load_yaml(alias_bomb(7), "deep")
+    cycle: list[object] = []
+    cycle.append(cycle)
+    assert expanded_size(cycle) == MAX_EXPANDED_VALUES + 1
+
+
+def test_values_in_messages_are_quoted_briefly() -> None:
+    assert len(brief(list(range(10**6)))) < 100
+    assert len(brief("x" * 10**6)) < 100
+    nested: list[object] = [0]
+    for _ in range(1000):
+        nested = [nested] * 3
+    assert len(brief(nested)) <= 200
+
+
+def test_a_resolution_written_as_5e_2_is_read_as_map_server_reads_it(tmp_path: Path) -> None:
+    """YAML 1.1 (PyYAML) reads 5e-2 as text; map_server reads it as 0.05. It was refused as
+    "must be a finite number"."""
+    a_map_image(tmp_path)
+    (tmp_path / "m.yaml").write_text("image: m.pgm\norigin: [0, 0, 0]\n" + MAP_KEYS.replace("0.05", "5e-2"))
+    plan = PlanMap.from_ros_map(tmp_path / "m.yaml")
+    assert plan.raster is not None and plan.raster.resolution == pytest.approx(0.05)
+    (tmp_path / "bad.yaml").write_text("image: m.pgm\norigin: [0, 0, 0]\n" + MAP_KEYS.replace("0.05", "fast"))
+    with pytest.raises(ValueError, match="resolution must be a finite number, got 'fast'"):
+        PlanMap.from_ros_map(tmp_path / "bad.yaml")
