@@ -102,3 +102,22 @@ def test_a_resolution_written_as_5e_2_is_read_as_map_server_reads_it(tmp_path: P
     (tmp_path / "bad.yaml").write_text("image: m.pgm\norigin: [0, 0, 0]\n" + MAP_KEYS.replace("0.05", "fast"))
     with pytest.raises(ValueError, match="resolution must be a finite number, got 'fast'"):
         PlanMap.from_ros_map(tmp_path / "bad.yaml")
+
+
+def test_a_start_covariance_of_a_million_kilometres_keeps_the_covariance_positive_definite() -> None:
+    """`initial_covariance=diag(1e12, 1e12, 10)`: the short Kalman form (I - K) P cancelled to an x/y
+    variance of exactly 0 and a negative eigenvalue on the first accepted estimate."""
+    from planicp import Localizer
+    from planicp.default_plan import load_default_plan
+    from planicp.sim.experiment import ExperimentConfig, run_experiment
+
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=1.0, seed=1))
+    localizer = Localizer(plan, tuple(recording.truth[0]), initial_covariance=np.diag([1e12, 1e12, 10.0]))
+    for k in range(3):
+        estimate = localizer.update(recording.scans[k], tuple(recording.odometry_in_odom[k]))
+        assert estimate.accepted
+        cov = estimate.covariance
+        assert np.array_equal(cov, cov.T) and np.linalg.eigvalsh(cov).min() > 0.0, cov
+        assert 1e-8 < cov[0, 0] < 1e-4 and 1e-8 < cov[1, 1] < 1e-4, cov  # a fit's millimetres, not 0
+        assert np.hypot(*(np.array(estimate.pose[:2]) - recording.truth[k][:2])) < 0.01
