@@ -121,3 +121,39 @@ def test_a_start_covariance_of_a_million_kilometres_keeps_the_covariance_positiv
         assert np.array_equal(cov, cov.T) and np.linalg.eigvalsh(cov).min() > 0.0, cov
         assert 1e-8 < cov[0, 0] < 1e-4 and 1e-8 < cov[1, 1] < 1e-4, cov  # a fit's millimetres, not 0
         assert np.hypot(*(np.array(estimate.pose[:2]) - recording.truth[k][:2])) < 0.01
+
+
+def test_planicp_plan_never_writes_over_its_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`planicp plan maps/plan.yaml --out maps` overwrote the input YAML and PGM (a `mode: scale`
+    map came back trinary, its comments gone)."""
+    from planicp.cli import main as cli_main
+
+    maps = tmp_path / "maps"
+    maps.mkdir()
+    cv2.imwrite(str(maps / "plan.pgm"), np.pad(np.zeros((20, 20), np.uint8), 10, constant_values=254))
+    text = "# a scale map, commented\nimage: plan.pgm\nmode: scale\norigin: [0, 0, 0]\n" + MAP_KEYS
+    (maps / "plan.yaml").write_text(text)
+    pgm = (maps / "plan.pgm").read_bytes()
+    assert cli_main(["plan", str(maps / "plan.yaml"), "--out", str(maps)]) == 2
+    err = capsys.readouterr().err
+    assert "plan.yaml is an input of this command" in err and "give another --out" in err, err
+    assert (maps / "plan.yaml").read_text() == text and (maps / "plan.pgm").read_bytes() == pgm
+    # The image alone as the input, written beside itself: refused too.
+    assert cli_main(["plan", str(maps / "plan.pgm"), "--resolution", "0.05", "--out", str(maps)]) == 2
+    assert (maps / "plan.pgm").read_bytes() == pgm
+    assert cli_main(["plan", str(maps / "plan.yaml"), "--out", str(tmp_path / "elsewhere")]) == 0
+
+
+def test_planicp_plan_replaces_a_symlink_in_its_output_folder_instead_of_following_it(tmp_path: Path) -> None:
+    from planicp.cli import main as cli_main
+
+    a_map_image(tmp_path)
+    (tmp_path / "m.yaml").write_text("image: m.pgm\norigin: [0, 0, 0]\n" + MAP_KEYS)
+    outside = tmp_path / "outside.csv"
+    outside.write_text("keep me\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "wall_points.csv").symlink_to(outside)
+    assert cli_main(["plan", str(tmp_path / "m.yaml"), "--out", str(out)]) == 0
+    assert outside.read_text() == "keep me\n"
+    assert not (out / "wall_points.csv").is_symlink() and (out / "wall_points.csv").read_text().startswith("x_m,y_m")

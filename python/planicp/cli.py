@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
-from collections.abc import Sequence
+import tempfile
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,17 +39,57 @@ def _plan(args: argparse.Namespace) -> int:
                      spacing=args.spacing, layers=args.layer, threshold=args.threshold, open_px=args.open_px,
                      close_px=args.close_px)
     out: Path = args.out
+    points_path, overlay_path = out / "wall_points.csv", out / "overlay.png"
+    _refuse_to_overwrite(_input_files(source), [points_path, overlay_path, out / "plan.yaml", out / "plan.pgm"])
     out.mkdir(parents=True, exist_ok=True)
-    points_path = out / "wall_points.csv"
-    np.savetxt(points_path, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
-    overlay_path = out / "overlay.png"
-    plot_plan_overlay(plan, title=source.name).savefig(overlay_path)
+    with _replacing(points_path) as partial:
+        np.savetxt(partial, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
+    with _replacing(overlay_path) as partial:
+        plot_plan_overlay(plan, title=source.name).savefig(partial, format="png")
     yaml_path = plan.to_ros_map(out / "plan.yaml")
     xmin, ymin, xmax, ymax = plan.extent
     print(f"{source}: {len(plan)} wall points, extent x {xmin:.2f}..{xmax:.2f} m, y {ymin:.2f}..{ymax:.2f} m "
           f"({xmax - xmin:.2f} x {ymax - ymin:.2f} m){' (from cache)' if plan.from_cache else ''}")
     print(f"wrote {points_path}, {overlay_path}, {yaml_path} (+ {yaml_path.with_suffix('.pgm').name})")
     return 0
+
+
+def _input_files(source: Path) -> list[Path]:
+    """The files a plan is read from: `source`, and for a map_server YAML the image it names."""
+    files = [source]
+    if source.suffix.lower() in (".yaml", ".yml") and source.is_file():
+        from .io.yaml_documents import load_yaml
+
+        try:
+            meta = load_yaml(source.read_text(), str(source))
+        except (ValueError, UnicodeDecodeError):
+            return files
+        if isinstance(meta, dict) and isinstance(meta.get("image"), str):
+            files.append(source.parent / meta["image"])
+    return files
+
+
+def _refuse_to_overwrite(inputs: list[Path], outputs: list[Path]) -> None:
+    """Raises ValueError when an output would be written over an input (after symlinks)."""
+    sources = {p.resolve() for p in inputs if p.exists()}
+    for output in outputs:
+        if output.resolve() in sources:
+            raise ValueError(f"{output} is an input of this command ({output.resolve()}); it would be written "
+                             f"over: give another --out folder")
+
+
+@contextlib.contextmanager
+def _replacing(path: Path) -> Iterator[Path]:
+    """A temporary file beside `path` to write, then renamed over `path` (a symlink there is
+    replaced, not followed; a failure leaves `path` as it was)."""
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    os.close(fd)
+    partial = Path(name)
+    try:
+        yield partial
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def _read_log(args: argparse.Namespace) -> Any:
