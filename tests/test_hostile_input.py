@@ -157,3 +157,62 @@ def test_planicp_plan_replaces_a_symlink_in_its_output_folder_instead_of_followi
     assert cli_main(["plan", str(tmp_path / "m.yaml"), "--out", str(out)]) == 0
     assert outside.read_text() == "keep me\n"
     assert not (out / "wall_points.csv").is_symlink() and (out / "wall_points.csv").read_text().startswith("x_m,y_m")
+
+
+def _plan_image(tmp_path: Path) -> Path:
+    from planicp import synthetic
+
+    path = tmp_path / "plan.png"
+    cv2.imwrite(str(path), synthetic.generate_floor(3, "office", width=20.0, height=12.0, rooms=4).to_image())
+    return path
+
+
+@pytest.mark.parametrize("tamper", ["shifted points", "a wrong shape", "a missing array", "NaN points"])
+def test_a_cache_entry_that_loads_but_was_changed_is_rebuilt(tmp_path: Path, tamper: str) -> None:
+    """The cache trusted any .npz that loaded: shifted points were used silently, a wrong shape gave
+    a garbage raster, a missing array raised KeyError, NaN points left the plan unloadable until
+    the entry was deleted by hand."""
+    path, cache = _plan_image(tmp_path), tmp_path / "cache"
+    first = PlanMap.from_image(path, 0.05, cache=cache)
+    (entry,) = cache.glob("*.npz")
+    with np.load(entry) as data:
+        arrays = {name: data[name] for name in data.files}
+    name = next(n for n in arrays if n != "_checksum" and arrays[n].ndim == 2 and arrays[n].shape[1] == 2)
+    if tamper == "shifted points":
+        arrays[name] = arrays[name] + 1.0
+    elif tamper == "a wrong shape":
+        arrays[name] = arrays[name].reshape(-1)[: 49].reshape(7, 7)
+    elif tamper == "a missing array":
+        del arrays[name]
+    else:
+        arrays[name] = np.full_like(arrays[name], np.nan)
+    with open(entry, "wb") as f:
+        np.savez(f, **arrays)
+    again = PlanMap.from_image(path, 0.05, cache=cache)
+    assert not again.from_cache
+    np.testing.assert_array_equal(again.points, first.points)
+    assert PlanMap.from_image(path, 0.05, cache=cache).from_cache  # the rebuilt entry is trusted
+
+
+def test_a_read_only_cache_folder_is_skipped_with_a_warning(tmp_path: Path) -> None:
+    """A robot with a read-only home could not load its plan ("[Errno 30] Read-only file system")."""
+    import os
+
+    path, cache = _plan_image(tmp_path), tmp_path / "cache"
+    cache.mkdir()
+    cache.chmod(0o500)
+    try:
+        if os.access(cache, os.W_OK):
+            pytest.skip("running as a user whom file modes do not stop (root)")
+        with pytest.warns(UserWarning, match=r"plan cache .*cache cannot be written .*prepared without it"):
+            plan = PlanMap.from_image(path, 0.05, cache=cache)
+        assert len(plan) > 0 and not plan.from_cache
+    finally:
+        cache.chmod(0o700)
+
+
+def test_a_cache_folder_that_cannot_be_made_is_skipped_with_a_warning(tmp_path: Path) -> None:
+    path = _plan_image(tmp_path)
+    with pytest.warns(UserWarning, match=r"plan cache .* cannot be written .*prepared without it"):
+        plan = PlanMap.from_image(path, 0.05, cache=path / "cache")  # a file where a folder should be
+    assert len(plan) > 0 and not plan.from_cache

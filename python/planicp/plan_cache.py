@@ -2,8 +2,11 @@
 
 An entry is one `.npz` file named by the SHA-256 of (planicp's version, the cache format, the kind
 of source, its parameters, its bytes). A changed file or parameter gives another key, so it is
-prepared again. A corrupt or unreadable entry is deleted and rebuilt, never trusted. Entries are
-written to a temporary file and renamed into place, so an interrupted write leaves nothing behind.
+prepared again. Each entry holds a checksum of its key and its arrays (names, types, shapes and
+bytes); an entry that does not load, or whose arrays do not match it (a truncated, edited or
+swapped file), is deleted and rebuilt, never trusted. Entries are written to a temporary file and
+renamed into place, so an interrupted write leaves nothing behind. A folder that cannot be written
+(read-only, full) is skipped with a warning: the plan is prepared without the cache.
 
 The folder is `$PLANICP_CACHE_DIR`, else `$XDG_CACHE_HOME/planicp`, else `~/.cache/planicp`.
 """
@@ -14,6 +17,7 @@ import hashlib
 import json
 import os
 import tempfile
+import warnings
 import zipfile
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -24,7 +28,7 @@ from numpy.typing import NDArray
 
 from . import _core
 
-FORMAT = 3
+FORMAT = 4
 """Bumped whenever what an entry holds, or how a plan is prepared, changes."""
 
 
@@ -58,20 +62,58 @@ def cached(folder: Path | None, key: str, build: Callable[[], Arrays]) -> tuple[
         return build(), False
     path = folder / f"{key}.npz"
     if path.exists():
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {name: data[name] for name in data.files}
+        arrays = _verified(path, key)
+        if arrays is not None:
             return arrays, True
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError):
-            path.unlink(missing_ok=True)  # corrupt: rebuild rather than trust it
+        try:
+            path.unlink(missing_ok=True)  # corrupt or tampered with: rebuilt rather than trusted
+        except OSError:
+            pass
     arrays = build()
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".npz.tmp")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".npz.tmp")
+    except OSError as exc:
+        warnings.warn(f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared "
+                      f"without it (set PLANICP_CACHE_DIR to a writable folder, or pass cache=False)", stacklevel=3)
+        return arrays, False
     try:
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)  # type: ignore[arg-type]
+            np.savez(f, **arrays, **{CHECKSUM: np.frombuffer(_checksum(key, arrays), dtype=np.uint8)})  # type: ignore[arg-type]
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        warnings.warn(f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared "
+                      f"without it", stacklevel=3)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
     return arrays, False
+
+
+CHECKSUM = "_checksum"
+"""The array of an entry that holds the SHA-256 of its key and its other arrays."""
+
+
+def _checksum(key: str, arrays: Arrays) -> bytes:
+    """SHA-256 over `key` and every array's name, type, shape and bytes, in name order."""
+    h = hashlib.sha256(key.encode())
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"\n{name} {a.dtype.str} {a.shape}\n".encode())
+        h.update(a.tobytes())
+    return h.digest()
+
+
+def _verified(path: Path, key: str) -> Arrays | None:
+    """The arrays of the entry at `path` when it loads and its checksum matches them and `key`;
+    None otherwise."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {name: data[name] for name in data.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError):
+        return None
+    stored = arrays.pop(CHECKSUM, None)
+    if stored is None or stored.dtype != np.uint8 or stored.tobytes() != _checksum(key, arrays):
+        return None
+    return arrays
