@@ -216,3 +216,54 @@ def test_a_cache_folder_that_cannot_be_made_is_skipped_with_a_warning(tmp_path: 
     with pytest.warns(UserWarning, match=r"plan cache .* cannot be written .*prepared without it"):
         plan = PlanMap.from_image(path, 0.05, cache=path / "cache")  # a file where a folder should be
     assert len(plan) > 0 and not plan.from_cache
+
+
+@pytest.mark.parametrize("suffix", [".png", ".jpg", ".bmp", ".pgm", ".ppm", ".tif"])
+def test_image_dimensions_come_from_the_header(tmp_path: Path, suffix: str) -> None:
+    from planicp.image_files import image_dimensions
+
+    path = tmp_path / f"a{suffix}"
+    channels = (37, 53, 3) if suffix == ".ppm" else (37, 53)
+    assert cv2.imwrite(str(path), np.full(channels, 128, np.uint8))
+    assert image_dimensions(path) == (53, 37)
+
+
+def test_an_image_of_a_billion_pixels_is_refused_from_its_header(tmp_path: Path) -> None:
+    """A 0.95 MB PNG of 30000 x 30000 pixels peaked at 5.2 GB; 50000^2 gave a raw cv2.error. The
+    size is read from the header and refused before any pixel is decoded (here the header is all
+    there is: decoding would fail)."""
+    import struct
+    import zlib
+
+    ihdr = struct.pack(">IIBBBBB", 30000, 30000, 8, 0, 0, 0, 0)
+    chunk = b"IHDR" + ihdr
+    png = b"\x89PNG\r\n\x1a\n" + struct.pack(">I", len(ihdr)) + chunk + struct.pack(">I", zlib.crc32(chunk))
+    (tmp_path / "huge.png").write_bytes(png + b"\x00" * 100)
+    (tmp_path / "huge.pgm").write_bytes(b"P5\n# a comment\n50000 50000\n255\n" + b"\x00" * 100)
+    for name in ("huge.png", "huge.pgm"):
+        with pytest.raises(ValueError, match=r"is \d+ x \d+ pixels \(\d+ million\); plan images are read up to 200 mil"):
+            PlanMap.from_image(tmp_path / name, 0.05, cache=False)
+    (tmp_path / "m.yaml").write_text("image: huge.png\norigin: [0, 0, 0]\n" + MAP_KEYS)
+    with pytest.raises(ValueError, match=r"ROS map image .* is 30000 x 30000 pixels"):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
+def test_a_sparse_file_claiming_gigabytes_is_refused_before_it_is_read(tmp_path: Path) -> None:
+    path = tmp_path / "sparse.png"
+    with open(path, "wb") as f:
+        f.truncate(2 << 30)  # 2 GiB, no blocks on disk
+    with pytest.raises(ValueError, match=r"is 2048 MiB; plan images are read up to 1024 MiB"):
+        PlanMap.from_image(path, 0.05)
+
+
+def test_colour_images_convert_to_grey_as_the_mean_of_their_channels(tmp_path: Path) -> None:
+    from planicp.plan_raster import load_gray
+
+    rng = np.random.default_rng(1)
+    rgba = rng.integers(0, 256, (300, 200, 4), dtype=np.uint8)
+    expected = rgba[:, :, :3].astype(np.float64).mean(axis=2)
+    a = rgba[:, :, 3] / 255.0
+    expected = (expected * a + 255.0 * (1.0 - a)).astype(np.uint8)
+    np.testing.assert_array_equal(load_gray(rgba), expected)
+    rgb16 = rng.integers(0, 65536, (50, 40, 3), dtype=np.uint16)
+    np.testing.assert_array_equal(load_gray(rgb16), load_gray(rgb16[:, :, :3].astype(np.float64).mean(axis=2).astype(np.uint16)))

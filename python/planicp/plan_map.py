@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from . import _core
 from ._validation import as_pose, as_points, positive, whole_number
 from .plan_cache import cache_key, cached, default_cache_dir
+from .image_files import check_image_file
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import dxf_segments, house_expo_segments, sample_segments
@@ -133,6 +134,7 @@ class PlanMap:
             path = Path(source)
             if not path.is_file():
                 raise FileNotFoundError(f"plan image {path} does not exist")
+            check_image_file(path, "plan image")  # before its bytes are read for the cache key
             contents = [path.read_bytes()]
         else:
             arr = np.ascontiguousarray(source)

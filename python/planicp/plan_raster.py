@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .image_files import check_image_file
 from ._validation import Pose, as_points, as_pose, positive, whole_number
 
 
@@ -209,6 +210,23 @@ def _polygon(vertices: Any) -> NDArray[np.float64]:
     return verts
 
 
+def _colour_to_gray(image: NDArray[Any]) -> NDArray[Any]:
+    """The mean of the colour channels, transparent pixels white, in the image's own type; computed
+    a block of rows at a time, so a large colour image needs no float64 copy of itself."""
+    out = np.empty(image.shape[:2], dtype=image.dtype if image.dtype.kind in "ui" else np.float64)
+    top = np.iinfo(image.dtype).max if image.dtype.kind in "ui" else 1.0
+    rows = max(1, (1 << 22) // max(1, image.shape[1]))  # about 4 million pixels a block
+    for start in range(0, image.shape[0], rows):
+        block = image[start:start + rows]
+        gray = block[:, :, :3].astype(np.float64).mean(axis=2)
+        if image.shape[2] == 4:
+            alpha = block[:, :, 3]
+            a = alpha.astype(np.float64) / (np.iinfo(alpha.dtype).max if alpha.dtype.kind in "ui" else 1.0)
+            gray = gray * a + top * (1.0 - a)
+        out[start:start + rows] = gray  # truncated to the image's type, as astype does
+    return out
+
+
 def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:
     """An 8-bit grey image from a path (PNG, JPG, PGM, BMP, ...) or an array.
 
@@ -220,7 +238,11 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
         path = Path(source)
         if not path.is_file():
             raise FileNotFoundError(f"{what} {path} does not exist")
-        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        check_image_file(path, what)
+        try:
+            image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        except cv2.error as exc:
+            raise ValueError(f"{what} {path} could not be read as an image: {str(exc).strip()[-200:]}") from None
         if image is None:
             raise ValueError(f"{what} {path} could not be read as an image (unsupported or corrupt file)")
         name = str(path)
@@ -230,13 +252,7 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
         if image.dtype.kind not in "uifb":
             raise TypeError(f"{name} must hold numbers, got dtype {image.dtype}")
     if image.ndim == 3 and image.shape[2] in (3, 4):
-        alpha = image[:, :, 3] if image.shape[2] == 4 else None
-        gray = image[:, :, :3].astype(np.float64).mean(axis=2)
-        if alpha is not None:
-            a = alpha.astype(np.float64) / (np.iinfo(alpha.dtype).max if alpha.dtype.kind in "ui" else 1.0)
-            top = np.iinfo(image.dtype).max if image.dtype.kind in "ui" else 1.0
-            gray = gray * a + top * (1.0 - a)
-        image = gray.astype(image.dtype) if image.dtype.kind in "ui" else gray
+        image = _colour_to_gray(image)
     if image.ndim != 2:
         raise ValueError(f"{name} must be a 2-D grey image (or colour), got shape {image.shape}")
     if image.size == 0:
