@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from planicp import PlanMap
-from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, brief, expanded_size, load_yaml
+from planicp._validation import brief
+from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
 from planicp.sweep import StudyError, load_study
 
 MAP_KEYS = "resolution: 0.05\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
@@ -267,3 +268,28 @@ def test_colour_images_convert_to_grey_as_the_mean_of_their_channels(tmp_path: P
     np.testing.assert_array_equal(load_gray(rgba), expected)
     rgb16 = rng.integers(0, 65536, (50, 40, 3), dtype=np.uint16)
     np.testing.assert_array_equal(load_gray(rgb16), load_gray(rgb16[:, :, :3].astype(np.float64).mean(axis=2).astype(np.uint16)))
+
+
+def test_a_log_line_of_megabytes_is_cut_skipped_and_never_held_whole(tmp_path: Path,
+                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 1.5 MB .log.gz with one 1.6 GB line reached 4.75 GB, and the line's token was embedded in
+    the error. Here with the limit lowered to 1 kB: the long line is cut, skipped as malformed and
+    quoted by a short prefix; the lines around it are read."""
+    import gzip
+
+    from planicp.io import carmen, text_source
+
+    monkeypatch.setattr(text_source, "MAX_LINE_BYTES", 1000)
+    good = "FLASER 3 1.0 1.1 1.2 0.0 0.0 0.0 0.0 0.0 0.0 {t} host {t}\n"
+    text = good.format(t=1.0) + "FLASER 3 " + "9" * 200_000 + " 1.0\n" + good.format(t=2.0) + good.format(t=3.0)
+    path = tmp_path / "long.log.gz"
+    with gzip.open(path, "wt") as f:
+        f.write(text)
+    with pytest.warns(UserWarning) as caught:
+        log = carmen.read_carmen(path)
+    assert len(log) == 3 and sum(log.skipped.values()) == 1, log.skipped
+    message = " ".join(str(w.message) for w in caught)
+    assert "skipped 1 malformed line(s); first at line 2" in message and "9" * 100 not in message, message
+    lines = list(text_source.read_lines(path))
+    assert lines[1] == (2, "FLASER 3 " + "9" * 51 + " ... (a line of 200014 bytes, longer than 1000: cut)")
+    assert [n for n, _ in lines] == [1, 2, 3, 4]

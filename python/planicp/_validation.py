@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 from collections.abc import Iterable
 from typing import Any
 
@@ -100,3 +101,15 @@ def unknown_fields(cls: Any, keys: Iterable[Any]) -> tuple[list[str], list[str]]
     the sorted names of its init fields, for an error that names the typo and the choices."""
     known = {f.name for f in dataclasses.fields(cls) if f.init}
     return sorted(str(k) for k in keys if k not in known), sorted(known)
+
+
+_BRIEF = reprlib.Repr()
+_BRIEF.maxlevel, _BRIEF.maxlist, _BRIEF.maxdict, _BRIEF.maxtuple = 3, 6, 6, 6
+_BRIEF.maxstring, _BRIEF.maxother, _BRIEF.maxlong = 60, 60, 40
+
+
+def brief(value: Any) -> str:
+    """`repr(value)` cut to a few nested levels, elements and characters (at most 200 characters
+    whatever `value` is): how a message quotes input, which may be huge or nested without end."""
+    text = _BRIEF.repr(value)
+    return text if len(text) <= 200 else text[:197] + "..."

@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose
-from .io.yaml_documents import brief, load_yaml
+from ._validation import Pose, brief
+from .io.yaml_documents import load_yaml
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")

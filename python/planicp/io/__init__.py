@@ -24,6 +24,7 @@ from .log_times import DEFAULT_SCAN_PERIOD, TimeRepair, repair_times
 from .pose_interpolation import interpolate_poses
 from .scan_log import BadLine, ScanFrame, ScanLog
 from .trajectory_files import read_kitti, read_tum, write_kitti, write_tum
+from .._validation import brief
 
 CARMEN_SUFFIXES = (".log", ".clf", ".carmen")
 
@@ -64,7 +65,7 @@ def open_log(path: str | Path, **options: Any) -> ScanLog:
     if first in ("PARAM", "ODOM", "FLASER", "RLASER", "ROBOTLASER1", "SYNC", "TRUEPOS", "RAWLASER1"):
         return read_carmen(source, **options)
     raise ValueError(f"cannot tell the format of {source}: expected a CARMEN log (.log, .clf), a g2o file, "
-                     f"a ROS 1 .bag or a ROS 2 bag folder; its first record is {first!r}")
+                     f"a ROS 1 .bag or a ROS 2 bag folder; its first record is {brief(first)}")
 
 
 def _first_record(source: Path) -> str | None:

@@ -50,6 +50,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import brief
 from .._validation import Pose, as_pose
 from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
@@ -85,7 +86,7 @@ def _number(fields: list[str], index: int) -> float:
     try:
         return float(fields[index])
     except ValueError:
-        raise _BadLine(f"field {index + 1} ({fields[index]!r}) is not a number") from None
+        raise _BadLine(f"field {index + 1} ({brief(fields[index])}) is not a number") from None
 
 
 def _finite(fields: list[str], start: int, count: int, what: str) -> tuple[float, ...]:
@@ -98,7 +99,7 @@ def _finite(fields: list[str], start: int, count: int, what: str) -> tuple[float
 def _count(fields: list[str], index: int, what: str) -> int:
     value = _number(fields, index)
     if not (value.is_integer() and 0 <= value <= 1_000_000):
-        raise _BadLine(f"{what} must be a whole number >= 0, got {fields[index]!r}")
+        raise _BadLine(f"{what} must be a whole number >= 0, got {brief(fields[index])}")
     return int(value)
 
 
@@ -114,7 +115,7 @@ def _ranges(fields: list[str], start: int, n: int) -> NDArray[np.float64]:
         return np.array(fields[start:start + n], dtype=np.float64)
     except ValueError:
         bad = next(k for k in range(start, start + n) if not _is_float(fields[k]))
-        raise _BadLine(f"field {bad + 1} ({fields[bad]!r}) is not a number") from None
+        raise _BadLine(f"field {bad + 1} ({brief(fields[bad])}) is not a number") from None
 
 
 def _is_float(text: str) -> bool:

@@ -53,11 +53,29 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
         yield from _lines_of(path, path.open("rb"))
 
 
+MAX_LINE_BYTES = 1 << 20
+"""Longest line read whole (1 MiB; a CARMEN laser line of 1081 ranges is about 10 kB). A longer
+one is passed on as its first `CUT_LINE_PREFIX` bytes and a note, which no reader parses: it is
+skipped as malformed, and its bytes are never held at once."""
+
+CUT_LINE_PREFIX = 60
+
+
 def _lines_of(path: Path, stream: IO[bytes] | gzip.GzipFile) -> Iterator[tuple[int, str]]:
     number = 0
     with stream:
         try:
-            for number, raw in enumerate(stream, start=1):  # noqa: B007 - number is read after the loop
+            while raw := stream.readline(MAX_LINE_BYTES + 1):
+                number += 1
+                if len(raw) > MAX_LINE_BYTES and not raw.endswith(b"\n"):
+                    length = len(raw)
+                    while rest := stream.readline(MAX_LINE_BYTES):
+                        length += len(rest)
+                        if rest.endswith(b"\n"):
+                            break
+                    head = raw[:CUT_LINE_PREFIX].decode("utf-8", errors="replace")
+                    yield number, f"{head} ... (a line of {length} bytes, longer than {MAX_LINE_BYTES}: cut)"
+                    continue
                 yield number, raw.decode("utf-8", errors="replace").rstrip("\r\n")
         except (EOFError, zlib.error, gzip.BadGzipFile) as exc:
             raise TruncatedStream(path, number, str(exc) or type(exc).__name__) from None

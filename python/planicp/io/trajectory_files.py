@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._validation import brief
+
 TUM_HEADER = "# timestamp tx ty tz qx qy qz qw"
 
 
@@ -76,7 +78,7 @@ def read_tum(path: str | Path, *, planar_tolerance: float = 1e-6) -> tuple[NDArr
         try:
             t, x, y, z, qx, qy, qz, qw = (float(v) for v in fields)
         except ValueError:
-            raise ValueError(f"{source}, line {number}: a TUM line must hold numbers: {text!r}") from None
+            raise ValueError(f"{source}, line {number}: a TUM line must hold numbers: {brief(text)}") from None
         if max(abs(z), abs(qx), abs(qy)) > planar_tolerance:
             raise ValueError(f"{source}, line {number}: not a planar pose (z={z}, qx={qx}, qy={qy})")
         times.append(t)
@@ -113,6 +115,6 @@ def read_kitti(path: str | Path) -> NDArray[np.float64]:
         try:
             m = [float(v) for v in fields]
         except ValueError:
-            raise ValueError(f"{source}, line {number}: a KITTI line must hold numbers: {text!r}") from None
+            raise ValueError(f"{source}, line {number}: a KITTI line must hold numbers: {brief(text)}") from None
         rows.append((m[3], m[7], math.atan2(m[4], m[0])))
     return np.array(rows, dtype=np.float64).reshape(-1, 3)

@@ -4,13 +4,14 @@ A YAML file can be small and still expand to an enormous document: anchors and a
 (`&a [*b, *b, *b, ...]`) nest references, and a 437-byte map_server YAML grew to 4.7 GB when a
 value was turned into text for an error message. `load_yaml` refuses a document whose values,
 with every alias expanded, number more than `MAX_EXPANDED_VALUES` (counted without expanding
-anything), and `brief` quotes a value in a message at a bounded length.
+anything), and messages quote values with `planicp._validation.brief`, at a bounded length.
 """
 
 from __future__ import annotations
 
-import reprlib
 from typing import Any
+
+from .._validation import brief
 
 MAX_EXPANDED_VALUES = 100_000
 """Most values (scalars, lists and mappings, every alias expanded) a document may hold. A
@@ -18,18 +19,6 @@ map_server YAML holds about a dozen, a study a few hundred."""
 
 MAX_DOCUMENT_BYTES = 10_000_000
 """Largest YAML file read (10 MB)."""
-
-_BRIEF = reprlib.Repr()
-_BRIEF.maxlevel, _BRIEF.maxlist, _BRIEF.maxdict, _BRIEF.maxtuple = 3, 6, 6, 6
-_BRIEF.maxstring, _BRIEF.maxother, _BRIEF.maxlong = 60, 60, 40
-
-
-def brief(value: Any) -> str:
-    """`repr(value)` cut to a few nested levels, elements and characters (at most about 200
-    characters whatever `value` is)."""
-    text = _BRIEF.repr(value)
-    return text if len(text) <= 200 else text[:197] + "..."
-
 
 def load_yaml(text: str, source: str) -> Any:
     """The document in `text` (`source` names it in errors), parsed by PyYAML's safe loader.
