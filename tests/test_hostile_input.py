@@ -293,3 +293,28 @@ def test_a_log_line_of_megabytes_is_cut_skipped_and_never_held_whole(tmp_path: P
     lines = list(text_source.read_lines(path))
     assert lines[1] == (2, "FLASER 3 " + "9" * 51 + " ... (a line of 200014 bytes, longer than 1000: cut)")
     assert [n for n, _ in lines] == [1, 2, 3, 4]
+
+
+def test_a_scan_of_identical_points_is_refused_the_same_way_on_every_update() -> None:
+    """1000 identical points were accepted on a first update (moving the pose 1.8 cm), and later
+    raised from a search ("1 usable points") and flipped `lost`. Now such a scan is never aligned:
+    the prediction stands, on every update, and no stage raises."""
+    from planicp import Localizer
+    from planicp.default_plan import load_default_plan
+    from planicp.sim.experiment import ExperimentConfig, run_experiment
+
+    plan = load_default_plan()
+    rec, _ = run_experiment(plan, ExperimentConfig(duration_s=3.0, seed=1))
+    loc = Localizer(plan, tuple(rec.truth[0]))
+    same = np.tile(rec.scans[0][100], (1000, 1))  # a return on a wall, a thousand times
+    first = loc.update(same, tuple(rec.odometry_in_odom[0]))
+    assert not first.accepted and first.result is None and first.pose == first.predicted_pose
+    assert first.reason == "scan covers 1 cells of 0.2 m (need 10): too little of the scene to place the robot"
+    for k in range(1, 5):
+        assert loc.update(rec.scans[k], tuple(rec.odometry_in_odom[k])).accepted
+    for k in range(5, 12):  # long enough to be declared lost: the recovery coasts, nothing raises
+        estimate = loc.update(same, tuple(rec.odometry_in_odom[k]))
+        assert not estimate.accepted and estimate.result is None
+    assert estimate.lost
+    back = [loc.update(rec.scans[k], tuple(rec.odometry_in_odom[k])) for k in range(12, 30)]
+    assert not back[-1].lost and np.hypot(*(np.array(back[-1].pose[:2]) - rec.truth[29][:2])) < 0.05

@@ -7,6 +7,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "MIN_SCAN_POINTS",
+    "MIN_SEARCH_POINTS",
     "Alignment",
     "GlobalMatcher",
     "IcpSettings",
@@ -28,6 +29,8 @@ __all__ = [
 
 __version__: str
 MIN_SCAN_POINTS: int
+MIN_SEARCH_POINTS: int
+"""Fewest search cells (of `RelocalizationConfig.resolution`) a scan must occupy to be searched."""
 
 class PlanicpError(ValueError):
     """An input planicp cannot work with; the message names the problem."""

@@ -113,11 +113,19 @@ def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rul
                         ) -> FitDecision:
     """The scan aligned from the prediction (see `_aligned`; the occlusion rule applies while not
     `lost`) and judged by the gate; with the index, a fit that explains little of the scan is
-    tried again with the KD-tree. A scan with too few usable points is not aligned."""
+    tried again with the KD-tree. A scan with too few usable points, or whose points fall in fewer
+    search cells than a search needs (`_core.MIN_SEARCH_POINTS`), is not aligned: the same scans
+    are refused by every stage, never accepted on one update and refused by a search on another."""
     usable = -(-len(points) // rules.config.subsample)
     if usable < _core.MIN_SCAN_POINTS:
         return FitDecision(None, None, None, False, f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})",
                            usable=False)
+    resolution = rules.recovery.search.resolution
+    cells = occupied_cells(points, resolution)
+    if cells < _core.MIN_SEARCH_POINTS:
+        # A thousand returns at one spot are one: ICP would "align" them, and the searches refuse them.
+        return FitDecision(None, None, None, False, f"scan covers {cells} cells of {resolution:g} m (need "
+                           f"{_core.MIN_SEARCH_POINTS}): too little of the scene to place the robot", usable=False)
     predicted = prediction.pose
     result, kept, beyond, occluded, realigned = _aligned(points, prediction, rules, lost)
     reason = rules.gate.rejection(result, predicted)
@@ -132,6 +140,14 @@ def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rul
         if wide.num_inliers > result.num_inliers:
             result, reason, retried = wide, rules.gate.rejection(wide, predicted), True
     return FitDecision(result, kept, beyond, occluded, reason, usable=True, realigned=realigned, retried=retried)
+
+
+def occupied_cells(points: NDArray[np.float64], resolution: float) -> int:
+    """How many square cells of `resolution` metres the base-frame `points` fall in (the global
+    search keeps one point per such cell)."""
+    cells = np.floor(points / resolution).astype(np.int64)
+    keys = (cells[:, 0] << 32) ^ (cells[:, 1] & 0xFFFFFFFF)
+    return int(np.unique(keys).size)
 
 
 def _aligned(points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
