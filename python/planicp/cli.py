@@ -175,6 +175,10 @@ def _sweep(args: argparse.Namespace) -> int:
     except RuntimeError as exc:  # a worker process died
         print(f"planicp sweep: error: {exc}", file=sys.stderr)
         return 1
+    if result.failed:
+        print(f"planicp sweep: {result.failed} of {result.total} runs failed (their errors are recorded in "
+              f"{args.out}); run the same command with --retry-failed to run them again", file=sys.stderr)
+        return 1
     return 0 if result.executed + result.skipped == result.total else 1
 
 
