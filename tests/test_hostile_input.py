@@ -318,3 +318,17 @@ def test_a_scan_of_identical_points_is_refused_the_same_way_on_every_update() ->
     assert estimate.lost
     back = [loc.update(rec.scans[k], tuple(rec.odometry_in_odom[k])) for k in range(12, 30)]
     assert not back[-1].lost and np.hypot(*(np.array(back[-1].pose[:2]) - rec.truth[29][:2])) < 0.05
+
+
+def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anything_large_is_made() -> None:
+    """EnhancedOccupancyGrid(office, resolution=0.001) took 3 GB and 20 s before its error (the
+    walls' samples, 2500 per wall pixel), and 0.0005 raised MemoryError."""
+    from planicp import EnhancedOccupancyGrid
+    from planicp.default_plan import load_default_plan
+
+    plan = load_default_plan()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for resolution in (0.001, 0.0005):
+        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a coarser"):
+            EnhancedOccupancyGrid(plan, resolution=resolution)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB

@@ -193,6 +193,18 @@ class EnhancedOccupancyGrid:
         self.wall_tolerance_cells = whole_number(wall_tolerance_cells, "wall_tolerance_cells", 0, 1000)
         max_cells = whole_number(max_cells, "max_cells", 1, 2**62)
 
+        # The budget from the arithmetic first: the walls' samples at a fine resolution (k^2 per wall
+        # pixel) would take gigabytes before the grid could refuse its size.
+        xmin, ymin, xmax, ymax = plan.extent
+        span = np.array([xmax - xmin, ymax - ymin])
+        if plan.raster is not None:
+            corners = _raster_corners(plan)
+            span = np.maximum(span, corners.max(axis=0) - corners.min(axis=0))
+        upper = float(np.prod(np.ceil((span + 2.0 * margin) / self.resolution) + 2.0))
+        if upper > max_cells:
+            raise _core.PlanicpError(f"the occupancy grid over the plan at {self.resolution:g} m would need about "
+                             f"{upper:.3g} cells (max_cells {max_cells}); give a coarser resolution, a smaller "
+                             f"margin or a larger max_cells")
         self._wall_samples = _wall_samples(plan, self.resolution)
         raster = plan.raster
         anchor = (raster.origin[0], raster.origin[1]) if raster is not None and raster.origin[2] == 0.0 else (0.0, 0.0)
