@@ -332,3 +332,27 @@ def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anythi
         with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a coarser"):
             EnhancedOccupancyGrid(plan, resolution=resolution)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB
+
+
+def test_dxf_arcs_of_cad_float_noise_and_of_absurd_radius_give_a_plan_or_one_clear_error(tmp_path: Path) -> None:
+    """A bulge of 1e-15 (ordinary CAD float noise) and a CIRCLE of radius 1e17 gave
+    ZeroDivisionError from the CLI; a CIRCLE of radius 1e14 took 4.9 GB."""
+    ezdxf = pytest.importorskip("ezdxf")
+    from planicp.vector_plan import dxf_segments
+
+    doc = ezdxf.new()
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0.0, 0.0, 0.0, 0.0, 1e-15), (5.0, 0.0), (5.0, 4.0), (0.0, 4.0)], close=True)
+    doc.saveas(tmp_path / "noise.dxf")
+    segments = dxf_segments(tmp_path / "noise.dxf")
+    assert len(segments) == 4  # the nearly straight bulge is its chord
+    for radius in (1e14, 1e17):
+        doc = ezdxf.new()
+        doc.modelspace().add_line((0.0, 0.0), (5.0, 0.0))
+        doc.modelspace().add_circle((0.0, 0.0), radius)
+        doc.saveas(tmp_path / "huge.dxf")
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        with pytest.raises(ValueError, match=r"huge\.dxf': CIRCLE .* on layer 0: an arc of radius 1e\+1[47] drawing "
+                                             r"units would take \d+ points .* check the drawing's units"):
+            dxf_segments(tmp_path / "huge.dxf")
+        assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000

@@ -261,7 +261,10 @@ def dxf_segments(
     for entity in msp:
         if wanted is not None and str(entity.dxf.layer).casefold() not in wanted:
             continue
-        polyline = _entity_polyline(entity, tol_units)
+        try:
+            polyline = _entity_polyline(entity, tol_units)
+        except ValueError as exc:
+            raise ValueError(f"{name}: {entity.dxftype()} {entity.dxf.handle} on layer {entity.dxf.layer}: {exc}") from None
         if polyline is not None:
             pieces.append(np.stack([polyline[:-1], polyline[1:]], axis=1))
     if not pieces:
@@ -398,6 +401,10 @@ def _bulge_chain(xyb: list[tuple[float, float, float]], closed: bool, tol: float
     return np.concatenate(chain)
 
 
+MAX_ARC_POINTS = 1_000_000
+"""Most points one arc or circle of a drawing is flattened to (a 3 km circle at the default 5 mm)."""
+
+
 def _arc_points(
     center: NDArray[np.float64], start: NDArray[np.float64], sweep: float, tol: float
 ) -> NDArray[np.float64]:
@@ -409,8 +416,15 @@ def _arc_points(
     radius = float(np.hypot(*(start - center)))
     if radius == 0.0:
         return np.array([start, start], dtype=np.float64)
-    max_step = 2.0 * math.acos(max(-1.0, 1.0 - tol / radius))
+    if not math.isfinite(radius):
+        raise ValueError("an arc with no finite radius (its centre or start is not finite)")
+    # 1 - tol / r rounds to 1 for a nearly straight arc (a bulge of 1e-15, ordinary CAD noise): the
+    # small-angle form of the same step, r (1 - cos(step / 2)) ~ r step^2 / 8, keeps it positive.
+    max_step = max(2.0 * math.acos(max(-1.0, 1.0 - tol / radius)), 2.0 * math.sqrt(2.0 * tol / radius))
     n = max(1, math.ceil(abs(sweep) / max_step))
+    if n > MAX_ARC_POINTS:
+        raise ValueError(f"an arc of radius {radius:.3g} drawing units would take {n} points to follow within "
+                         f"{tol:.3g}; check the drawing's units (or the entity: a circle that large is no wall)")
     if abs(sweep) >= 2.0 * math.pi:
         n = max(n, 3)
     angles = math.atan2(start[1] - center[1], start[0] - center[0]) + sweep * np.arange(n + 1) / n
