@@ -356,3 +356,20 @@ def test_dxf_arcs_of_cad_float_noise_and_of_absurd_radius_give_a_plan_or_one_cle
                                              r"units would take \d+ points .* check the drawing's units"):
             dxf_segments(tmp_path / "huge.dxf")
         assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000
+
+
+def test_house_expo_files_that_nest_too_deep_hold_huge_numbers_or_ask_for_a_huge_raster(tmp_path: Path) -> None:
+    """A HouseExpo JSON nested 3000 deep gave RecursionError, a 400-digit number OverflowError, and
+    rasterising at 0.0005 m took 5.3 GB."""
+    house = {"verts": [[0, 0], [10, 0], [10, 8], [0, 8]], "bbox": {"min": [0, 0], "max": [10, 8]}}
+    (tmp_path / "deep.json").write_text("[" * 3000 + "]" * 3000)
+    with pytest.raises(ValueError, match="nests its values too deeply"):
+        PlanMap.from_house_expo(tmp_path / "deep.json")
+    big = {**house, "verts": [[0, 0], [10**400, 0], [10, 8]]}
+    with pytest.raises(ValueError, match="key 'verts' holds a number too large for a coordinate"):
+        PlanMap.from_house_expo(big)
+    with pytest.raises(ValueError, match=r"a raster of 2\.06e\+04 x 1\.66e\+04 pixels at 0\.0005 m is too large"):
+        PlanMap.from_house_expo(house, resolution=0.0005)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    fine = PlanMap.from_house_expo(house, resolution=0.002)  # 25 million pixels, a block of rows at a time
+    assert fine.raster is not None and resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 400_000

@@ -153,6 +153,10 @@ def house_expo_segments(
             data = json.loads(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise ValueError(f"{name} is not valid JSON: {exc}") from None
+        except RecursionError:
+            raise ValueError(f"{name} nests its values too deeply to be a HouseExpo plan") from None
+        except ValueError as exc:  # an integer of thousands of digits
+            raise ValueError(f"{name} is not a HouseExpo plan: {str(exc)[:120]}") from None
     else:
         raise TypeError(f"source must be a path (str or Path) or a parsed dict, got {type(source).__name__}")
     if not isinstance(data, Mapping):
@@ -309,7 +313,10 @@ def _json_points(value: Any, where: str) -> NDArray[np.float64]:
         for p in value
     ):
         raise ValueError(f"{where} must be a list of [x, y] number pairs")
-    arr = np.array(value, dtype=np.float64).reshape(-1, 2)
+    try:
+        arr = np.array(value, dtype=np.float64).reshape(-1, 2)
+    except OverflowError:
+        raise ValueError(f"{where} holds a number too large for a coordinate in metres") from None
     finite = np.isfinite(arr).all(axis=1)
     if not finite.all():
         row = int(np.flatnonzero(~finite)[0])
