@@ -373,3 +373,24 @@ def test_house_expo_files_that_nest_too_deep_hold_huge_numbers_or_ask_for_a_huge
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     fine = PlanMap.from_house_expo(house, resolution=0.002)  # 25 million pixels, a block of rows at a time
     assert fine.raster is not None and resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 400_000
+
+
+def test_a_folder_a_device_or_a_symlink_loop_as_the_image_is_named_as_what_it_is(tmp_path: Path) -> None:
+    """/dev/zero or a folder given as the image was reported as "does not exist", and an image
+    symlink loop raised RuntimeError."""
+    import os
+
+    with pytest.raises(ValueError, match=r"plan image .* is a folder: give the image file itself"):
+        PlanMap.from_image(tmp_path, 0.05)
+    if os.path.exists("/dev/zero"):
+        with pytest.raises(ValueError, match=r"plan image /dev/zero is not a regular file \(a device or a pipe\)"):
+            PlanMap.from_image("/dev/zero", 0.05)
+    loop = tmp_path / "loop.png"
+    loop.symlink_to(tmp_path / "loop.png")
+    with pytest.raises(ValueError, match=r"plan image .*loop\.png cannot be opened: Too many levels of symbolic links"):
+        PlanMap.from_image(loop, 0.05)
+    (tmp_path / "m.yaml").write_text("image: loop.png\norigin: [0, 0, 0]\n" + MAP_KEYS)
+    with pytest.raises(ValueError, match=r"ROS map image \(from .*m\.yaml\) .*loop\.png cannot be opened"):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        PlanMap.from_image(tmp_path / "missing.png", 0.05)

@@ -10,6 +10,7 @@ pixels itself.
 
 from __future__ import annotations
 
+import stat
 import struct
 from pathlib import Path
 
@@ -43,6 +44,22 @@ def image_dimensions(path: Path) -> tuple[int, int] | None:
             f.seek(0)
             return _tiff_dimensions(f.read(1 << 16))
     return None
+
+
+def require_regular_file(path: Path, what: str) -> None:
+    """Raises FileNotFoundError when nothing is at `path`, and ValueError when what is there is no
+    regular file (a folder, a device such as /dev/zero, a pipe) or cannot be reached (a symlink
+    loop); each names `what` and `path`."""
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{what} {path} does not exist") from None
+    except (OSError, RuntimeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ValueError(f"{what} {path} cannot be opened: {reason}") from None
+    if not stat.S_ISREG(mode):
+        kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file (a device or a pipe)"
+        raise ValueError(f"{what} {path} is {kind}: give the image file itself")
 
 
 def check_image_file(path: Path, what: str) -> None:

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from . import _core
 from ._validation import as_pose, as_points, positive, whole_number
 from .plan_cache import cache_key, cached, default_cache_dir
-from .image_files import check_image_file
+from .image_files import check_image_file, require_regular_file
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import dxf_segments, house_expo_segments, sample_segments
@@ -132,8 +132,7 @@ class PlanMap:
         pose = as_pose(origin, "origin")
         if isinstance(source, (str, Path)):
             path = Path(source)
-            if not path.is_file():
-                raise FileNotFoundError(f"plan image {path} does not exist")
+            require_regular_file(path, "plan image")
             check_image_file(path, "plan image")  # before its bytes are read for the cache key
             contents = [path.read_bytes()]
         else:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .image_files import MAX_IMAGE_PIXELS, check_image_file
+from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
 from ._validation import Pose, as_points, as_pose, positive, whole_number
 
 
@@ -242,8 +242,7 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
     cv2 = _cv2()
     if isinstance(source, (str, Path)):
         path = Path(source)
-        if not path.is_file():
-            raise FileNotFoundError(f"{what} {path} does not exist")
+        require_regular_file(path, what)
         check_image_file(path, what)
         try:
             image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validation import Pose, brief
+from .image_files import require_regular_file
 from .io.yaml_documents import load_yaml
 from .plan_raster import PlanRaster, load_gray
 
@@ -132,9 +133,14 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     image = meta["image"]
     if not isinstance(image, str) or not image:
         raise ValueError(f"ROS map {path}: image must be the image file's name, got {brief(image)}")
-    image_path = (path.parent / image).resolve()
-    if not image_path.is_file():
+    image_path = path.parent / image
+    try:
+        image_path = image_path.resolve()
+    except (OSError, RuntimeError):  # a symlink loop: require_regular_file says so
+        pass
+    if not image_path.exists() and not image_path.is_symlink():
         raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist ({image_path})")
+    require_regular_file(image_path, f"ROS map image (from {path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
     edge_detector = meta.get(EDGE_DETECTOR_KEY)
