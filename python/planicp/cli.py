@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import os
+import io
 import sys
-import tempfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from . import __version__, synthetic
+from .io.atomic_files import write_atomically
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -42,10 +41,11 @@ def _plan(args: argparse.Namespace) -> int:
     points_path, overlay_path = out / "wall_points.csv", out / "overlay.png"
     _refuse_to_overwrite(_input_files(source), [points_path, overlay_path, out / "plan.yaml", out / "plan.pgm"])
     out.mkdir(parents=True, exist_ok=True)
-    with _replacing(points_path) as partial:
-        np.savetxt(partial, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
-    with _replacing(overlay_path) as partial:
-        plot_plan_overlay(plan, title=source.name).savefig(partial, format="png")
+    points_csv, overlay_png = io.BytesIO(), io.BytesIO()
+    np.savetxt(points_csv, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
+    plot_plan_overlay(plan, title=source.name).savefig(overlay_png, format="png")
+    write_atomically(points_path, points_csv.getvalue())
+    write_atomically(overlay_path, overlay_png.getvalue())
     yaml_path = plan.to_ros_map(out / "plan.yaml")
     xmin, ymin, xmax, ymax = plan.extent
     print(f"{source}: {len(plan)} wall points, extent x {xmin:.2f}..{xmax:.2f} m, y {ymin:.2f}..{ymax:.2f} m "
@@ -76,20 +76,6 @@ def _refuse_to_overwrite(inputs: list[Path], outputs: list[Path]) -> None:
         if output.resolve() in sources:
             raise ValueError(f"{output} is an input of this command ({output.resolve()}); it would be written "
                              f"over: give another --out folder")
-
-
-@contextlib.contextmanager
-def _replacing(path: Path) -> Iterator[Path]:
-    """A temporary file beside `path` to write, then renamed over `path` (a symlink there is
-    replaced, not followed; a failure leaves `path` as it was)."""
-    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    partial = Path(name)
-    try:
-        yield partial
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
 
 
 def _read_log(args: argparse.Namespace) -> Any:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import stat
 import struct
 from pathlib import Path
+from typing import BinaryIO
 
 MAX_IMAGE_PIXELS = 200_000_000
 """Most pixels of a plan image: a 14,000 x 14,000 raster, 700 m square at 5 cm (about 200 MB grey)."""
@@ -91,8 +92,8 @@ def _netpbm_dimensions(data: bytes) -> tuple[int, int] | None:
         return None
 
 
-def _jpeg_dimensions(f: object) -> tuple[int, int] | None:
-    read = f.read  # type: ignore[attr-defined]
+def _jpeg_dimensions(f: BinaryIO) -> tuple[int, int] | None:
+    read = f.read
     for _ in range(10_000):  # markers before the frame header
         marker = read(2)
         if len(marker) < 2 or marker[0] != 0xFF:

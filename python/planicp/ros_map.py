@@ -13,8 +13,6 @@ free); raw: the value v itself (0..100, anything else unknown). Image row 0 is t
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +22,7 @@ from numpy.typing import NDArray
 
 from ._validation import Pose, brief
 from .image_files import require_regular_file
+from .io.atomic_files import write_atomically
 from .io.yaml_documents import load_yaml
 from .plan_raster import PlanRaster, load_gray
 
@@ -213,17 +212,7 @@ def write_ros_map(
     )
     if edge_detector is not None:
         meta += f"{EDGE_DETECTOR_KEY}: {edge_detector}\n"
-    _atomic_write(pgm_path, header + image.tobytes())
-    _atomic_write(path, meta.encode())
+    write_atomically(pgm_path, header + image.tobytes())
+    write_atomically(path, meta.encode())
     return path
 
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -18,13 +18,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .._validation import brief
 from .carmen import read_carmen
 from .g2o import G2oGraph, read_g2o, read_g2o_graph
 from .log_times import DEFAULT_SCAN_PERIOD, TimeRepair, repair_times
 from .pose_interpolation import interpolate_poses
 from .scan_log import BadLine, ScanFrame, ScanLog
 from .trajectory_files import read_kitti, read_tum, write_kitti, write_tum
-from .._validation import brief
 
 CARMEN_SUFFIXES = (".log", ".clf", ".carmen")
 

@@ -50,8 +50,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import brief
-from .._validation import Pose, as_pose
+from .._validation import Pose, as_pose, brief
 from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog

@@ -38,6 +38,7 @@ Poses are T_map_base; scans are base-frame points (metres).
 from __future__ import annotations
 
 import math
+from statistics import NormalDist
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -482,7 +483,7 @@ BEYOND_SIGMAS = 3.0
 """The one-sided level of `Recovery.beyond_seen`, in standard deviations of a normal distribution
 (3: 1 in 741)."""
 
-_NORMAL_CDF_AT_SIGMAS = 0.5 * (1.0 + math.erf(BEYOND_SIGMAS / math.sqrt(2.0)))
+_NORMAL_CDF_AT_SIGMAS = NormalDist().cdf(BEYOND_SIGMAS)
 
 
 def student_t_quantile(p: float, dof: int) -> float:
@@ -494,23 +495,11 @@ def student_t_quantile(p: float, dof: int) -> float:
         return math.tan(math.pi * (p - 0.5))
     if dof == 2:
         return (2.0 * p - 1.0) * math.sqrt(2.0 / (4.0 * p * (1.0 - p)))
-    z = _normal_quantile(p)
+    z = NormalDist().inv_cdf(p)
     v = float(dof)
     return (z + (z**3 + z) / (4 * v) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * v**2)
             + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * v**3)
             + (79 * z**9 + 776 * z**7 + 1482 * z**5 - 1920 * z**3 - 945 * z) / (92160 * v**4))
-
-
-def _normal_quantile(p: float) -> float:
-    """The `p` quantile (0 < p < 1) of the standard normal distribution (bisection on `erf`)."""
-    low, high = -40.0, 40.0
-    for _ in range(200):
-        mid = (low + high) / 2.0
-        if 0.5 * (1.0 + math.erf(mid / math.sqrt(2.0))) < p:
-            low = mid
-        else:
-            high = mid
-    return (low + high) / 2.0
 
 _WHOLE_SEARCH = 2**62
 """A node budget no search reaches: `search_nodes=None` runs each search within one update."""
