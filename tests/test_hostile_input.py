@@ -394,3 +394,31 @@ def test_a_folder_a_device_or_a_symlink_loop_as_the_image_is_named_as_what_it_is
         PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         PlanMap.from_image(tmp_path / "missing.png", 0.05)
+
+
+@pytest.mark.parametrize(("line", "match"), [
+    ("image: [m.pgm]", r"image must be the image file's name, got \['m\.pgm'\]"),
+    ("image: m.pgm\nmode: [trinary]", r"mode must be one of .*, got \['trinary'\]"),
+    ("image: m.pgm\norigin: [0, [1], 0]", r"origin must be three numbers, got \[0, \[1\], 0\]"),
+    ("image: m.pgm\nnegate: [0]", r"negate must be 0 or 1, got \[0\]"),
+])
+def test_a_ros_map_value_of_the_wrong_type_is_named_briefly(tmp_path: Path, line: str, match: str) -> None:
+    a_map_image(tmp_path)
+    keys = {"origin": "[0, 0, 0]", "negate": "0"}
+    text = line + "\n" + "".join(f"{k}: {v}\n" for k, v in keys.items() if f"{k}:" not in line)
+    (tmp_path / "m.yaml").write_text(text + MAP_KEYS.replace("negate: 0\n", ""))
+    with pytest.raises(ValueError, match=match):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
+def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_source(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from planicp.io import yaml_documents
+
+    with pytest.raises(ValueError, match="^doc.yaml nests its values too deeply"):
+        load_yaml("[" * 5000 + "]" * 5000, "doc.yaml")
+    with pytest.raises(ValueError, match="^doc.yaml is not valid YAML"):
+        load_yaml("a: [1, 2", "doc.yaml")
+    monkeypatch.setattr(yaml_documents, "MAX_DOCUMENT_BYTES", 10)
+    with pytest.raises(ValueError, match="^doc.yaml is 16 characters long; a YAML document here is at most 10"):
+        load_yaml("a: 1\nb: 2\nc: 3\nd", "doc.yaml")
