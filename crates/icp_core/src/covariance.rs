@@ -42,8 +42,7 @@ pub fn estimate_normals_interruptible(
 
 /// The wall normal at `p` (see [`estimate_normals`]).
 fn normal_at(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2, p: &[f64; 2]) -> [f64; 2] {
-    let k = std::num::NonZero::new(NORMAL_NEIGHBOURS).expect("k > 0");
-    let nn = tree.nearest_n::<kiddo::SquaredEuclidean>(p, k);
+    let nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
     if nn.len() < 3 {
         return [0.0, 0.0];
     }

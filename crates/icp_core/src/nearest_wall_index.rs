@@ -36,7 +36,6 @@ use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
 use crate::point_map::Tree2;
 use crate::wall_facing::SEEN_FROM_EVERYWHERE;
-use kiddo::SquaredEuclidean;
 
 /// Cells per block side.
 pub const BLOCK: usize = 8;
@@ -274,7 +273,7 @@ impl NearestWallIndex {
                 let corner =
                     [self.origin[0] + bcol as f64 * block_size, self.origin[1] + brow as f64 * block_size];
                 let centre = [corner[0] + 0.5 * block_size, corner[1] + 0.5 * block_size];
-                let nn = tree.nearest_one::<SquaredEuclidean>(&centre);
+                let nn = tree.nearest_one(&centre);
                 let d_block = nn.distance.sqrt();
                 if d_block > self.reach + half_diagonal + block_half_diagonal {
                     continue;
@@ -283,9 +282,7 @@ impl NearestWallIndex {
                 // d_block + 2R of the block centre; its list within d(c) + 2r of the cell.
                 let radius = d_block + 2.0 * block_half_diagonal + 2.0 * half_diagonal;
                 nearby.clear();
-                for n in tree.within_unsorted::<SquaredEuclidean>(&centre, radius * radius) {
-                    nearby.push((n.distance, n.item));
-                }
+                tree.for_each_within(&centre, radius * radius, |item, d2| nearby.push((d2, item)));
                 nearby.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let stored = (self.building.len() / BLOCK_CELLS) as u32;
                 self.blocks[brow * self.block_cols + bcol] = stored;

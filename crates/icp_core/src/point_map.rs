@@ -10,12 +10,9 @@ use crate::visibility;
 use crate::wall_facing::visibility_masks_interruptible;
 use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
-use kiddo::SquaredEuclidean;
 use std::sync::{Mutex, OnceLock};
 
-/// KD-tree over 2D points; items are indices into the point slice it was built from.
-pub type Tree2 = ImmutableKdTree<f64, u32, 2, 16>;
+pub use crate::kd_tree::Tree2;
 
 /// Largest number of points a map may hold (indices are `u32`).
 pub const MAX_POINTS: usize = u32::MAX as usize;
@@ -243,7 +240,7 @@ impl PointMap {
     /// Index and squared distance of the plan point nearest to `q`.
     #[inline]
     pub fn nearest(&self, q: [f64; 2]) -> (u32, f64) {
-        let nn = self.tree.nearest_one::<SquaredEuclidean>(&q);
+        let nn = self.tree.nearest_one(&q);
         (nn.item, nn.distance)
     }
 
@@ -273,12 +270,11 @@ impl PointMap {
 pub fn median_spacing(points: &[[f64; 2]], tree: &Tree2) -> f64 {
     const FALLBACK: f64 = 0.05;
     let stride = (points.len() / 4096).max(1);
-    let two = std::num::NonZero::new(2).expect("2 > 0");
     let mut spacing: Vec<f64> = points
         .iter()
         .step_by(stride)
         .filter_map(|p| {
-            let nn = tree.nearest_n::<SquaredEuclidean>(p, two);
+            let nn = tree.nearest_n(p, 2);
             nn.iter().map(|n| n.distance).find(|&d| d > 0.0).map(f64::sqrt)
         })
         .collect();
