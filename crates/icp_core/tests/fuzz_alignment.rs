@@ -71,12 +71,17 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
     let valid_points = !pts.is_empty() && in_range(&pts);
     let valid_res = res.is_none_or(|r| r.is_finite() && r > 0.0);
     let valid_normals = normals.as_ref().is_none_or(|n: &Vec<[f64; 2]>| n.len() == pts.len() && in_range(n));
-    let n_points = pts.len();
+    // A plan far denser than useful keeps the first point of each THIN_CELL square, in order.
+    let kept: Option<Vec<[f64; 2]>> = valid_points
+        .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
+        .flatten();
+    let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
     let result = PointMap::with_normals(pts, normals.clone(), res);
     match result {
         Ok(map) => {
             ensure!(valid_points && valid_res && valid_normals, "accepted an invalid plan");
             ensure!(map.len() == n_points && map.normals().len() == n_points, "lengths");
+            ensure!(kept.as_ref().is_none_or(|k| map.points() == &k[..]), "thinned points");
             ensure!(map.spacing().is_finite() && map.spacing() > 0.0, "spacing {}", map.spacing());
             let r = map.raster().resolution();
             ensure!(r.is_finite() && r > 0.0, "raster resolution {r}");

@@ -126,7 +126,8 @@ fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyAr
     Array2::from_shape_vec((points.len(), 2), flat).expect("length matches shape").into_pyarray(py)
 }
 
-/// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster.
+/// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster;
+/// points denser than two per 5 mm square on average are thinned to one per square.
 #[pyclass(frozen, module = "planicp._core", name = "PointMap")]
 pub(crate) struct PyPointMap {
     pub(crate) inner: Arc<PointMap>,
