@@ -28,8 +28,9 @@ from numpy.typing import NDArray
 
 from . import _core
 
-FORMAT = 4
-"""Bumped whenever what an entry holds, or how a plan is prepared, changes."""
+FORMAT = 5
+"""Bumped whenever what an entry holds, or how a plan is prepared, changes (5: normals fitted to the
+six nearest points with ties broken by index, points thinned when far denser than useful)."""
 
 
 def default_cache_dir() -> Path:

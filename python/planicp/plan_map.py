@@ -167,11 +167,11 @@ class PlanMap:
 
     @staticmethod
     def _prepared(raster: PlanRaster, edge_detector: str) -> dict[str, NDArray[Any]]:
-        """What a cache entry holds: points, their wall normals (the slow part of a map build), and
-        the packed wall raster."""
-        points = raster.surface_points(edge_detector)
-        normals = _core.PointMap(points, 1.5 * raster.resolution).normals
-        return {"points": points, "normals": normals, "walls": np.packbits(raster.walls),
+        """What a cache entry holds: the map's points (thinned when far denser than useful: see
+        `from_points`), their wall normals (the slow part of a map build), and the packed wall
+        raster."""
+        native = _core.PointMap(raster.surface_points(edge_detector), 1.5 * raster.resolution)
+        return {"points": native.points, "normals": native.normals, "walls": np.packbits(raster.walls),
                 "shape": np.array(raster.walls.shape)}
 
     @classmethod

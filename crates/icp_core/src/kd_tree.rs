@@ -13,8 +13,10 @@
 //! Left of a split lie points with a coordinate at most the split value, right of it at least:
 //! equal coordinates may fall on both sides, and a query searches the far side whenever the
 //! split is closer than its current best. Distances are squared and computed as
-//! `dx * dx + dy * dy`; among points at the same distance a query returns the first it meets,
-//! which is the same every time.
+//! `dx * dx + dy * dy`. Among points at the same distance the k-nearest query keeps the lowest
+//! indices (the wall normals it serves, fitted to a point's six nearest on a plan's pixel lattice,
+//! would otherwise depend on the tree's layout); the nearest and radius queries return the first
+//! they meet, which is the same every time.
 
 /// Most points in a leaf.
 pub const LEAF: usize = 8;
@@ -136,7 +138,9 @@ impl Tree2 {
         }
     }
 
-    /// The `k` points nearest to `q` (all of them when there are fewer), nearest first.
+    /// The `k` points nearest to `q` (all of them when there are fewer), nearest first; among
+    /// points at the same distance the lowest indices come first (except among points on `q`
+    /// itself, taken as met), so the answer depends on the points, not on the tree's layout.
     pub fn nearest_n(&self, q: &[f64; 2], k: usize) -> Vec<Neighbour> {
         self.nearest_n_counted(q, k).0
     }
@@ -164,16 +168,17 @@ impl Tree2 {
         found: &mut Vec<Neighbour>,
         examined: &mut usize,
     ) {
-        let bound =
-            |found: &Vec<Neighbour>| if found.len() < k { f64::INFINITY } else { found[k - 1].distance };
+        // Ordered by distance, then index: among points at the k-th distance the lowest indices
+        // are kept, whatever the tree's layout.
+        let before = |n: &Neighbour, d: f64, item: u32| n.distance < d || (n.distance == d && n.item < item);
         if hi - lo <= LEAF {
             *examined += hi - lo;
             for (p, &item) in self.points[lo..hi].iter().zip(&self.items[lo..hi]) {
                 let d = sq_dist(q, p);
-                if d < bound(found) {
-                    // After the ones at the same distance: the first met stays first.
-                    let at = found.partition_point(|n| n.distance <= d);
-                    found.insert(at, Neighbour { item, distance: d });
+                let candidate = Neighbour { item, distance: d };
+                if found.len() < k || before(&candidate, found[k - 1].distance, found[k - 1].item) {
+                    let at = found.partition_point(|n| before(n, d, item));
+                    found.insert(at, candidate);
                     found.truncate(k);
                 }
             }
@@ -189,7 +194,11 @@ impl Tree2 {
         };
         self.nearest_n_in(q, k, near.0, near.1, near.2, off, rd, found, examined);
         let far_rd = rd - off[axis] * off[axis] + diff * diff;
-        if far_rd < bound(found) {
+        // Beyond a split exactly at the k-th distance may lie a tie of lower index, unless that
+        // distance is 0: points on the query itself are taken as met (so that copies of a point
+        // cost no more than one).
+        let bound = if found.len() < k { f64::INFINITY } else { found[k - 1].distance };
+        if far_rd < bound || (far_rd == bound && bound > 0.0) {
             off[axis] = diff.abs();
             self.nearest_n_in(q, k, far.0, far.1, far.2, off, far_rd, found, examined);
         }
@@ -308,6 +317,11 @@ mod tests {
                     for (i, nb) in n.iter().enumerate() {
                         assert_eq!(nb.distance, all[i].0, "k {k}, rank {i}");
                         assert_eq!(sq_dist(&q, &points[nb.item as usize]), nb.distance);
+                    }
+                    let expected: Vec<u32> = all.iter().take(k).map(|a| a.1).collect();
+                    let got: Vec<u32> = n.iter().map(|nb| nb.item).collect();
+                    if all.get(k - 1).is_none_or(|a| a.0 > 0.0) {
+                        assert_eq!(got, expected, "k {k}: the lowest indices among ties");
                     }
                     let mut items: Vec<u32> = n.iter().map(|nb| nb.item).collect();
                     items.sort_unstable();
