@@ -3,6 +3,7 @@ naming the file, in bounded memory and time (issue: hostile input and faults).""
 
 from __future__ import annotations
 
+import re
 import resource
 import subprocess
 import sys
@@ -13,7 +14,13 @@ import cv2
 import numpy as np
 import pytest
 
-from planicp import PlanMap
+import carmen_excerpt
+from planicp import EnhancedOccupancyGrid, PlanMap
+from planicp._core import PlanicpError
+from planicp.cli import main as cli_main
+from planicp.default_plan import default_plan_path, load_default_plan
+from planicp.io import read_carmen
+from planicp.log_evaluation import plan_from_scans
 from planicp._validation import brief
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
 from planicp.sweep import StudyError, load_study
@@ -329,7 +336,7 @@ def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anythi
     plan = load_default_plan()
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     for resolution in (0.001, 0.0005):
-        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a coarser"):
+        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a resolution of at least"):
             EnhancedOccupancyGrid(plan, resolution=resolution)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB
 
@@ -422,3 +429,80 @@ def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_sour
     monkeypatch.setattr(yaml_documents, "MAX_DOCUMENT_BYTES", 10)
     with pytest.raises(ValueError, match="^doc.yaml is 16 characters long; a YAML document here is at most 10"):
         load_yaml("a: 1\nb: 2\nc: 3\nd", "doc.yaml")
+
+
+@pytest.mark.parametrize("option", ["--open-px", "--close-px"])
+@pytest.mark.parametrize("size", [10**9, 2**40])
+def test_a_morphology_size_larger_than_the_image_is_one_clear_line(tmp_path: Path, option: str, size: int,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """`--open-px 1e9` gave a raw cv2.error (a 10^18-byte kernel), `--close-px 2**40` "Can't parse 'ksize'"."""
+    image = tmp_path / "plan.png"
+    cv2.imwrite(str(image), np.pad(np.zeros((20, 20), np.uint8), 10, constant_values=255))
+    code = cli_main(["plan", str(image), "--resolution", "0.05", option, str(size), "--out", str(tmp_path / "out"),
+                  "--no-cache"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1
+    assert f"{option[2:].replace('-', '_')}={size} pixels is larger than the plan image" in err and "40 x 40" in err
+
+
+def test_a_binary_file_given_as_a_log_gives_a_short_error(tmp_path: Path,
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """5 MB of random bytes to `replay` gave a 1.26 MB error quoting every junk "record type"."""
+    log = tmp_path / "binary.log"
+    log.write_bytes(np.random.default_rng(0).integers(0, 256, 5_000_000, dtype=np.uint8).tobytes())
+    code = cli_main(["replay", str(log), "--plan", str(default_plan_path()), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err) < 400, err[:1000]
+    assert "no usable FLASER, RLASER or ROBOTLASER1 line" in err and "(not a record): " in err
+
+
+@pytest.mark.parametrize(("param", "reason"), [
+    ("robot_front_laser_max abc", "is not a number"),
+    ("robot_front_laser_max -5", "must be a positive number of metres"),
+    ("robot_front_laser_max 1e400", "must be a positive number of metres"),
+    ("robot_frontlaser_offset 1e300", "must be a finite number within"),
+])
+def test_a_bad_param_line_is_skipped_and_named_not_the_whole_log(tmp_path: Path, param: str, reason: str) -> None:
+    """`PARAM robot_front_laser_max -5` refused the whole log ("need 0 <= range_min < range_max")
+    without naming file or line; `abc` or `1e300` were silently ignored or used."""
+    lines = ["PARAM " + param + " nohost 0", *carmen_excerpt.log_lines()]
+    path = tmp_path / "param.log"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match=rf"param.log: skipped 1 malformed line\(s\); first at line 1 \(PARAM\): "
+                                         rf"{param.split()[0]}.*{reason}.*the default is used"):
+        log = read_carmen(path)
+    clean = tmp_path / "clean.log"
+    clean.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
+    reference = read_carmen(clean)
+    assert len(log) == carmen_excerpt.SCANS and log.skipped["PARAM (malformed)"] == 1
+    assert log[3].laser_pose == reference[3].laser_pose
+    np.testing.assert_array_equal(log[3].ranges, reference[3].ranges)
+    with pytest.raises(ValueError, match=rf"param.log, line 1: bad PARAM line: {param.split()[0]}"):
+        read_carmen(path, errors="raise")
+
+
+def test_plans_from_scans_too_fine_for_the_pixel_budget_name_the_finest_resolution_that_fits(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`evaluate-log --resolution 1e-6` tried to allocate 313 TiB (a traceback)."""
+    path = tmp_path / "room.log"
+    path.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
+    code = cli_main(["evaluate-log", str(path), "--resolution", "1e-6", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    finest = float(re.search(r"give a resolution of at least ([0-9.e-]+) m", err).group(1))  # type: ignore[union-attr]
+    # The quoted resolution fits the budget, and it is the finest that does (within 20 %).
+    log = read_carmen(path)
+    even = [f for k, f in enumerate(log) if k % 2 == 0]
+    plan_from_scans(even, finest)
+    with pytest.raises(ValueError, match="give a resolution of at least"):
+        plan_from_scans(even, finest / 1.2)
+
+
+def test_an_occupancy_grid_too_fine_names_the_finest_resolution_that_fits() -> None:
+    plan = load_default_plan()
+    with pytest.raises(PlanicpError, match="give a resolution of at least") as error:
+        EnhancedOccupancyGrid(plan, resolution=0.0005)
+    finest = float(re.search(r"at least ([0-9.e-]+) m", str(error.value)).group(1))  # type: ignore[union-attr]
+    EnhancedOccupancyGrid(plan, resolution=finest)
+    with pytest.raises(PlanicpError):
+        EnhancedOccupancyGrid(plan, resolution=finest * 0.98)

@@ -54,14 +54,22 @@ from .._validation import Pose, as_pose, brief
 from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog
-from .line_records import LineTally, records
-from .log_times import repair_times
+from .line_records import LineTally, records, skipped_summary
+from .log_times import late_copies, repair_times
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
 AUTO_ORDER: tuple[LaserKind, ...] = ("ROBOTLASER1", "FLASER", "RLASER")
 NO_RETURN_RANGE = 80.0
 """Metres: FLASER/RLASER readings at or above this are "no return" unless the log says otherwise."""
+
+
+MAX_MOUNT_OFFSET = 100.0
+"""Metres: a laser mount PARAM farther from the base than this is a bad line (a robot is not that big)."""
+
+_RANGE_PARAMS = ("robot_front_laser_max", "robot_rear_laser_max")
+_MOUNT_PARAMS = tuple(f"robot_{laser}_{part}" for laser in ("frontlaser", "rearlaser")
+                      for part in ("offset", "side_offset", "angular_offset"))
 
 
 class _BadLine(Exception):
@@ -100,6 +108,21 @@ def _count(fields: list[str], index: int, what: str) -> int:
     if not (value.is_integer() and 0 <= value <= 1_000_000):
         raise _BadLine(f"{what} must be a whole number >= 0, got {brief(fields[index])}")
     return int(value)
+
+
+def _check_param(name: str, text: str) -> None:
+    """A PARAM planicp reads must hold a usable value; a bad one is a bad line (its default is kept)."""
+    if name not in _RANGE_PARAMS and name not in _MOUNT_PARAMS:
+        return
+    try:
+        value = float(text)
+    except ValueError:
+        raise _BadLine(f"{name} ({brief(text)}) is not a number; the default is used") from None
+    if name in _RANGE_PARAMS and not (math.isfinite(value) and value > 0.0):
+        raise _BadLine(f"{name} must be a positive number of metres, got {brief(text)}; the default is used")
+    if name in _MOUNT_PARAMS and not (math.isfinite(value) and abs(value) <= MAX_MOUNT_OFFSET):
+        raise _BadLine(f"{name} must be a finite number within +-{MAX_MOUNT_OFFSET:g} (metres or radians), "
+                       f"got {brief(text)}; the default is used (or pass laser_pose)")
 
 
 def _expect_fields(fields: list[str], needed: int, layout: str) -> None:
@@ -231,6 +254,7 @@ def read_carmen(
             if kind == "PARAM":
                 if len(fields) < 3:
                     raise _BadLine(f"truncated: PARAM needs a name and a value, got {len(fields)} fields")
+                _check_param(fields[1], fields[2])
                 params[fields[1]] = fields[2]
             elif kind == "ODOM":
                 _expect_fields(fields, 10, "ODOM x y theta tv rv accel ts host logger_ts")
@@ -252,13 +276,21 @@ def read_carmen(
     chosen = laser if laser is not None else (present[0] if present else None)
     if chosen is None or not lasers[chosen]:
         what = chosen or "FLASER, RLASER or ROBOTLASER1"
-        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {tally.skipped or 'nothing'})")
+        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {skipped_summary(tally.skipped)})")
     for other in LASER_KINDS:
         if other != chosen and lasers[other]:
             tally.skip(f"{other} (other laser)", len(lasers[other]))
 
-    times, repair = repair_times(np.array([r.time for r in lasers[chosen]], dtype=np.float64))
-    chosen_records = [replace(r, time=float(t)) for r, t in zip(lasers[chosen], times)]
+    kept = lasers[chosen]
+    late = late_copies(np.array([r.time for r in kept]), np.array([r.robot_world for r in kept]))
+    if late.any():
+        tally.skip(f"{chosen} (late copy: stamped before earlier records)", int(np.count_nonzero(late)))
+        warnings.warn(f"{source}: dropped {int(np.count_nonzero(late))} {chosen} line(s) written late (stamped "
+                      f"before earlier lines, with an old pose); first at line {kept[int(np.argmax(late))].line}",
+                      stacklevel=2)
+        kept = [r for r, drop in zip(kept, late) if not drop]
+    times, repair = repair_times(np.array([r.time for r in kept], dtype=np.float64))
+    chosen_records = [replace(r, time=float(t)) for r, t in zip(kept, times)]
     # Stamps made up for coarse or missing ones cannot be matched against the ODOM stream's: each
     # line's own odometry is used.
     stream_rows = odom_rows if repair.fallback == "none" else []

@@ -31,7 +31,7 @@ from .._validation import Pose
 from ..se2 import between
 from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser
 from .scan_log import ScanFrame, ScanLog
-from .line_records import LineTally, records
+from .line_records import LineTally, records, skipped_summary
 from .log_times import repair_times
 
 
@@ -107,7 +107,7 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
         except _BadLine as exc:
             tally.reject(line, kind, str(exc))
     if not ids:
-        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {tally.skipped or 'nothing'})")
+        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {skipped_summary(tally.skipped)})")
     tally.warn(stacklevel=3)
     info_m = np.zeros((len(info), 3, 3))
     for k, (i11, i12, i13, i22, i23, i33) in enumerate(info):
