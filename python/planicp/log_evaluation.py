@@ -101,9 +101,9 @@ def plan_from_scans(frames: Sequence[ScanFrame], resolution: float = 0.05, min_h
     r = np.minimum(np.floor((xy[:, 1] - lo[1]) / resolution).astype(np.int64), rows - 1)
     # Hits per pixel counted over the pixels that have any, not in a full-size counter image.
     cells, hits = np.unique(r * cols + c, return_counts=True)
-    walls = np.zeros(rows * cols, dtype=bool)
-    walls[cells[hits >= min_hits]] = True
-    walls = walls.reshape(rows, cols)
+    flat = np.zeros(rows * cols, dtype=bool)
+    flat[cells[hits >= min_hits]] = True
+    walls = flat.reshape(rows, cols)
     if not walls.any():
         raise ValueError(f"no pixel of {resolution} m holds {min_hits} scan end points: no walls to draw")
     # Rows grow with +y here; images put the top row first. The wall pixels are where the surfaces
