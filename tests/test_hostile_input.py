@@ -422,3 +422,35 @@ def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_sour
     monkeypatch.setattr(yaml_documents, "MAX_DOCUMENT_BYTES", 10)
     with pytest.raises(ValueError, match="^doc.yaml is 16 characters long; a YAML document here is at most 10"):
         load_yaml("a: 1\nb: 2\nc: 3\nd", "doc.yaml")
+
+
+# Found by fuzzing the readers (tests/reader_fuzzing.py, benches/fuzz_readers.py): each failed as
+# the test's docstring says before its fix.
+
+def _peak_growth_kib(before: int) -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+
+
+def test_a_yaml_file_over_the_document_limit_is_refused_before_it_is_read(tmp_path: Path) -> None:
+    """A 1.2 MB study (a list of 400,000 zeros) took 83 s in PyYAML's pure-Python parser before it
+    was refused, and a file was read whole before its length was checked. Now PyYAML's C parser is
+    used when it is there, and a YAML file over 256 KiB is refused from its size alone."""
+    from planicp.io.yaml_documents import MAX_DOCUMENT_BYTES
+
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nfurniture: [" + ", ".join(["0"] * 400_000) + "]\n")
+    with pytest.raises(StudyError, match=r"s\.yaml is 1200037 bytes long; a YAML document here is at most 262144"):
+        load_study(tmp_path / "s.yaml")
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for name in ("sparse.yaml", "m.yaml"):
+        with open(tmp_path / name, "wb") as f:
+            f.truncate(2 << 30)  # 2 GiB, no blocks on disk
+    with pytest.raises(StudyError, match=r"sparse\.yaml is 2147483648 bytes long"):
+        load_study(tmp_path / "sparse.yaml")
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml is 2147483648 bytes long"):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+    assert _peak_growth_kib(before) < 50_000
+    # A document just under the limit is read (in seconds even without the C parser).
+    text = "name: x\nplans: [default]\nfurniture: [0, 0.5, 2]\n# " + "x" * 200_000 + "\n"
+    assert len(text) < MAX_DOCUMENT_BYTES
+    (tmp_path / "ok.yaml").write_text(text)
+    assert load_study(tmp_path / "ok.yaml")[0].furniture == (0.0, 0.5, 2.0)

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from ._validation import Pose, brief
 from .image_files import require_regular_file
 from .io.atomic_files import write_atomically
-from .io.yaml_documents import load_yaml
+from .io.yaml_documents import read_yaml_file
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")
@@ -95,11 +95,7 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     if not path.is_file():
         raise FileNotFoundError(f"ROS map YAML {path} does not exist")
     _yaml()  # PyYAML is there, or a message says how to get it
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise ValueError(f"ROS map {path} is not valid YAML: it is not UTF-8 text") from None
-    meta = load_yaml(text, f"ROS map {path}")
+    meta = read_yaml_file(path, f"ROS map {path}")
     if not isinstance(meta, dict):
         raise ValueError(f"ROS map {path} must be a YAML mapping, got {type(meta).__name__}")
     missing = [k for k in REQUIRED_KEYS if k not in meta]

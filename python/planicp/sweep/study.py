@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import unknown_fields
-from ..io.yaml_documents import load_yaml
+from ..io.yaml_documents import read_yaml_file
 from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
@@ -385,9 +385,7 @@ def load_study(path: str | Path) -> tuple[Study, Path]:
     if not source.is_file():
         raise FileNotFoundError(f"study file {source} does not exist")
     try:
-        data = load_yaml(source.read_text(encoding="utf-8"), f"study {source}")
-    except UnicodeDecodeError:
-        raise StudyError(f"study {source} is not valid YAML: it is not UTF-8 text") from None
+        data = read_yaml_file(source, f"study {source}")
     except ValueError as exc:
         raise StudyError(str(exc)) from None
     try:
