@@ -454,3 +454,50 @@ def test_a_yaml_file_over_the_document_limit_is_refused_before_it_is_read(tmp_pa
     assert len(text) < MAX_DOCUMENT_BYTES
     (tmp_path / "ok.yaml").write_text(text)
     assert load_study(tmp_path / "ok.yaml")[0].furniture == (0.0, 0.5, 2.0)
+
+
+FLASER = "FLASER 3 1.0 1.1 1.2 {pose} 0.0 0.0 0.0 {t} host {t}\n"
+
+
+def _zip_log(text: str) -> bytearray:
+    import io
+    import zipfile
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        archive.writestr("log.txt", text)
+    return bytearray(buffer.getvalue())
+
+
+@pytest.mark.parametrize("damage", ["local header", "offset before the start", "checksum"])
+def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, damage: str) -> None:
+    """A zip log whose member header was damaged raised zipfile.BadZipFile, one whose directory put
+    the member before the file's start OSError [Errno 22], and a bad CRC-32 BadZipFile (g2o and
+    CARMEN alike)."""
+    from planicp.io import read_carmen, read_g2o
+
+    data = _zip_log(FLASER.format(pose="0.0 0.0 0.0", t=1.0) + FLASER.format(pose="0.0 0.0 0.0", t=2.0))
+    end = data.rfind(b"PK\x05\x06")
+    central = data.rfind(b"PK\x01\x02")
+    if damage == "local header":
+        data[0:4] = b"PK\x03\x04"
+        offset = int.from_bytes(data[central + 42:central + 46], "little")
+        data[central + 42:central + 46] = (offset + 5).to_bytes(4, "little")
+    elif damage == "offset before the start":
+        offset = int.from_bytes(data[end + 16:end + 20], "little")
+        data[end + 16:end + 20] = (offset + 10).to_bytes(4, "little")
+    else:
+        data[14] ^= 0xFF  # the CRC-32 in the local header
+        data[central + 16] ^= 0xFF  # and in the central directory
+    path = tmp_path / "r.log"
+    path.write_bytes(bytes(data))
+    if damage == "checksum":  # found on the member's first block: no line before the break
+        with pytest.raises(ValueError, match=r"r\.log: no usable .* \(skipped: \{'\(compressed stream ends early\)': 1"):
+            read_carmen(path)
+        with pytest.raises(ValueError, match=r"r\.log: compressed data ends early or is corrupt after line 0: Bad CRC-32 "
+                                             r"for file 'log\.txt'"):
+            read_carmen(path, errors="raise")
+        return
+    for reader in (read_carmen, read_g2o):
+        with pytest.raises(ValueError, match=r"r\.log: the file 'log\.txt' in this zip archive cannot be read"):
+            reader(path)

@@ -9,15 +9,18 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
+from .._validation import brief, one_line
+
 GZIP_MAGIC = b"\x1f\x8b"
 ZIP_MAGIC = b"PK\x03\x04"
 
 
 class TruncatedStream(ValueError):
-    """The compressed stream ends early; the lines before the break were read."""
+    """The compressed stream ends early or is corrupt (a bad checksum, a damaged block); the lines
+    before the break were read."""
 
     def __init__(self, path: Path, line: int, detail: str) -> None:
-        super().__init__(f"{path}: compressed data ends early after line {line}: {detail}")
+        super().__init__(f"{path}: compressed data ends early or is corrupt after line {line}: {detail}")
         self.path = path
         self.line = line
 
@@ -30,8 +33,10 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
 
     Raises:
         FileNotFoundError: `path` does not exist.
-        ValueError: a file with a zip signature that is not a readable zip archive.
-        TruncatedStream: a gzip stream ends early (after yielding every complete line before it).
+        ValueError: a file with a zip signature that is not a readable zip archive, or whose one
+            file cannot be opened (a damaged header, an unknown compression method, a password).
+        TruncatedStream: a gzip or zip stream ends early or is corrupt (after yielding every
+            complete line before the break).
     """
     if not path.is_file():
         raise FileNotFoundError(f"log file not found: {path}")
@@ -42,13 +47,20 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
     elif magic == ZIP_MAGIC:
         try:
             archive = zipfile.ZipFile(path)
-        except zipfile.BadZipFile as exc:
-            raise ValueError(f"{path}: starts like a zip archive but is not one ({exc})") from None
+        except (zipfile.BadZipFile, OSError, EOFError) as exc:  # OSError: offsets before the file's start
+            raise ValueError(f"{path}: starts like a zip archive but is not one ({one_line(str(exc))})") from None
         with archive:
             members = [n for n in archive.namelist() if not n.startswith("__MACOSX/") and not n.endswith("/")]
             if len(members) != 1:
-                raise ValueError(f"{path}: a zip log must hold exactly one file, found {members}")
-            yield from _lines_of(path, archive.open(members[0]))
+                raise ValueError(f"{path}: a zip log must hold exactly one file, found {brief(members)}")
+            try:
+                member = archive.open(members[0])
+            except (zipfile.BadZipFile, NotImplementedError, RuntimeError, OSError, EOFError, zlib.error) as exc:
+                # RuntimeError: an encrypted member; NotImplementedError: an unknown compression method;
+                # OSError: a member's offset before the file's start
+                raise ValueError(f"{path}: the file {brief(members[0])} in this zip archive cannot be read "
+                                 f"({one_line(str(exc))})") from None
+            yield from _lines_of(path, member)
     else:
         yield from _lines_of(path, path.open("rb"))
 
@@ -77,5 +89,5 @@ def _lines_of(path: Path, stream: IO[bytes] | gzip.GzipFile) -> Iterator[tuple[i
                     yield number, f"{head} ... (a line of {length} bytes, longer than {MAX_LINE_BYTES}: cut)"
                     continue
                 yield number, raw.decode("utf-8", errors="replace").rstrip("\r\n")
-        except (EOFError, zlib.error, gzip.BadGzipFile) as exc:
-            raise TruncatedStream(path, number, str(exc) or type(exc).__name__) from None
+        except (EOFError, zlib.error, gzip.BadGzipFile, zipfile.BadZipFile, OSError) as exc:  # BadZipFile: a bad CRC
+            raise TruncatedStream(path, number, one_line(str(exc)) or type(exc).__name__) from None
