@@ -501,3 +501,30 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
     for reader in (read_carmen, read_g2o):
         with pytest.raises(ValueError, match=r"r\.log: the file 'log\.txt' in this zip archive cannot be read"):
             reader(path)
+
+
+@pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
+def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
+    """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming
+    a shape of 10^11 made numpy allocate 745 GiB (MemoryError) before reading it."""
+    import re
+    import zipfile
+
+    path, cache = _plan_image(tmp_path), tmp_path / "cache"
+    first = PlanMap.from_image(path, 0.05, cache=cache)
+    (entry,) = cache.glob("*.npz")
+    with zipfile.ZipFile(entry) as archive:
+        members = [(info.filename, archive.read(info)) for info in archive.infolist()]
+    name, body = members[0]
+    if damage == "an unterminated header":
+        body = body.replace(b"'descr':", b"'descr': (", 1)
+    else:
+        body = re.sub(rb"'shape': \([^)]*\)", b"'shape': (100000000000,)", body, count=1)
+    members[0] = (name, body)
+    with zipfile.ZipFile(entry, "w") as archive:
+        for member, data in members:
+            archive.writestr(member, data)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    again = PlanMap.from_image(path, 0.05, cache=cache)
+    assert not again.from_cache and _peak_growth_kib(before) < 100_000
+    np.testing.assert_array_equal(again.points, first.points)
