@@ -503,6 +503,63 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
             reader(path)
 
 
+def test_a_carmen_maximum_range_param_of_zero_or_less_is_ignored(tmp_path: Path) -> None:
+    """`PARAM robot_front_laser_max 0` raised "need 0 <= range_min < range_max, got 0.0, 0.0" (naming
+    no file) for the whole log."""
+    from planicp.io import read_carmen
+
+    for value in ("0", "-5"):
+        path = tmp_path / "r.log"
+        path.write_text(f"PARAM robot_front_laser_max {value}\n" + FLASER.format(pose="0 0 0", t=1.0)
+                        + FLASER.format(pose="0 0 0", t=2.0))
+        log = read_carmen(path)
+        assert len(log) == 2 and log[0].range_max == 80.0
+
+
+def test_a_log_line_with_a_pose_beyond_the_coordinate_limit_is_skipped_as_malformed(tmp_path: Path) -> None:
+    """A FLASER pose of 1e308 m raised "reference has a coordinate of 1.000000e+308 m" (naming no
+    file) for the whole log; now that line is malformed, the others are read."""
+    from planicp.io import read_carmen, read_g2o, read_g2o_graph
+
+    path = tmp_path / "r.log"
+    path.write_text(FLASER.format(pose="0 0 0", t=1.0) + FLASER.format(pose="1e308 0 0", t=1.5)
+                    + "ODOM 1e12 0 0 0 0 0 1.7 host 1.7\n" + FLASER.format(pose="0 0 0", t=2.0))
+    with pytest.warns(UserWarning, match=r"r\.log: skipped 2 malformed line\(s\); first at line 2 \(FLASER\): the laser "
+                                         r"and odometry poses: a coordinate of 1e\+308 m is beyond \+-1e\+09 m"):
+        log = read_carmen(path)
+    assert len(log) == 2 and log.skipped == {"FLASER (malformed)": 1, "ODOM (malformed)": 1}
+    with pytest.raises(ValueError, match=r"r\.log, line 2: bad FLASER line: the laser and odometry poses: a coordinate"):
+        read_carmen(path, errors="raise")
+    # A mount (the laser's pose in the robot, from a ROBOTLASER1 line's two poses) beyond the limit:
+    # the line is malformed, not the log.
+    scan = "ROBOTLASER1 0 -1.57 3.14 0.785 50.0 0.1 0 5 1.0 1.1 1.2 1.1 1.0 0 {poses} 0 0 0.5 0.5 0.5 {t} nohost {t}\n"
+    path.write_text(scan.format(poses="9e8 0 0 -9e8 0 0", t=1.0) + scan.format(poses="0.2 0 0 0 0 0", t=2.0))
+    with pytest.warns(UserWarning, match=r"first at line 1 \(ROBOTLASER1\): laser_pose has a coordinate of 1\.8"):
+        assert len(read_carmen(path, reference=False)) == 1
+    graph = tmp_path / "g.g2o"
+    scan = scan.replace("{poses}", "0.2 0.0 0.0 0.0 0.0 0.0")
+    graph.write_text("VERTEX_SE2 0 0 0 0\n" + scan.format(t=1.0) + "VERTEX_SE2 1 1e300 0 0\n" + scan.format(t=2.0)
+                     + "VERTEX_SE2 2 1 0 0\n" + scan.format(t=3.0))
+    with pytest.warns(UserWarning, match=r"skipped 2 malformed line\(s\); first at line 3 \(VERTEX_SE2\)"):
+        log = read_g2o(graph)
+    assert [f.odometry for f in log] == [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)]  # the scan of vertex 1 is not vertex 0's
+    with pytest.warns(UserWarning):
+        assert read_g2o_graph(graph).vertex_ids.tolist() == [0, 2]
+
+
+def test_a_record_kind_of_hundreds_of_kilobytes_is_quoted_briefly(tmp_path: Path) -> None:
+    """A line whose first token was 300,000 digits gave a 300 KB message (the token, as a record
+    kind in `skipped`, quoted whole)."""
+    from planicp.io import read_carmen, read_g2o
+
+    path = tmp_path / "r.log"
+    path.write_text("9" * 300_000 + " 1 2\n")
+    for reader in (read_carmen, read_g2o):
+        with pytest.raises(ValueError, match=r"r\.log: no .* \(skipped: \{'9{37}\.\.\.': 1\}\)") as info:
+            reader(path)
+        assert len(str(info.value)) < 300
+
+
 @pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
 def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
     """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming
