@@ -560,6 +560,21 @@ def test_a_record_kind_of_hundreds_of_kilobytes_is_quoted_briefly(tmp_path: Path
         assert len(str(info.value)) < 300
 
 
+@pytest.mark.parametrize(("text", "match"), [
+    ("0\nSECTION\n0\nENDSEC\n0\nEOF\n", r" could not be read as DXF: IndexError: list index out of range"),
+    ("0\nSECTION\n2\nENTITIES\n0\nPOLYLINE\n8\n0\n66\n1\n70\n0\n0\nVERTEX\n8\n0\n42\n0.0\n0\nVERTEX\n8\n0\n10\n1.0\n"
+     "20\n0.0\n0\nSEQEND\n0\nENDSEC\n0\nEOF\n",
+     r": POLYLINE \w+ on layer 0: damaged \(AttributeError: 'NoneType' object has no attribute 'x'\)"),
+])
+def test_a_damaged_dxf_file_is_a_value_error_naming_the_file(tmp_path: Path, text: str, match: str) -> None:
+    """ezdxf's recovery raised IndexError on a SECTION without a name, and a recovered VERTEX
+    without a location gave AttributeError from the reader."""
+    pytest.importorskip("ezdxf")
+    (tmp_path / "d.dxf").write_text(text)
+    with pytest.raises(ValueError, match=r"DXF file '.*d\.dxf'" + match):
+        PlanMap.from_dxf(tmp_path / "d.dxf")
+
+
 @pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
 def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
     """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming
