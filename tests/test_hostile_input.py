@@ -575,6 +575,34 @@ def test_a_damaged_dxf_file_is_a_value_error_naming_the_file(tmp_path: Path, tex
         PlanMap.from_dxf(tmp_path / "d.dxf")
 
 
+def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_naming_the_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 4 KB HouseExpo file with one vertex 260 km away had 26 million points sampled (61 s, 2.6
+    GB) before the core refused their visibility raster, in a message naming no file; a DXF or
+    HouseExpo plan of too many points was refused naming no file either."""
+    import json
+
+    house = {"verts": [[0, 0], [10, 0], [10, 260_000], [0, 8]], "bbox": {"min": [0, 0], "max": [10, 260_000]}}
+    (tmp_path / "h.json").write_text(json.dumps(house))
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': walls spanning 10 x 260000 m need a visibility "
+                                         r"raster of 2\.91e\+09 cells at 0\.03 m \(limit 268435456\)"):
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    assert _peak_growth_kib(before) < 50_000
+    from planicp import vector_plan
+
+    monkeypatch.setattr(vector_plan, "_MAX_SAMPLES", 1000)
+    (tmp_path / "h.json").write_text(json.dumps({"verts": [[0, 0], [30, 0], [30, 20]], "bbox": {"min": [0, 0], "max": [30, 20]}}))
+    with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': sampling .* more than 1000 points"):
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    ezdxf = pytest.importorskip("ezdxf")
+    doc = ezdxf.new()
+    doc.modelspace().add_line((0.0, 0.0), (100.0, 0.0))
+    doc.saveas(tmp_path / "d.dxf")
+    with pytest.raises(ValueError, match=r"DXF file '.*d\.dxf': sampling 100 m of walls every 0\.02 m gives more than 1000"):
+        PlanMap.from_dxf(tmp_path / "d.dxf")
+
+
 @pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
 def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
     """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming

@@ -90,7 +90,7 @@ def sample_segments(segments: Any, spacing: float = 0.02) -> NDArray[np.float64]
         ValueError: wrong shape, no segments, a NaN/inf coordinate, `spacing` <= 0, or more than
             50 million points (the spacing is far too fine for the plan's size).
     """
-    segs = _as_segments(segments, "segments")
+    segs = as_segments(segments, "segments")
     step = positive(spacing, "spacing", "metres")
     p0, p1 = segs[:, 0, :], segs[:, 1, :]
     delta = p1 - p0
@@ -299,7 +299,7 @@ _DAMAGED = (AttributeError, TypeError, IndexError, KeyError, ZeroDivisionError, 
 should be): reading such a document is refused naming the file (and the entity)."""
 
 
-def _as_segments(value: Any, name: str) -> NDArray[np.float64]:
+def as_segments(value: Any, name: str) -> NDArray[np.float64]:
     """`value` as a C-contiguous (M, 2, 2) float64 array of finite coordinates, M >= 1."""
     try:
         arr = np.asarray(value)
