@@ -603,6 +603,19 @@ def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_na
         PlanMap.from_dxf(tmp_path / "d.dxf")
 
 
+@pytest.mark.parametrize(("values", "match"), [
+    ("resolution: 0.05\norigin: [1e12, 0, 0]", r"origin \['1e12', 0, 0\] is beyond \+-1e\+09 m"),
+    ("resolution: 1.0e9\norigin: [0, 0, 0]", r"its 20 x 20 pixels at 1e\+09 m from origin \[0, 0, 0\] reach beyond"),
+])
+def test_a_ros_map_beyond_the_coordinate_limit_is_refused_naming_the_map(tmp_path: Path, values: str, match: str) -> None:
+    """An origin of 1e12 m gave "origin has a coordinate of 1.000000e+12 m" and a resolution of 1e9 m
+    the core's "plan has a coordinate of 1.45e10 m", neither naming the map."""
+    a_map_image(tmp_path)
+    (tmp_path / "m.yaml").write_text(f"image: m.pgm\n{values}\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml: " + match):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
 @pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
 def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
     """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, brief
+from ._validation import MAX_COORDINATE, Pose, brief
 from .image_files import require_regular_file
 from .io.atomic_files import write_atomically
 from .io.yaml_documents import read_yaml_file
@@ -115,6 +115,9 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         raise ValueError(f"ROS map {path}: origin must be three numbers, got {brief(origin)}") from None
     if not all(math.isfinite(v) for v in origin_pose):
         raise ValueError(f"ROS map {path}: origin must be finite, got {brief(origin)}")
+    if max(abs(origin_pose[0]), abs(origin_pose[1])) > MAX_COORDINATE:
+        raise ValueError(f"ROS map {path}: origin {brief(origin)} is beyond +-{MAX_COORDINATE:.0e} m; planicp works "
+                         f"in metres: give the map's origin in a local frame")
     occ = _number(meta, "occupied_thresh", path)
     free = _number(meta, "free_thresh", path)
     if not 0.0 <= free <= occ <= 1.0:
@@ -137,6 +140,11 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist ({image_path})")
     require_regular_file(image_path, f"ROS map image (from {path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
+    reach = math.hypot(*gray.shape) * resolution  # farthest a pixel corner lies from the origin, metres
+    if max(abs(origin_pose[0]), abs(origin_pose[1])) + reach > MAX_COORDINATE:
+        raise ValueError(f"ROS map {path}: its {gray.shape[1]} x {gray.shape[0]} pixels at {resolution:g} m from origin "
+                         f"{brief(origin)} reach beyond +-{MAX_COORDINATE:.0e} m; check resolution (metres per pixel) "
+                         f"and origin")
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
     edge_detector = meta.get(EDGE_DETECTOR_KEY)
     if edge_detector is not None and (not isinstance(edge_detector, str) or edge_detector not in EDGE_DETECTORS):
