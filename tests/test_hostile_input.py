@@ -456,6 +456,26 @@ def test_a_yaml_file_over_the_document_limit_is_refused_before_it_is_read(tmp_pa
     assert load_study(tmp_path / "ok.yaml")[0].furniture == (0.0, 0.5, 2.0)
 
 
+def test_a_study_value_made_of_a_long_string_aliased_thousands_of_times_is_quoted_briefly(tmp_path: Path) -> None:
+    """`plans: [[&s "x" * 100000, *s, *s, ...]]`: 30,000 aliases, well under the limit of values, but
+    the message quoted the list with repr(): 3 GB of text, a MemoryError after 26 s and 2.4 GB."""
+    text = 'name: x\nplans: [[&s "' + "x" * 100_000 + '", ' + ", ".join(["*s"] * 30_000) + "]]\n"
+    (tmp_path / "s.yaml").write_text(text)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(StudyError, match=r"key 'plans\[0\]' must be a path or a mapping with 'path', got \['xxx") as info:
+        load_study(tmp_path / "s.yaml")
+    assert len(str(info.value)) < 400 and _peak_growth_kib(before) < 100_000
+
+
+def test_a_study_asking_for_a_trillion_seeds_is_refused(tmp_path: Path) -> None:
+    """`seeds: {count: 1000000000000}` raised MemoryError building the tuple of seeds."""
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 1000000000000}\n")
+    with pytest.raises(StudyError, match=r"key 'seeds.count' asks for 1000000000000 seeds; a study runs at most 100000"):
+        load_study(tmp_path / "s.yaml")
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 3}\n")
+    assert load_study(tmp_path / "s.yaml")[0].seeds == (5, 6, 7)
+
+
 FLASER = "FLASER 3 1.0 1.1 1.2 {pose} 0.0 0.0 0.0 {t} host {t}\n"
 
 
