@@ -489,11 +489,11 @@ def _zip_log(text: str) -> bytearray:
     return bytearray(buffer.getvalue())
 
 
-@pytest.mark.parametrize("damage", ["local header", "offset before the start", "checksum"])
+@pytest.mark.parametrize("damage", ["local header", "offset before the start", "checksum", "version"])
 def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, damage: str) -> None:
     """A zip log whose member header was damaged raised zipfile.BadZipFile, one whose directory put
-    the member before the file's start OSError [Errno 22], and a bad CRC-32 BadZipFile (g2o and
-    CARMEN alike)."""
+    the member before the file's start OSError [Errno 22], a bad CRC-32 BadZipFile and a member
+    needing zip version 8.4 NotImplementedError (g2o and CARMEN alike)."""
     from planicp.io import read_carmen, read_g2o
 
     data = _zip_log(FLASER.format(pose="0.0 0.0 0.0", t=1.0) + FLASER.format(pose="0.0 0.0 0.0", t=2.0))
@@ -506,6 +506,8 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
     elif damage == "offset before the start":
         offset = int.from_bytes(data[end + 16:end + 20], "little")
         data[end + 16:end + 20] = (offset + 10).to_bytes(4, "little")
+    elif damage == "version":
+        data[central + 6] = 84  # the version needed to extract: 8.4
     else:
         data[14] ^= 0xFF  # the CRC-32 in the local header
         data[central + 16] ^= 0xFF  # and in the central directory
@@ -518,9 +520,42 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
                                              r"for file 'log\.txt'"):
             read_carmen(path, errors="raise")
         return
+    match = r"starts like a zip archive but is not one \(zip file version 8\.4\)" if damage == "version" else \
+        r"the file 'log\.txt' in this zip archive cannot be read"
     for reader in (read_carmen, read_g2o):
-        with pytest.raises(ValueError, match=r"r\.log: the file 'log\.txt' in this zip archive cannot be read"):
+        with pytest.raises(ValueError, match=r"r\.log: " + match):
             reader(path)
+
+
+@pytest.mark.parametrize("packing", ["gz", "zip"])
+def test_a_compressed_log_that_expands_hundreds_of_times_is_refused(tmp_path: Path, packing: str,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 1.5 MB gzip log expanding to 1.2 GB of text took 15 s only to decompress (and its lines, had
+    they been scans, gigabytes). Real logs expand 3 to 5 times; over 100 times, and past 16 MiB (1
+    MiB here, to keep the test fast), is refused whatever errors= says."""
+    import gzip
+    import io
+    import zipfile
+
+    from planicp.io import read_carmen, text_source
+
+    monkeypatch.setattr(text_source, "EXPANSION_FLOOR", 1 << 20)
+    text = (FLASER.format(pose="0 0 0", t=1.0) + "# padding\n" * 300_000).encode()
+    path = tmp_path / f"bomb.log.{packing}"
+    if packing == "gz":
+        path.write_bytes(gzip.compress(text))
+    else:
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("bomb.log", text)
+        path.write_bytes(buffer.getvalue())
+    assert len(text) > 100 * path.stat().st_size
+    for errors in ("skip", "raise"):
+        with pytest.raises(ValueError, match=r"bomb\.log\.(gz|zip): the compressed log expands to more than \d+ bytes, "
+                                             r"over 100 times its size .* refused as a decompression bomb"):
+            read_carmen(path, errors=errors)  # type: ignore[arg-type]
+    path.write_bytes(gzip.compress(text[:900_000]))  # under the floor: read
+    assert len(read_carmen(path)) == 1
 
 
 def test_a_carmen_maximum_range_param_of_zero_or_less_is_ignored(tmp_path: Path) -> None:

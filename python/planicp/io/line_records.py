@@ -50,8 +50,9 @@ MAX_KIND_CHARS = 40
 
 def records(tally: LineTally) -> Iterator[tuple[int, str, list[str]]]:
     """(1-based line number, record kind, whitespace-split fields) of every line of `tally.source`
-    that is not empty or a `#` comment. The kind is the first field, cut to `MAX_KIND_CHARS`. A compressed stream that ends early ends the records (the
-    lines before the break are kept and the break is tallied), or raises with `errors="raise"`."""
+    that is not empty or a `#` comment. The kind is the first field, cut to `MAX_KIND_CHARS`. A
+    compressed stream that ends early ends the records (the lines before the break are kept and the
+    break is tallied), or raises with `errors="raise"`."""
     try:
         for line, text in read_lines(tally.source):
             fields = text.split()
