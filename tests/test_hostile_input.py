@@ -696,3 +696,11 @@ def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, da
     again = PlanMap.from_image(path, 0.05, cache=cache)
     assert not again.from_cache and _peak_growth_kib(before) < 100_000
     np.testing.assert_array_equal(again.points, first.points)
+
+
+def test_a_pgm_header_claiming_a_width_of_hundreds_of_digits_is_refused_briefly(tmp_path: Path) -> None:
+    """A PGM header giving a width of 400 digits raised OverflowError ("int too large to convert to
+    float") from the message that refused it."""
+    (tmp_path / "p.pgm").write_bytes(b"P5\n" + b"9" * 400 + b" 10\n255\n" + b"\x00" * 100)
+    with pytest.raises(ValueError, match=r"p\.pgm is 999\.\.\.\(400 digits\) x 10 pixels \(999\.\.\.\(395 digits\) million\)"):
+        PlanMap.from_image(tmp_path / "p.pgm", 0.05, cache=False)
