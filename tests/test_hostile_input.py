@@ -704,3 +704,16 @@ def test_a_pgm_header_claiming_a_width_of_hundreds_of_digits_is_refused_briefly(
     (tmp_path / "p.pgm").write_bytes(b"P5\n" + b"9" * 400 + b" 10\n255\n" + b"\x00" * 100)
     with pytest.raises(ValueError, match=r"p\.pgm is 999\.\.\.\(400 digits\) x 10 pixels \(999\.\.\.\(395 digits\) million\)"):
         PlanMap.from_image(tmp_path / "p.pgm", 0.05, cache=False)
+
+
+@pytest.mark.parametrize(("image", "match"), [
+    ('"m\\0.pgm"', r"image 'm\\x00\.pgm' is no file name: it holds a NUL character"),
+    ("m" * 300 + ".pgm", r"image 'mmm.*' cannot be opened: File name too long"),
+])
+def test_a_ros_map_image_name_the_file_system_cannot_take_is_refused_naming_the_map(tmp_path: Path, image: str,
+                                                                                     match: str) -> None:
+    """An image name holding a NUL raised ValueError "embedded null byte" (naming no map), and one of
+    300 characters OSError [Errno 36] File name too long."""
+    (tmp_path / "m.yaml").write_text(f"image: {image}\norigin: [0, 0, 0]\n" + MAP_KEYS)
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml: " + match):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
