@@ -717,3 +717,14 @@ def test_a_ros_map_image_name_the_file_system_cannot_take_is_refused_naming_the_
     (tmp_path / "m.yaml").write_text(f"image: {image}\norigin: [0, 0, 0]\n" + MAP_KEYS)
     with pytest.raises(ValueError, match=r"ROS map .*m\.yaml: " + match):
         PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
+def test_a_house_expo_file_without_its_keys_lists_the_keys_it_has_briefly(tmp_path: Path) -> None:
+    """A HouseExpo file whose 'verts' key was renamed to a 6,000-character name listed every key
+    whole: a 6 KB message."""
+    import json
+
+    (tmp_path / "h.json").write_text(json.dumps({"bbox": {"min": [0, 0], "max": [1, 1]}, "v" * 6000: [[0, 0]]}))
+    with pytest.raises(ValueError, match=r"h\.json' has no 'verts' key \(keys: \['bbox', 'vvvv") as info:
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    assert len(str(info.value)) < 300

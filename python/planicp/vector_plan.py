@@ -163,7 +163,7 @@ def house_expo_segments(
         raise ValueError(f"{name} must hold a JSON object with 'verts' and 'bbox', got {type(data).__name__}")
     for key in ("verts", "bbox"):
         if key not in data:
-            raise ValueError(f"{name} has no {key!r} key (keys: {sorted(map(str, data))})")
+            raise ValueError(f"{name} has no {key!r} key (keys: {brief(sorted(map(str, data)))})")
 
     verts = _json_points(data["verts"], f"{name}, key 'verts'")
     if len(verts) >= 2 and (verts[-1] == verts[0]).all():
@@ -244,7 +244,8 @@ def dxf_segments(
     except MemoryError:
         raise
     except Exception as exc:  # noqa: BLE001 - ezdxf's recovery raises what its parsing meets (IndexError, ...)
-        reason = str(exc) if isinstance(exc, (DXFError, OSError, UnicodeDecodeError)) else f"{type(exc).__name__}: {exc}"
+        known = isinstance(exc, (DXFError, OSError, UnicodeDecodeError))
+        reason = str(exc) if known else f"{type(exc).__name__}: {exc}"
         raise ValueError(f"{name} could not be read as DXF: {one_line(reason)}") from None
 
     try:
