@@ -728,3 +728,16 @@ def test_a_house_expo_file_without_its_keys_lists_the_keys_it_has_briefly(tmp_pa
     with pytest.raises(ValueError, match=r"h\.json' has no 'verts' key \(keys: \['bbox', 'vvvv") as info:
         PlanMap.from_house_expo(tmp_path / "h.json")
     assert len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize(("line", "key"), [
+    ("plans: [{path: hall.png, resolution: 0.05, origin: [1, 2, BIG]}]", r"'plans\[0\]': origin"),
+    ("plans: [default]\nfurniture: [BIG]", r"'furniture\[0\]': furniture"),
+    ("plans: [default]\nsensors: {a: {range_max: BIG}}", r"'sensors\.a': range_max"),
+])
+def test_a_study_number_of_hundreds_of_digits_is_a_study_error(tmp_path: Path, line: str, key: str) -> None:
+    """An integer of 400 digits where a float belongs raised OverflowError ("int too large to convert
+    to float") from load_study."""
+    (tmp_path / "s.yaml").write_text("name: x\n" + line.replace("BIG", "9" * 400) + "\n")
+    with pytest.raises(StudyError, match=rf"key {key} is too large a number, got 9{{18}}\.\.\.9{{19}}"):
+        load_study(tmp_path / "s.yaml")

@@ -94,7 +94,8 @@ class PlanSource:
         if self.resolution is not None:
             value = _number(self.resolution, "resolution")
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"resolution must be a positive number of metres per pixel, got {brief(self.resolution)}")
+                raise ValueError(f"resolution must be a positive number of metres per pixel, got "
+                                 f"{brief(self.resolution)}")
             object.__setattr__(self, "resolution", value)
         origin = self.origin
         if isinstance(origin, (str, bytes)) or not isinstance(origin, (list, tuple)) or len(origin) != 3:
@@ -300,7 +301,7 @@ class Study:
                 raise StudyError(f"unknown key(s) {brief([f'icp.{name}.{k}' for k in unknown])}; known: {icp_keys}")
             try:
                 IcpConfig.for_tracking(**dict(changes))
-            except (TypeError, ValueError) as exc:
+            except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
                 raise StudyError(f"key {brief(f'icp.{name}')}: {one_line(str(exc), 300)}") from None
         for name, sensor in self.sensors.items():
             for oname, odom in self.odometry.items():
@@ -415,7 +416,10 @@ def _number(value: Any, name: str) -> float:
         value = _number_text(value)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValueError(f"{name} must be a number, got {brief(value)}")
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise ValueError(f"{name} is too large a number, got {brief(value)}") from None
 
 
 def _number_text(text: str) -> Any:
@@ -429,7 +433,7 @@ def _number_text(text: str) -> Any:
 def _at(where: str, convert: Any, value: Any, name: str) -> Any:
     try:
         return convert(value, name)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
         raise StudyError(f"key {brief(where)}: {one_line(str(exc), 300)}") from None
 
 
@@ -455,7 +459,7 @@ def _dataclass(cls: Any, value: Any, key: str) -> Any:
         raise StudyError(f"unknown key(s) {brief([f'{key}.{k}' for k in unknown])}; known: {known}")
     try:
         return cls(**{str(k): v for k, v in values.items()})
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
         raise StudyError(f"key {brief(key)}: {one_line(str(exc), 300)}") from None
 
 
