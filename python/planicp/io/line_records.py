@@ -62,15 +62,21 @@ class LineTally:
                           f"({first.kind}): {first.reason}", stacklevel=stacklevel + 1)
 
 
+MAX_KIND_CHARS = 40
+"""Longest record kind kept (in `skipped`, bad lines and messages): a longer first token is cut."""
+
+
 def records(tally: LineTally) -> Iterator[tuple[int, str, list[str]]]:
     """(1-based line number, record kind, whitespace-split fields) of every line of `tally.source`
-    that is not empty or a `#` comment. A compressed stream that ends early ends the records (the
-    lines before the break are kept and the break is tallied), or raises with `errors="raise"`."""
+    that is not empty or a `#` comment. The kind is the first field, cut to `MAX_KIND_CHARS`. A
+    compressed stream that ends early ends the records (the lines before the break are kept and the
+    break is tallied), or raises with `errors="raise"`."""
     try:
         for line, text in read_lines(tally.source):
             fields = text.split()
             if fields and not fields[0].startswith("#"):
-                yield line, fields[0], fields
+                kind = fields[0] if len(fields[0]) <= MAX_KIND_CHARS else fields[0][:MAX_KIND_CHARS - 3] + "..."
+                yield line, kind, fields
     except TruncatedStream as exc:
         if tally.errors == "raise":
             raise
