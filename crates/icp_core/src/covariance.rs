@@ -7,6 +7,8 @@
 //! `J = [n_x, n_y, n . perp(p - t)]` and `sigma^2` the residual variance along the normals. `H`
 //! itself is returned too: it tells along which direction the walls fix the pose (degeneracy).
 
+use crate::cancel::{self, Cancel};
+use crate::error::Result;
 use crate::point_map::PointMap;
 use crate::pose::Pose2;
 use nalgebra::{Matrix3, Vector3};
@@ -17,39 +19,57 @@ pub const NORMAL_NEIGHBOURS: usize = 6;
 /// Unit normal of the plan's wall at every point (least-squares line through the point's
 /// [`NORMAL_NEIGHBOURS`] nearest plan points); `[0, 0]` where no direction can be fitted.
 pub fn estimate_normals(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2) -> Vec<[f64; 2]> {
+    match estimate_normals_interruptible(map_points, tree, cancel::NEVER) {
+        Ok(normals) => normals,
+        Err(_) => unreachable!("a hook that never stops cannot interrupt"),
+    }
+}
+
+/// [`estimate_normals`] that polls `cancel` every [`cancel::POLL_EVERY`] points and stops with
+/// [`crate::error::IcpError::Interrupted`] when it says so.
+pub fn estimate_normals_interruptible(
+    map_points: &[[f64; 2]],
+    tree: &crate::point_map::Tree2,
+    cancel: Cancel<'_>,
+) -> Result<Vec<[f64; 2]>> {
+    let mut normals = Vec::with_capacity(map_points.len());
+    for chunk in map_points.chunks(cancel::POLL_EVERY) {
+        cancel::check(cancel)?;
+        normals.extend(chunk.iter().map(|p| normal_at(map_points, tree, p)));
+    }
+    Ok(normals)
+}
+
+/// The wall normal at `p` (see [`estimate_normals`]).
+fn normal_at(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2, p: &[f64; 2]) -> [f64; 2] {
     let k = std::num::NonZero::new(NORMAL_NEIGHBOURS).expect("k > 0");
-    map_points
-        .iter()
-        .map(|p| {
-            let nn = tree.nearest_n::<kiddo::SquaredEuclidean>(p, k);
-            if nn.len() < 3 {
-                return [0.0, 0.0];
-            }
-            let inv = 1.0 / nn.len() as f64;
-            let (mut mx, mut my) = (0.0, 0.0);
-            for n in &nn {
-                let q = map_points[n.item as usize];
-                mx += q[0] - p[0];
-                my += q[1] - p[1];
-            }
-            mx *= inv;
-            my *= inv;
-            let (mut cxx, mut cxy, mut cyy) = (0.0, 0.0, 0.0);
-            for n in &nn {
-                let q = map_points[n.item as usize];
-                let (dx, dy) = (q[0] - p[0] - mx, q[1] - p[1] - my);
-                cxx += dx * dx;
-                cxy += dx * dy;
-                cyy += dy * dy;
-            }
-            if cxx + cyy <= 0.0 {
-                return [0.0, 0.0];
-            }
-            // Direction of the major axis; the normal is perpendicular to it.
-            let phi = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
-            [-phi.sin(), phi.cos()]
-        })
-        .collect()
+    let nn = tree.nearest_n::<kiddo::SquaredEuclidean>(p, k);
+    if nn.len() < 3 {
+        return [0.0, 0.0];
+    }
+    let inv = 1.0 / nn.len() as f64;
+    let (mut mx, mut my) = (0.0, 0.0);
+    for n in &nn {
+        let q = map_points[n.item as usize];
+        mx += q[0] - p[0];
+        my += q[1] - p[1];
+    }
+    mx *= inv;
+    my *= inv;
+    let (mut cxx, mut cxy, mut cyy) = (0.0, 0.0, 0.0);
+    for n in &nn {
+        let q = map_points[n.item as usize];
+        let (dx, dy) = (q[0] - p[0] - mx, q[1] - p[1] - my);
+        cxx += dx * dx;
+        cxy += dx * dy;
+        cyy += dy * dy;
+    }
+    if cxx + cyy <= 0.0 {
+        return [0.0, 0.0];
+    }
+    // Direction of the major axis; the normal is perpendicular to it.
+    let phi = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    [-phi.sin(), phi.cos()]
 }
 
 /// How well an alignment fixes the pose.

@@ -90,6 +90,10 @@ pub enum IcpError {
         /// How many bytes were asked for.
         bytes: u128,
     },
+    /// The caller's [`crate::cancel::Cancel`] hook asked the computation to stop (in Python: a
+    /// signal such as Ctrl-C arrived; the binding raises its exception instead of this error).
+    #[error("interrupted: the caller asked the computation to stop")]
+    Interrupted,
 }
 
 /// A vector of `n` copies of `value`, allocated fallibly: an error instead of an abort when the

@@ -21,6 +21,7 @@
 //! The result is a set of hypotheses on a `resolution` lattice; [`crate::relocalization`] refines
 //! them with ICP and ranks them.
 
+use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
 use crate::point_map::PointMap;
@@ -34,6 +35,10 @@ pub const MIN_SEARCH_POINTS: usize = 10;
 
 /// Most rotations one search may sweep.
 pub const MAX_ROTATIONS: usize = 20_000;
+
+/// Nodes scored between two polls of a [`Cancel`] hook (a node costs tens to hundreds of
+/// nanoseconds: a poll every 0.1 ms or so).
+pub const NODES_PER_POLL: u64 = 1024;
 
 /// Settings of the global search. Distances in metres, angles in radians.
 #[derive(Clone, Debug, PartialEq)]
@@ -362,8 +367,19 @@ impl GlobalMatcher {
     /// Searches the whole plan (`window` `None`) or a window for the poses that best explain
     /// `scan` (points in the robot frame, metres).
     pub fn search(&self, scan: &[[f64; 2]], window: Option<&SearchWindow>) -> Result<SearchOutcome> {
+        self.search_interruptible(scan, window, cancel::NEVER)
+    }
+
+    /// [`GlobalMatcher::search`] that polls `cancel` every [`NODES_PER_POLL`] nodes and stops
+    /// with [`IcpError::Interrupted`] when it says so.
+    pub fn search_interruptible(
+        &self,
+        scan: &[[f64; 2]],
+        window: Option<&SearchWindow>,
+        cancel: Cancel<'_>,
+    ) -> Result<SearchOutcome> {
         let mut run = self.start(scan, window)?;
-        run.advance(self, u64::MAX);
+        run.advance_interruptible(self, u64::MAX, cancel)?;
         Ok(run.outcome())
     }
 
@@ -518,14 +534,34 @@ impl SearchRun {
     /// search has ended (every node that could beat the
     /// candidates expanded, or `max_nodes` scored in all).
     pub fn advance(&mut self, matcher: &GlobalMatcher, budget: u64) -> bool {
+        match self.advance_interruptible(matcher, budget, cancel::NEVER) {
+            Ok(ended) => ended,
+            Err(_) => unreachable!("a hook that never stops cannot interrupt"),
+        }
+    }
+
+    /// [`SearchRun::advance`] that polls `cancel` every [`NODES_PER_POLL`] nodes and stops with
+    /// [`IcpError::Interrupted`] when it says so. The run stays where it stopped, between two
+    /// nodes: advanced again, it goes on as if it had not been interrupted.
+    pub fn advance_interruptible(
+        &mut self,
+        matcher: &GlobalMatcher,
+        budget: u64,
+        cancel: Cancel<'_>,
+    ) -> Result<bool> {
         let pyramid = &matcher.pyramid;
+        let mut next_poll = self.nodes.saturating_add(NODES_PER_POLL);
         let stop_at = self.nodes.saturating_add(budget.max(1));
         let [bx, by] = self.root_blocks;
         let roots = self.rotated.len() * bx * by;
         let block = 1i32 << self.top;
         while self.next_root < roots {
             if self.nodes >= stop_at {
-                return false;
+                return Ok(false);
+            }
+            if self.nodes >= next_poll {
+                cancel::check(cancel)?;
+                next_poll = self.nodes.saturating_add(NODES_PER_POLL);
             }
             if self.nodes >= self.max_nodes {
                 // More roots than the search may score: it ends without expanding any (and never
@@ -533,7 +569,7 @@ impl SearchRun {
                 self.complete = false;
                 self.finished = true;
                 self.roots = Vec::new();
-                return true;
+                return Ok(true);
             }
             let k = self.next_root;
             self.next_root += 1;
@@ -549,11 +585,15 @@ impl SearchRun {
         }
         while !self.finished {
             if self.nodes >= stop_at {
-                return false;
+                return Ok(false);
+            }
+            if self.nodes >= next_poll {
+                cancel::check(cancel)?;
+                next_poll = self.nodes.saturating_add(NODES_PER_POLL);
             }
             self.expand_next(pyramid);
         }
-        true
+        Ok(true)
     }
 
     /// Whether the search has ended.
@@ -868,6 +908,29 @@ pub(crate) mod tests {
         // A finished run stays finished and scores nothing more.
         assert!(run.advance(&matcher, 500));
         assert_eq!(run.nodes(), whole.nodes);
+    }
+
+    #[test]
+    fn an_interrupted_run_stops_between_nodes_and_resumes_to_the_same_result() {
+        let map = PointMap::new(asymmetric_floor(), None).unwrap();
+        let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
+        let whole = matcher.search(&scan, None).unwrap();
+        assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to interrupt", whole.nodes);
+        // Stop at the third poll: after 3 * NODES_PER_POLL nodes (up to three more), not later.
+        let polls = std::cell::Cell::new(0u32);
+        let third = || {
+            polls.set(polls.get() + 1);
+            polls.get() >= 3
+        };
+        let mut run = matcher.start(&scan, None).unwrap();
+        assert_eq!(run.advance_interruptible(&matcher, u64::MAX, &third), Err(IcpError::Interrupted));
+        assert_eq!(polls.get(), 3);
+        assert!(!run.finished() && (3 * NODES_PER_POLL..3 * NODES_PER_POLL + 4).contains(&run.nodes()));
+        assert!(run.advance(&matcher, u64::MAX));
+        assert_eq!(run.outcome(), whole);
+        assert_eq!(matcher.search_interruptible(&scan, None, &|| true).unwrap_err(), IcpError::Interrupted);
     }
 
     #[test]

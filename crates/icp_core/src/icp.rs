@@ -8,6 +8,7 @@
 //!    and covariance.
 
 use crate::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
+use crate::cancel::{self, Cancel};
 use crate::candidate_cache::CandidateCache;
 use crate::correspondence::{
     find_pairs, trim, trim_auto, Pair, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
@@ -214,6 +215,21 @@ pub fn align_seen(
     config: &IcpConfig,
     visible: Option<&[u32]>,
 ) -> Result<IcpResult> {
+    align_interruptible(map, scan, initial, config, visible, cancel::NEVER)
+}
+
+/// [`align_seen`] that polls `cancel` before every iteration (and while it builds the plan's
+/// nearest-wall index, when this alignment is the first to need it) and stops with
+/// [`IcpError::Interrupted`] when it says so: a budget of `max_iterations` that would run for
+/// hours can still be stopped.
+pub fn align_interruptible(
+    map: &PointMap,
+    scan: &[[f64; 2]],
+    initial: Pose2,
+    config: &IcpConfig,
+    visible: Option<&[u32]>,
+    cancel: Cancel<'_>,
+) -> Result<IcpResult> {
     if let Some(&bad) = visible.and_then(|v| v.iter().find(|&&i| i as usize >= map.len())) {
         return Err(invalid("visible point index", bad, "must index a plan point"));
     }
@@ -237,7 +253,10 @@ pub fn align_seen(
     let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
     let largest_distance = largest_factor * config.max_correspondence_distance;
     let indexed = match config.search {
-        CorrespondenceSearch::WallIndex => map.wall_index().ok().filter(|w| largest_distance <= w.reach()),
+        CorrespondenceSearch::WallIndex => match map.wall_index_interruptible(cancel) {
+            Err(IcpError::Interrupted) => return Err(IcpError::Interrupted),
+            built => built.ok().filter(|w| largest_distance <= w.reach()),
+        },
         CorrespondenceSearch::KdTree => None,
     };
     let target = if indexed.is_some() {
@@ -295,6 +314,7 @@ pub fn align_seen(
         let mut pending: Option<(Pose2, f64)> = None;
         let mut cooldown = 0usize;
         while iterations < end {
+            cancel::check(cancel)?;
             pose.transform_points(&used, &mut moved);
             if let Some(wall) = indexed {
                 let view = config.use_visibility.then(|| SensorView::new(&bearings, pose.yaw));
@@ -523,6 +543,56 @@ mod tests {
             early.iterations
         );
         assert!((early.pose.x - res.pose.x).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_cancel_hook_stops_an_endless_budget_and_a_silent_one_changes_nothing() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let scan = scan_from(&map, Pose2::new(5.0, 2.5, -0.2), &mut rng, 0.01);
+        let guess = Pose2::new(5.1, 2.4, -0.15);
+        for search in [CorrespondenceSearch::WallIndex, CorrespondenceSearch::KdTree] {
+            // Zero tolerances: every one of usize::MAX iterations would run (for centuries).
+            let endless = IcpConfig {
+                translation_tolerance: 0.0,
+                rotation_tolerance: 0.0,
+                max_iterations: usize::MAX,
+                search,
+                ..IcpConfig::default()
+            };
+            let polls = std::cell::Cell::new(0usize);
+            let after_200 = || {
+                polls.set(polls.get() + 1);
+                polls.get() > 200
+            };
+            let out = align_interruptible(&map, &scan, guess, &endless, None, &after_200);
+            assert_eq!(out, Err(IcpError::Interrupted));
+            // It stopped at the first poll that asked: no iteration ran after it.
+            assert_eq!(polls.get(), 201);
+            let bounded = IcpConfig { max_iterations: 17, ..endless };
+            let polls = std::cell::Cell::new(0usize);
+            let counting = || {
+                polls.set(polls.get() + 1);
+                false
+            };
+            let res = align_interruptible(&map, &scan, guess, &bounded, None, &counting).unwrap();
+            assert_eq!(res, align(&map, &scan, guess, &bounded).unwrap());
+            // At least once per iteration (the index, built already, polls no more).
+            assert!(polls.get() >= 17, "{} polls", polls.get());
+        }
+    }
+
+    #[test]
+    fn an_interrupted_index_build_is_not_kept() {
+        let map = PointMap::new(rooms(), None).unwrap();
+        let scan = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+        let out =
+            align_interruptible(&map, &scan, Pose2::new(5.0, 2.5, 0.0), &IcpConfig::default(), None, &|| {
+                true
+            });
+        assert_eq!(out, Err(IcpError::Interrupted));
+        assert!(map.built_wall_index().is_none());
+        assert!(map.wall_index().is_ok() && map.built_wall_index().is_some());
     }
 
     #[test]

@@ -27,9 +27,11 @@
 //! - [`relocalization`]: global search candidates refined by ICP, ranked, with their ambiguity.
 //! - [`covariance`]: the pose covariance of a finished alignment.
 //! - [`error`]: every way the core can refuse its input.
+//! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
 
 pub mod acceleration;
 pub mod bucket_grid;
+pub mod cancel;
 pub mod candidate_cache;
 pub mod cell_traversal;
 pub mod clearance;

@@ -31,6 +31,7 @@
 //! sorted by distance to the block centre), then for every cell the exact nearest distance and
 //! its list from that short, sorted prefix.
 
+use crate::cancel::{self, Cancel};
 use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
 use crate::point_map::Tree2;
@@ -140,6 +141,19 @@ impl NearestWallIndex {
         cell: f64,
         reach: f64,
     ) -> Result<Self> {
+        Self::new_interruptible(points, tree, seen, cell, reach, cancel::NEVER)
+    }
+
+    /// [`NearestWallIndex::new`] that polls `cancel` every [`cancel::POLL_EVERY`] blocks and stops
+    /// with [`IcpError::Interrupted`] when it says so.
+    pub fn new_interruptible(
+        points: &[[f64; 2]],
+        tree: &Tree2,
+        seen: Option<&[u16]>,
+        cell: f64,
+        reach: f64,
+        cancel: Cancel<'_>,
+    ) -> Result<Self> {
         if !(cell.is_finite() && cell > 0.0) {
             return Err(invalid("index cell", cell, "must be a positive finite number of metres"));
         }
@@ -209,11 +223,11 @@ impl NearestWallIndex {
             lists: Vec::new(),
             sites,
         };
-        index.fill(points, tree)?;
+        index.fill(points, tree, cancel)?;
         Ok(index)
     }
 
-    fn fill(&mut self, points: &[[f64; 2]], tree: &Tree2) -> Result<()> {
+    fn fill(&mut self, points: &[[f64; 2]], tree: &Tree2, cancel: Cancel<'_>) -> Result<()> {
         let cell = self.cell;
         let half_diagonal = cell * std::f64::consts::FRAC_1_SQRT_2;
         let block_size = cell * BLOCK as f64;
@@ -230,7 +244,10 @@ impl NearestWallIndex {
         // Blocks within reach of some point, found point by point: free space costs nothing.
         let mut near = vec![false; self.blocks.len()];
         let pad = self.reach + half_diagonal + block_half_diagonal;
-        for p in points {
+        for (k, p) in points.iter().enumerate() {
+            if k % cancel::POLL_EVERY == 0 {
+                cancel::check(cancel)?;
+            }
             let span = |v: f64, o: f64, n: usize| {
                 let lo = ((v - pad - o) / block_size).floor().max(0.0) as usize;
                 let hi = (((v + pad - o) / block_size).floor() as usize).min(n - 1);
@@ -243,10 +260,16 @@ impl NearestWallIndex {
                 }
             }
         }
+        let mut visited = 0usize;
         for brow in 0..block_rows {
             for bcol in 0..self.block_cols {
                 if !near[brow * self.block_cols + bcol] {
                     continue;
+                }
+                // A block costs about a KD-tree query and 64 short scans: tens of microseconds.
+                visited += 1;
+                if visited % (cancel::POLL_EVERY / 64) == 0 {
+                    cancel::check(cancel)?;
                 }
                 let corner =
                     [self.origin[0] + bcol as f64 * block_size, self.origin[1] + brow as f64 * block_size];

@@ -1,17 +1,18 @@
 //! The plan as the ICP sees it: wall-surface points in metres (map frame), a KD-tree over them and
 //! a visibility raster, all built once and shared read-only between alignments and threads.
 
+use crate::cancel::{self, Cancel};
 use crate::covariance;
 use crate::error::{check_finite, IcpError, Result};
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
-use crate::wall_facing::visibility_masks;
+use crate::wall_facing::visibility_masks_interruptible;
 use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
 use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use kiddo::SquaredEuclidean;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 /// KD-tree over 2D points; items are indices into the point slice it was built from.
 pub type Tree2 = ImmutableKdTree<f64, u32, 2, 16>;
@@ -42,6 +43,18 @@ pub struct PointMap {
     index_cell: Option<f64>,
     index_reach: f64,
     wall_index: OnceLock<Result<NearestWallIndex>>,
+    /// Held while the index is built, so that one thread builds it and the others wait.
+    index_build: BuildLock,
+}
+
+/// A mutex that a cloned map gets afresh (nothing is being built in the clone).
+#[derive(Debug, Default)]
+struct BuildLock(Mutex<()>);
+
+impl Clone for BuildLock {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
 }
 
 impl PointMap {
@@ -59,6 +72,17 @@ impl PointMap {
         points: Vec<[f64; 2]>,
         normals: Option<Vec<[f64; 2]>>,
         raster_resolution: Option<f64>,
+    ) -> Result<Self> {
+        Self::build(points, normals, raster_resolution, cancel::NEVER)
+    }
+
+    /// [`PointMap::with_normals`] that polls `cancel` while it fits the normals and stops with
+    /// [`IcpError::Interrupted`] when it says so.
+    pub fn build(
+        points: Vec<[f64; 2]>,
+        normals: Option<Vec<[f64; 2]>>,
+        raster_resolution: Option<f64>,
+        cancel: Cancel<'_>,
     ) -> Result<Self> {
         if points.is_empty() {
             return Err(IcpError::Empty { what: "plan" });
@@ -90,7 +114,7 @@ impl PointMap {
                 check_finite("normals", &n)?;
                 n
             }
-            None => covariance::estimate_normals(&points, &tree),
+            None => covariance::estimate_normals_interruptible(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,
@@ -101,6 +125,7 @@ impl PointMap {
             index_cell: None,
             index_reach: DEFAULT_INDEX_REACH,
             wall_index: OnceLock::new(),
+            index_build: BuildLock::default(),
         })
     }
 
@@ -128,25 +153,56 @@ impl PointMap {
     /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
     /// plan's extent at its cell size.
     pub fn wall_index(&self) -> Result<&NearestWallIndex> {
-        self.wall_index
-            .get_or_init(|| {
-                let cell = if let Some(cell) = self.index_cell {
-                    cell
-                } else {
-                    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-                    for p in &self.points {
-                        for k in 0..2 {
-                            lo[k] = lo[k].min(p[k]);
-                            hi[k] = hi[k].max(p[k]);
-                        }
-                    }
-                    cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
-                };
-                let seen = visibility_masks(&self.points, &self.normals, &self.raster);
-                NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach)
-            })
-            .as_ref()
-            .map_err(Clone::clone)
+        self.wall_index_interruptible(cancel::NEVER)
+    }
+
+    /// [`PointMap::wall_index`] that polls `cancel` while it builds the index and stops with
+    /// [`IcpError::Interrupted`] when it says so; an interrupted build is not kept, the next
+    /// call starts it again. Threads that ask while another builds wait for its index.
+    pub fn wall_index_interruptible(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
+        if let Some(built) = self.wall_index.get() {
+            return built.as_ref().map_err(Clone::clone);
+        }
+        // A panic while building (a bug) poisons the lock; the index was not set, so building
+        // again is sound.
+        let _building = self.index_build.0.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if self.wall_index.get().is_none() {
+            match self.build_wall_index(cancel) {
+                Err(IcpError::Interrupted) => return Err(IcpError::Interrupted),
+                outcome => {
+                    // Under the lock no other thread sets it.
+                    let _ = self.wall_index.set(outcome);
+                }
+            }
+        }
+        match self.wall_index.get() {
+            Some(built) => built.as_ref().map_err(Clone::clone),
+            None => unreachable!("set above under the build lock"),
+        }
+    }
+
+    fn build_wall_index(&self, cancel: Cancel<'_>) -> Result<NearestWallIndex> {
+        let cell = if let Some(cell) = self.index_cell {
+            cell
+        } else {
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in &self.points {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
+        };
+        let seen = visibility_masks_interruptible(&self.points, &self.normals, &self.raster, cancel)?;
+        NearestWallIndex::new_interruptible(
+            &self.points,
+            &self.tree,
+            Some(&seen),
+            cell,
+            self.index_reach,
+            cancel,
+        )
     }
 
     /// The wall points, metres, map frame.
@@ -296,6 +352,15 @@ mod tests {
             PointMap::new(vec![[0.0, 0.0], [f64::NAN, 1.0]], None).unwrap_err(),
             IcpError::NonFinite { what: "plan", row: 1 }
         );
+    }
+
+    #[test]
+    fn a_build_asked_to_stop_stops() {
+        let pts: Vec<[f64; 2]> = (0..10_000).map(|i| [i as f64 * 0.01, 0.0]).collect();
+        assert_eq!(PointMap::build(pts.clone(), None, None, &|| true).unwrap_err(), IcpError::Interrupted);
+        // With normals given there is nothing long to poll in.
+        let normals = vec![[0.0, 1.0]; pts.len()];
+        assert!(PointMap::build(pts, Some(normals), None, &|| true).is_ok());
     }
 
     #[test]

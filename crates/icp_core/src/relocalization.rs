@@ -10,9 +10,10 @@
 //! and the result is `ambiguous` when it is at least `1 - ambiguity_margin`: in a symmetric
 //! building the scan alone cannot tell those places apart.
 
+use crate::cancel::{self, Cancel};
 use crate::error::{invalid, Result};
 use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
-use crate::icp::{align, IcpConfig, IcpResult};
+use crate::icp::{align_interruptible, IcpConfig, IcpResult};
 use crate::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 
@@ -82,10 +83,25 @@ pub fn relocalize(
     icp: &IcpConfig,
     ranking: &RankingConfig,
 ) -> Result<Relocalization> {
+    relocalize_interruptible(map, matcher, scan, window, icp, ranking, cancel::NEVER)
+}
+
+/// [`relocalize`] that polls `cancel` during the search and the alignments (see
+/// [`GlobalMatcher::search_interruptible`], [`crate::icp::align_interruptible`]) and stops with
+/// [`crate::error::IcpError::Interrupted`] when it says so.
+pub fn relocalize_interruptible(
+    map: &PointMap,
+    matcher: &GlobalMatcher,
+    scan: &[[f64; 2]],
+    window: Option<&SearchWindow>,
+    icp: &IcpConfig,
+    ranking: &RankingConfig,
+    cancel: Cancel<'_>,
+) -> Result<Relocalization> {
     icp.validate()?;
     ranking.validate()?;
-    let search = matcher.search(scan, window)?;
-    refine(map, matcher, scan, search, icp, ranking)
+    let search = matcher.search_interruptible(scan, window, cancel)?;
+    refine_interruptible(map, matcher, scan, search, icp, ranking, cancel)
 }
 
 /// The candidates of a finished search (`search`, of `scan` with `matcher`; see
@@ -99,11 +115,25 @@ pub fn refine(
     icp: &IcpConfig,
     ranking: &RankingConfig,
 ) -> Result<Relocalization> {
+    refine_interruptible(map, matcher, scan, search, icp, ranking, cancel::NEVER)
+}
+
+/// [`refine`] that polls `cancel` during the alignments and stops with
+/// [`crate::error::IcpError::Interrupted`] when it says so.
+pub fn refine_interruptible(
+    map: &PointMap,
+    matcher: &GlobalMatcher,
+    scan: &[[f64; 2]],
+    search: SearchOutcome,
+    icp: &IcpConfig,
+    ranking: &RankingConfig,
+    cancel: Cancel<'_>,
+) -> Result<Relocalization> {
     icp.validate()?;
     ranking.validate()?;
     let mut refined = Vec::with_capacity(search.candidates.len());
     for c in &search.candidates {
-        let alignment = align(map, scan, c.pose, icp)?;
+        let alignment = align_interruptible(map, scan, c.pose, icp, None, cancel)?;
         refined.push(RankedCandidate {
             pose: alignment.pose,
             score: alignment.inlier_ratio,

@@ -14,6 +14,8 @@
 //! occluders within reach: a far face seen at less than about 18 degrees to its plane through a
 //! 0.2 m wall, and an occluder farther than [`OCCLUSION_REACH`] from the point, are not caught.
 
+use crate::cancel::{self, Cancel};
+use crate::error::Result;
 use crate::wall_raster::WallRaster;
 
 /// Directions per point.
@@ -30,16 +32,30 @@ pub const SEEN_FROM_EVERYWHERE: u16 = u16::MAX;
 /// cell and a half of the point's own wall line are the wall itself (a rotated wall's raster
 /// staircase), not an occluder.
 pub fn visibility_masks(points: &[[f64; 2]], normals: &[[f64; 2]], raster: &WallRaster) -> Vec<u16> {
+    match visibility_masks_interruptible(points, normals, raster, cancel::NEVER) {
+        Ok(masks) => masks,
+        Err(_) => unreachable!("a hook that never stops cannot interrupt"),
+    }
+}
+
+/// [`visibility_masks`] that polls `cancel` every [`cancel::POLL_EVERY`] points and stops with
+/// [`crate::error::IcpError::Interrupted`] when it says so.
+pub fn visibility_masks_interruptible(
+    points: &[[f64; 2]],
+    normals: &[[f64; 2]],
+    raster: &WallRaster,
+    cancel: Cancel<'_>,
+) -> Result<Vec<u16>> {
     let directions: Vec<[f64; 2]> = (0..SECTORS)
         .map(|k| {
             let a = (k as f64 + 0.5) * std::f64::consts::TAU / SECTORS as f64;
             [a.cos(), a.sin()]
         })
         .collect();
-    points
-        .iter()
-        .zip(normals)
-        .map(|(&p, &n)| {
+    let mut masks = Vec::with_capacity(points.len());
+    for (chunk, chunk_normals) in points.chunks(cancel::POLL_EVERY).zip(normals.chunks(cancel::POLL_EVERY)) {
+        cancel::check(cancel)?;
+        masks.extend(chunk.iter().zip(chunk_normals).map(|(&p, &n)| {
             directions.iter().enumerate().fold(0u16, |mask, (k, &d)| {
                 if occluded(raster, p, n, d) {
                     mask
@@ -47,8 +63,9 @@ pub fn visibility_masks(points: &[[f64; 2]], normals: &[[f64; 2]], raster: &Wall
                     mask | (1 << k)
                 }
             })
-        })
-        .collect()
+        }));
+    }
+    Ok(masks)
 }
 
 /// Whether a march from `p` along the unit direction `d` meets a wall cell past the free cells

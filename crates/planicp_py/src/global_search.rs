@@ -1,11 +1,13 @@
 //! `planicp._core.GlobalMatcher` and `relocalize`: global relocalization on the plan
 //! (`icp_core::global_search`, `icp_core::relocalization`). `planicp.relocalize` wraps them.
 
-use crate::{guarded, points_from, Alignment, IcpSettings, PyPointMap};
+use crate::{guarded, interruptible, points_from, Alignment, IcpSettings, PyPointMap};
 use icp_core::global_search::{
     GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
 };
-use icp_core::relocalization::{refine as core_refine, relocalize as core_relocalize, RankingConfig};
+use icp_core::relocalization::{
+    refine_interruptible as core_refine, relocalize_interruptible as core_relocalize, RankingConfig,
+};
 use icp_core::{PointMap, Pose2};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
@@ -137,7 +139,7 @@ impl SearchRun {
     /// returns whether the search has ended.
     fn advance(&mut self, py: Python<'_>, budget: u64) -> PyResult<bool> {
         let (run, matcher) = (&mut self.run, &self.matcher);
-        py.detach(|| guarded(|| Ok(run.advance(matcher, budget))))
+        interruptible(py, |cancel| run.advance_interruptible(matcher, budget, cancel))
     }
 
     /// Whether the search has ended.
@@ -165,8 +167,8 @@ impl SearchRun {
         let icp = settings.inner.clone();
         let ranking = RankingConfig { max_candidates, ambiguity_margin };
         let outcome = self.run.outcome();
-        let out = py.detach(|| {
-            guarded(|| core_refine(&self.map, &self.matcher, &self.scan, outcome, &icp, &ranking))
+        let out = interruptible(py, |cancel| {
+            core_refine(&self.map, &self.matcher, &self.scan, outcome, &icp, &ranking, cancel)
         })?;
         wrap(py, out)
     }
@@ -226,8 +228,9 @@ pub fn relocalize(
     let icp = settings.inner.clone();
     let ranking = RankingConfig { max_candidates, ambiguity_margin };
     let window = window_from(window);
-    let out =
-        py.detach(|| guarded(|| core_relocalize(&map, &core, &pts, window.as_ref(), &icp, &ranking)))?;
+    let out = interruptible(py, |cancel| {
+        core_relocalize(&map, &core, &pts, window.as_ref(), &icp, &ranking, cancel)
+    })?;
     wrap(py, out)
 }
 

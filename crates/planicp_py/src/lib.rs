@@ -2,8 +2,11 @@
 //!
 //! Inputs are copied out of numpy arrays, the GIL is released for the numerical work, core errors
 //! become `PlanicpError` (a `ValueError`), and a panic inside the core is caught and raised as
-//! `PlanicpInternalError` (a `RuntimeError`) instead of crossing into Python.
+//! `PlanicpInternalError` (a `RuntimeError`) instead of crossing into Python. Calls that can run
+//! for seconds on their input (alignments, searches, map and index builds) look for Python signals
+//! every 50 ms, so that Ctrl-C stops them with KeyboardInterrupt.
 
+use icp_core::cancel::Cancel;
 use icp_core::icp::CorrespondenceSearch;
 use icp_core::{IcpConfig, IcpError, IcpResult, PointMap, Pose2};
 use numpy::ndarray::Array2;
@@ -11,8 +14,10 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMet
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
+use std::cell::{Cell, RefCell};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 mod global_search;
 mod log_odds_grid;
@@ -50,6 +55,60 @@ pub(crate) fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T>
     }
 }
 
+/// Longest a native call runs between two looks for Python signals (Ctrl-C), seconds.
+const SIGNAL_CHECK_INTERVAL: Duration = Duration::from_millis(50);
+
+/// The hook a long core computation polls (`icp_core::cancel`): at most every
+/// [`SIGNAL_CHECK_INTERVAL`] it attaches to Python and runs its signal handlers; an exception they
+/// raise (KeyboardInterrupt for Ctrl-C) is kept and stops the computation. Between those looks a
+/// poll only reads the clock.
+struct SignalCheck {
+    last: Cell<Instant>,
+    raised: RefCell<Option<PyErr>>,
+}
+
+impl SignalCheck {
+    fn new() -> Self {
+        Self { last: Cell::new(Instant::now()), raised: RefCell::new(None) }
+    }
+
+    fn poll(&self) -> bool {
+        if self.raised.borrow().is_some() {
+            return true;
+        }
+        let now = Instant::now();
+        if now.duration_since(self.last.get()) < SIGNAL_CHECK_INTERVAL {
+            return false;
+        }
+        self.last.set(now);
+        // No Python to ask (the interpreter is shutting down): go on.
+        match Python::try_attach(|py| py.check_signals()) {
+            Some(Err(raised)) => {
+                *self.raised.borrow_mut() = Some(raised);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
+/// Runs `f` with the GIL released, as [`guarded`] does, handing it a cancel hook that looks for
+/// Python signals every [`SIGNAL_CHECK_INTERVAL`]: a Ctrl-C during a long computation stops it
+/// and raises its KeyboardInterrupt (not a PlanicpError) when `f` has returned.
+pub(crate) fn interruptible<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce(Cancel<'_>) -> Result<T, IcpError> + Send,
+) -> PyResult<T> {
+    py.detach(|| {
+        let signals = SignalCheck::new();
+        let out = guarded(|| f(&|| signals.poll()));
+        match signals.raised.into_inner() {
+            Some(raised) => Err(raised),
+            None => out,
+        }
+    })
+}
+
 /// Copies an (N, 2) float64 array into owned points; `what` names it in errors.
 pub(crate) fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
     let shape = array.shape();
@@ -85,7 +144,7 @@ impl PyPointMap {
     ) -> PyResult<Self> {
         let pts = points_from("plan points", &points)?;
         let normals = normals.map(|n| points_from("normals", &n)).transpose()?;
-        let map = py.detach(|| guarded(|| PointMap::with_normals(pts, normals, raster_resolution)))?;
+        let map = interruptible(py, |cancel| PointMap::build(pts, normals, raster_resolution, cancel))?;
         Ok(Self { inner: Arc::new(map) })
     }
 
@@ -115,12 +174,10 @@ impl PyPointMap {
     /// (cell m, reach m, memory bytes, stored blocks, blocks, candidates).
     fn wall_index_stats(&self, py: Python<'_>) -> PyResult<(f64, f64, usize, usize, usize, usize)> {
         let map = Arc::clone(&self.inner);
-        py.detach(|| {
-            guarded(|| {
-                map.wall_index().map(|index| {
-                    let s = index.stats();
-                    (index.cell(), index.reach(), s.memory_bytes, s.stored_blocks, s.blocks, s.candidates)
-                })
+        interruptible(py, |cancel| {
+            map.wall_index_interruptible(cancel).map(|index| {
+                let s = index.stats();
+                (index.cell(), index.reach(), s.memory_bytes, s.stored_blocks, s.blocks, s.candidates)
             })
         })
     }
@@ -356,16 +413,15 @@ fn align(
     let config = settings.inner.clone();
     let initial = Pose2::new(initial.0, initial.1, initial.2);
     let view = view.map(|v| Arc::clone(&v.inner));
-    let inner = py.detach(|| {
-        guarded(|| {
-            icp_core::icp::align_seen(
-                &map,
-                &pts,
-                initial,
-                &config,
-                view.as_ref().map(|v| v.visible.as_slice()),
-            )
-        })
+    let inner = interruptible(py, |cancel| {
+        icp_core::icp::align_interruptible(
+            &map,
+            &pts,
+            initial,
+            &config,
+            view.as_ref().map(|v| v.visible.as_slice()),
+            cancel,
+        )
     })?;
     Ok(Alignment { inner })
 }

@@ -35,7 +35,8 @@ def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig |
         TypeError: an argument of the wrong type.
         ValueError: a malformed scan (shape, NaN/inf, fewer than 3 points) or pose.
 
-    The GIL is released while the alignment runs.
+    The GIL is released while the alignment runs; it looks for Python signals every 50 ms, so
+    that Ctrl-C stops even a huge `max_iterations` with KeyboardInterrupt.
     """
     if not isinstance(plan, PlanMap):
         raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")

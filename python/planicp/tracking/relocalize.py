@@ -232,7 +232,8 @@ def relocalize(
         ValueError: a malformed scan (shape, NaN/inf, fewer than 10 distinct points), region or
             setting.
 
-    The GIL is released while the search runs.
+    The GIL is released while the search runs; it looks for Python signals every 50 ms, so that
+    Ctrl-C stops it with KeyboardInterrupt.
     """
     start = time.perf_counter()
     config, count, points, window = _search_arguments(scan_xy, plan, region, config, max_candidates)
@@ -280,7 +281,9 @@ class SearchInSteps:
         return self._run.nodes
 
     def advance(self, budget: int) -> Relocalization | None:
-        """Scores up to `budget` (>= 1) more nodes; the result once the search has ended, else None."""
+        """Scores up to `budget` (>= 1) more nodes; the result once the search has ended, else None.
+        Ctrl-C stops it between nodes with KeyboardInterrupt; advanced again, the search goes on
+        from there."""
         nodes = whole_number(budget, "budget", 1, 2**62)
         start = time.perf_counter()
         if not self._run.advance(nodes):
