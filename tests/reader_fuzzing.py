@@ -472,6 +472,29 @@ def mutate_tree(rng: random.Random, tree: Any, splice: bool) -> Any:
     return tree
 
 
+def text_size(tree: Any, limit: int) -> int:
+    """About how many characters a YAML dump of `tree` takes: each list or mapping once (the dumper
+    writes a shared one as an alias), each scalar every time it occurs; past `limit`, `limit + 1`."""
+    total = 0
+    seen: set[int] = set()
+    stack = [tree]
+    while stack:
+        value = stack.pop()
+        if isinstance(value, (dict, list)):
+            if id(value) in seen:
+                total += 8
+                continue
+            seen.add(id(value))
+            stack.extend(value.values() if isinstance(value, dict) else value)
+            if isinstance(value, dict):
+                stack.extend(value.keys())
+        else:
+            total += len(str(value)) + 4
+        if total > limit:
+            return limit + 1
+    return total
+
+
 def _as_value(text: bytes) -> Any:
     """A token as the int, float or (when it is no number) text a document would hold."""
     try:
@@ -547,10 +570,14 @@ def mutate_yaml(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
     for _ in range(rng.choice((1, 1, 2, 3))):
         tree = mutate_tree(rng, tree, splice)
     style = rng.choice((None, True, False))
-    try:
-        text = yaml.dump(tree, Dumper=dumper, sort_keys=False, default_flow_style=style,
-                         allow_unicode=rng.random() < 0.5, width=rng.choice((80, 10**6)))
-    except Exception:  # noqa: BLE001 - a tree the dumper refuses, or one repeated into gigabytes (MemoryError)
+    text = None
+    if text_size(tree, MAX_CASE_BYTES) <= MAX_CASE_BYTES:  # the dumper writes scalars out each time they occur
+        try:
+            text = yaml.dump(tree, Dumper=dumper, sort_keys=False, default_flow_style=style,
+                             allow_unicode=rng.random() < 0.5, width=rng.choice((80, 10**6)))
+        except Exception:  # noqa: BLE001 - a tree the dumper refuses
+            pass
+    if text is None:  # (outside the handler: its traceback would keep the dumper's buffers alive)
         return mutate_bytes(rng, data, others)
     if SPLICE in text:
         snippet = yaml_snippet(rng)
