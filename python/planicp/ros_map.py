@@ -139,10 +139,10 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     except (OSError, RuntimeError):  # a symlink loop: require_regular_file says so
         pass
     try:
-        missing = not image_path.exists() and not image_path.is_symlink()
+        absent = not image_path.exists() and not image_path.is_symlink()
     except OSError as exc:  # a name too long for the file system
         raise ValueError(f"ROS map {path}: image {brief(image)} cannot be opened: {exc.strerror or exc}") from None
-    if missing:
+    if absent:
         raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist "
                                 f"({one_line(str(image_path), 300)})")
     require_regular_file(image_path, f"ROS map image (from {path})")
