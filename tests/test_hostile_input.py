@@ -3,6 +3,7 @@ naming the file, in bounded memory and time (issue: hostile input and faults).""
 
 from __future__ import annotations
 
+import re
 import resource
 import subprocess
 import sys
@@ -13,7 +14,13 @@ import cv2
 import numpy as np
 import pytest
 
-from planicp import PlanMap
+import carmen_excerpt
+from planicp import EnhancedOccupancyGrid, PlanMap
+from planicp._core import PlanicpError
+from planicp.cli import main as cli_main
+from planicp.default_plan import default_plan_path, load_default_plan
+from planicp.io import read_carmen
+from planicp.log_evaluation import plan_from_scans
 from planicp._validation import brief
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
 from planicp.sweep import StudyError, load_study
@@ -329,7 +336,7 @@ def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anythi
     plan = load_default_plan()
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     for resolution in (0.001, 0.0005):
-        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a coarser"):
+        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a resolution of at least"):
             EnhancedOccupancyGrid(plan, resolution=resolution)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB
 
@@ -422,3 +429,399 @@ def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_sour
     monkeypatch.setattr(yaml_documents, "MAX_DOCUMENT_BYTES", 10)
     with pytest.raises(ValueError, match="^doc.yaml is 16 characters long; a YAML document here is at most 10"):
         load_yaml("a: 1\nb: 2\nc: 3\nd", "doc.yaml")
+
+
+@pytest.mark.parametrize("option", ["--open-px", "--close-px"])
+@pytest.mark.parametrize("size", [10**9, 2**40])
+def test_a_morphology_size_larger_than_the_image_is_one_clear_line(tmp_path: Path, option: str, size: int,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """`--open-px 1e9` gave a raw cv2.error (a 10^18-byte kernel), `--close-px 2**40` "Can't parse 'ksize'"."""
+    image = tmp_path / "plan.png"
+    cv2.imwrite(str(image), np.pad(np.zeros((20, 20), np.uint8), 10, constant_values=255))
+    code = cli_main(["plan", str(image), "--resolution", "0.05", option, str(size), "--out", str(tmp_path / "out"),
+                  "--no-cache"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1
+    assert f"{option[2:].replace('-', '_')}={size} pixels is larger than the plan image" in err and "40 x 40" in err
+
+
+def test_a_binary_file_given_as_a_log_gives_a_short_error(tmp_path: Path,
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """5 MB of random bytes to `replay` gave a 1.26 MB error quoting every junk "record type"."""
+    log = tmp_path / "binary.log"
+    log.write_bytes(np.random.default_rng(0).integers(0, 256, 5_000_000, dtype=np.uint8).tobytes())
+    code = cli_main(["replay", str(log), "--plan", str(default_plan_path()), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err) < 400, err[:1000]
+    assert "no usable FLASER, RLASER or ROBOTLASER1 line" in err and "(not a record): " in err
+
+
+@pytest.mark.parametrize(("param", "reason"), [
+    ("robot_front_laser_max abc", "is not a number"),
+    ("robot_front_laser_max -5", "must be a positive number of metres"),
+    ("robot_front_laser_max 1e400", "must be a positive number of metres"),
+    ("robot_frontlaser_offset 1e300", "must be a finite number within"),
+])
+def test_a_bad_param_line_is_skipped_and_named_not_the_whole_log(tmp_path: Path, param: str, reason: str) -> None:
+    """`PARAM robot_front_laser_max -5` refused the whole log ("need 0 <= range_min < range_max")
+    without naming file or line; `abc` or `1e300` were silently ignored or used."""
+    lines = ["PARAM " + param + " nohost 0", *carmen_excerpt.log_lines()]
+    path = tmp_path / "param.log"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(UserWarning, match=rf"param.log: skipped 1 malformed line\(s\); first at line 1 \(PARAM\): "
+                                         rf"{param.split()[0]}.*{reason}.*the default is used"):
+        log = read_carmen(path)
+    clean = tmp_path / "clean.log"
+    clean.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
+    reference = read_carmen(clean)
+    assert len(log) == carmen_excerpt.SCANS and log.skipped["PARAM (malformed)"] == 1
+    assert log[3].laser_pose == reference[3].laser_pose
+    np.testing.assert_array_equal(log[3].ranges, reference[3].ranges)
+    with pytest.raises(ValueError, match=rf"param.log, line 1: bad PARAM line: {param.split()[0]}"):
+        read_carmen(path, errors="raise")
+
+
+def test_plans_from_scans_too_fine_for_the_pixel_budget_name_the_finest_resolution_that_fits(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`evaluate-log --resolution 1e-6` tried to allocate 313 TiB (a traceback)."""
+    path = tmp_path / "room.log"
+    path.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
+    code = cli_main(["evaluate-log", str(path), "--resolution", "1e-6", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    finest = float(re.search(r"give a resolution of at least ([0-9.e-]+) m", err).group(1))  # type: ignore[union-attr]
+    # The quoted resolution fits the budget, and it is the finest that does (within 20 %).
+    log = read_carmen(path)
+    even = [f for k, f in enumerate(log) if k % 2 == 0]
+    plan_from_scans(even, finest)
+    with pytest.raises(ValueError, match="give a resolution of at least"):
+        plan_from_scans(even, finest / 1.2)
+
+
+def test_an_occupancy_grid_too_fine_names_the_finest_resolution_that_fits() -> None:
+    plan = load_default_plan()
+    with pytest.raises(PlanicpError, match="give a resolution of at least") as error:
+        EnhancedOccupancyGrid(plan, resolution=0.0005)
+    finest = float(re.search(r"at least ([0-9.e-]+) m", str(error.value)).group(1))  # type: ignore[union-attr]
+    EnhancedOccupancyGrid(plan, resolution=finest)
+    with pytest.raises(PlanicpError):
+        EnhancedOccupancyGrid(plan, resolution=finest * 0.98)
+
+
+# Found by fuzzing the readers (tests/reader_fuzzing.py, benches/fuzz_readers.py): each failed as
+# the test's docstring says before its fix.
+
+def _peak_growth_kib(before: int) -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+
+
+def test_a_yaml_file_over_the_document_limit_is_refused_before_it_is_read(tmp_path: Path) -> None:
+    """A 1.2 MB study (a list of 400,000 zeros) took 83 s in PyYAML's pure-Python parser before it
+    was refused, and a file was read whole before its length was checked. Now PyYAML's C parser is
+    used when it is there, and a YAML file over 256 KiB is refused from its size alone."""
+    from planicp.io.yaml_documents import MAX_DOCUMENT_BYTES
+
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nfurniture: [" + ", ".join(["0"] * 400_000) + "]\n")
+    with pytest.raises(StudyError, match=r"s\.yaml is 1200037 bytes long; a YAML document here is at most 262144"):
+        load_study(tmp_path / "s.yaml")
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    for name in ("sparse.yaml", "m.yaml"):
+        with open(tmp_path / name, "wb") as f:
+            f.truncate(2 << 30)  # 2 GiB, no blocks on disk
+    with pytest.raises(StudyError, match=r"sparse\.yaml is 2147483648 bytes long"):
+        load_study(tmp_path / "sparse.yaml")
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml is 2147483648 bytes long"):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+    assert _peak_growth_kib(before) < 50_000
+    # A document just under the limit is read (in seconds even without the C parser).
+    text = "name: x\nplans: [default]\nfurniture: [0, 0.5, 2]\n# " + "x" * 200_000 + "\n"
+    assert len(text) < MAX_DOCUMENT_BYTES
+    (tmp_path / "ok.yaml").write_text(text)
+    assert load_study(tmp_path / "ok.yaml")[0].furniture == (0.0, 0.5, 2.0)
+
+
+def test_a_study_value_made_of_a_long_string_aliased_thousands_of_times_is_quoted_briefly(tmp_path: Path) -> None:
+    """`plans: [[&s "x" * 100000, *s, *s, ...]]`: 30,000 aliases, well under the limit of values, but
+    the message quoted the list with repr(): 3 GB of text, a MemoryError after 26 s and 2.4 GB."""
+    text = 'name: x\nplans: [[&s "' + "x" * 100_000 + '", ' + ", ".join(["*s"] * 30_000) + "]]\n"
+    (tmp_path / "s.yaml").write_text(text)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(StudyError, match=r"key 'plans\[0\]' must be a path or a mapping with 'path', got \['xxx") as info:
+        load_study(tmp_path / "s.yaml")
+    assert len(str(info.value)) < 400 and _peak_growth_kib(before) < 100_000
+
+
+def test_a_study_asking_for_a_trillion_seeds_is_refused(tmp_path: Path) -> None:
+    """`seeds: {count: 1000000000000}` raised MemoryError building the tuple of seeds."""
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 1000000000000}\n")
+    with pytest.raises(StudyError, match=r"key 'seeds.count' asks for 1000000000000 seeds; a study runs at most 100000"):
+        load_study(tmp_path / "s.yaml")
+    (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 3}\n")
+    assert load_study(tmp_path / "s.yaml")[0].seeds == (5, 6, 7)
+
+
+FLASER = "FLASER 3 1.0 1.1 1.2 {pose} 0.0 0.0 0.0 {t} host {t}\n"
+
+
+def _zip_log(text: str) -> bytearray:
+    import io
+    import zipfile
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        archive.writestr("log.txt", text)
+    return bytearray(buffer.getvalue())
+
+
+@pytest.mark.parametrize("damage", ["local header", "offset before the start", "checksum", "version"])
+def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, damage: str) -> None:
+    """A zip log whose member header was damaged raised zipfile.BadZipFile, one whose directory put
+    the member before the file's start OSError [Errno 22], a bad CRC-32 BadZipFile and a member
+    needing zip version 8.4 NotImplementedError (g2o and CARMEN alike)."""
+    from planicp.io import read_carmen, read_g2o
+
+    data = _zip_log(FLASER.format(pose="0.0 0.0 0.0", t=1.0) + FLASER.format(pose="0.0 0.0 0.0", t=2.0))
+    end = data.rfind(b"PK\x05\x06")
+    central = data.rfind(b"PK\x01\x02")
+    if damage == "local header":
+        data[0:4] = b"PK\x03\x04"
+        offset = int.from_bytes(data[central + 42:central + 46], "little")
+        data[central + 42:central + 46] = (offset + 5).to_bytes(4, "little")
+    elif damage == "offset before the start":
+        offset = int.from_bytes(data[end + 16:end + 20], "little")
+        data[end + 16:end + 20] = (offset + 10).to_bytes(4, "little")
+    elif damage == "version":
+        data[central + 6] = 84  # the version needed to extract: 8.4
+    else:
+        data[14] ^= 0xFF  # the CRC-32 in the local header
+        data[central + 16] ^= 0xFF  # and in the central directory
+    path = tmp_path / "r.log"
+    path.write_bytes(bytes(data))
+    if damage == "checksum":  # found on the member's first block: no line before the break
+        with pytest.raises(ValueError, match=r"r\.log: no usable .* \(skipped: \(compressed stream ends early\): 1"):
+            read_carmen(path)
+        with pytest.raises(ValueError, match=r"r\.log: compressed data ends early or is corrupt after line 0: Bad CRC-32 "
+                                             r"for file 'log\.txt'"):
+            read_carmen(path, errors="raise")
+        return
+    match = r"starts like a zip archive but is not one \(zip file version 8\.4\)" if damage == "version" else \
+        r"the file 'log\.txt' in this zip archive cannot be read"
+    for reader in (read_carmen, read_g2o):
+        with pytest.raises(ValueError, match=r"r\.log: " + match):
+            reader(path)
+
+
+@pytest.mark.parametrize("packing", ["gz", "zip"])
+def test_a_compressed_log_that_expands_hundreds_of_times_is_refused(tmp_path: Path, packing: str,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 1.5 MB gzip log expanding to 1.2 GB of text took 15 s only to decompress (and its lines, had
+    they been scans, gigabytes). Real logs expand 3 to 5 times; over 100 times, and past 16 MiB (1
+    MiB here, to keep the test fast), is refused whatever errors= says."""
+    import gzip
+    import io
+    import zipfile
+
+    from planicp.io import read_carmen, text_source
+
+    monkeypatch.setattr(text_source, "EXPANSION_FLOOR", 1 << 20)
+    text = (FLASER.format(pose="0 0 0", t=1.0) + "# padding\n" * 300_000).encode()
+    path = tmp_path / f"bomb.log.{packing}"
+    if packing == "gz":
+        path.write_bytes(gzip.compress(text))
+    else:
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("bomb.log", text)
+        path.write_bytes(buffer.getvalue())
+    assert len(text) > 100 * path.stat().st_size
+    for errors in ("skip", "raise"):
+        with pytest.raises(ValueError, match=r"bomb\.log\.(gz|zip): the compressed log expands to more than \d+ bytes, "
+                                             r"over 100 times its size .* refused as a decompression bomb"):
+            read_carmen(path, errors=errors)  # type: ignore[arg-type]
+    path.write_bytes(gzip.compress(text[:900_000]))  # under the floor: read
+    assert len(read_carmen(path)) == 1
+
+
+def test_a_carmen_maximum_range_param_of_zero_or_less_is_ignored(tmp_path: Path) -> None:
+    """`PARAM robot_front_laser_max 0` raised "need 0 <= range_min < range_max, got 0.0, 0.0" (naming
+    no file) for the whole log."""
+    from planicp.io import read_carmen
+
+    for value in ("0", "-5"):
+        path = tmp_path / "r.log"
+        path.write_text(f"PARAM robot_front_laser_max {value}\n" + FLASER.format(pose="0 0 0", t=1.0)
+                        + FLASER.format(pose="0 0 0", t=2.0))
+        log = read_carmen(path)
+        assert len(log) == 2 and log[0].range_max == 80.0
+
+
+def test_a_log_line_with_a_pose_beyond_the_coordinate_limit_is_skipped_as_malformed(tmp_path: Path) -> None:
+    """A FLASER pose of 1e308 m raised "reference has a coordinate of 1.000000e+308 m" (naming no
+    file) for the whole log; now that line is malformed, the others are read."""
+    from planicp.io import read_carmen, read_g2o, read_g2o_graph
+
+    path = tmp_path / "r.log"
+    path.write_text(FLASER.format(pose="0 0 0", t=1.0) + FLASER.format(pose="1e308 0 0", t=1.5)
+                    + "ODOM 1e12 0 0 0 0 0 1.7 host 1.7\n" + FLASER.format(pose="0 0 0", t=2.0))
+    with pytest.warns(UserWarning, match=r"r\.log: skipped 2 malformed line\(s\); first at line 2 \(FLASER\): the laser "
+                                         r"and odometry poses: a coordinate of 1e\+308 m is beyond \+-1e\+09 m"):
+        log = read_carmen(path)
+    assert len(log) == 2 and log.skipped == {"FLASER (malformed)": 1, "ODOM (malformed)": 1}
+    with pytest.raises(ValueError, match=r"r\.log, line 2: bad FLASER line: the laser and odometry poses: a coordinate"):
+        read_carmen(path, errors="raise")
+    # A mount (the laser's pose in the robot, from a ROBOTLASER1 line's two poses) beyond the limit:
+    # the line is malformed, not the log.
+    scan = "ROBOTLASER1 0 -1.57 3.14 0.785 50.0 0.1 0 5 1.0 1.1 1.2 1.1 1.0 0 {poses} 0 0 0.5 0.5 0.5 {t} nohost {t}\n"
+    path.write_text(scan.format(poses="9e8 0 0 -9e8 0 0", t=1.0) + scan.format(poses="0.2 0 0 0 0 0", t=2.0))
+    with pytest.warns(UserWarning, match=r"first at line 1 \(ROBOTLASER1\): laser_pose has a coordinate of 1\.8"):
+        assert len(read_carmen(path, reference=False)) == 1
+    graph = tmp_path / "g.g2o"
+    scan = scan.replace("{poses}", "0.2 0.0 0.0 0.0 0.0 0.0")
+    graph.write_text("VERTEX_SE2 0 0 0 0\n" + scan.format(t=1.0) + "VERTEX_SE2 1 1e300 0 0\n" + scan.format(t=2.0)
+                     + "VERTEX_SE2 2 1 0 0\n" + scan.format(t=3.0))
+    with pytest.warns(UserWarning, match=r"skipped 2 malformed line\(s\); first at line 3 \(VERTEX_SE2\)"):
+        log = read_g2o(graph)
+    assert [f.odometry for f in log] == [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)]  # the scan of vertex 1 is not vertex 0's
+    with pytest.warns(UserWarning):
+        assert read_g2o_graph(graph).vertex_ids.tolist() == [0, 2]
+
+
+def test_a_record_kind_of_hundreds_of_kilobytes_is_quoted_briefly(tmp_path: Path) -> None:
+    """A line whose first token was 300,000 digits gave a 300 KB message (the token, as a record
+    kind in `skipped`, quoted whole)."""
+    from planicp.io import read_carmen, read_g2o
+
+    path = tmp_path / "r.log"
+    path.write_text("9" * 300_000 + " 1 2\n")
+    for reader in (read_carmen, read_g2o):
+        with pytest.raises(ValueError, match=r"r\.log: no .* \(skipped: \(not a record\): 1\)") as info:
+            reader(path)
+        assert len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize(("text", "match"), [
+    ("0\nSECTION\n0\nENDSEC\n0\nEOF\n", r" could not be read as DXF: IndexError: list index out of range"),
+    ("0\nSECTION\n2\nENTITIES\n0\nPOLYLINE\n8\n0\n66\n1\n70\n0\n0\nVERTEX\n8\n0\n42\n0.0\n0\nVERTEX\n8\n0\n10\n1.0\n"
+     "20\n0.0\n0\nSEQEND\n0\nENDSEC\n0\nEOF\n",
+     r": POLYLINE \w+ on layer 0: damaged \(AttributeError: 'NoneType' object has no attribute 'x'\)"),
+])
+def test_a_damaged_dxf_file_is_a_value_error_naming_the_file(tmp_path: Path, text: str, match: str) -> None:
+    """ezdxf's recovery raised IndexError on a SECTION without a name, and a recovered VERTEX
+    without a location gave AttributeError from the reader."""
+    pytest.importorskip("ezdxf")
+    (tmp_path / "d.dxf").write_text(text)
+    with pytest.raises(ValueError, match=r"DXF file '.*d\.dxf'" + match):
+        PlanMap.from_dxf(tmp_path / "d.dxf")
+
+
+def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_naming_the_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 4 KB HouseExpo file with one vertex 260 km away had 26 million points sampled (61 s, 2.6
+    GB) before the core refused their visibility raster, in a message naming no file; a DXF or
+    HouseExpo plan of too many points was refused naming no file either."""
+    import json
+
+    house = {"verts": [[0, 0], [10, 0], [10, 260_000], [0, 8]], "bbox": {"min": [0, 0], "max": [10, 260_000]}}
+    (tmp_path / "h.json").write_text(json.dumps(house))
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': walls spanning 10 x 260000 m need a visibility "
+                                         r"raster of 2\.91e\+09 cells at 0\.03 m \(limit 268435456\)"):
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    assert _peak_growth_kib(before) < 50_000
+    from planicp import vector_plan
+
+    monkeypatch.setattr(vector_plan, "_MAX_SAMPLES", 1000)
+    (tmp_path / "h.json").write_text(json.dumps({"verts": [[0, 0], [30, 0], [30, 20]], "bbox": {"min": [0, 0], "max": [30, 20]}}))
+    with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': sampling .* more than 1000 points"):
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    ezdxf = pytest.importorskip("ezdxf")
+    doc = ezdxf.new()
+    doc.modelspace().add_line((0.0, 0.0), (100.0, 0.0))
+    doc.saveas(tmp_path / "d.dxf")
+    with pytest.raises(ValueError, match=r"DXF file '.*d\.dxf': sampling 100 m of walls every 0\.02 m gives more than 1000"):
+        PlanMap.from_dxf(tmp_path / "d.dxf")
+
+
+@pytest.mark.parametrize(("values", "match"), [
+    ("resolution: 0.05\norigin: [1e12, 0, 0]", r"origin \['1e12', 0, 0\] is beyond \+-1e\+09 m"),
+    ("resolution: 1.0e9\norigin: [0, 0, 0]", r"its 20 x 20 pixels at 1e\+09 m from origin \[0, 0, 0\] reach beyond"),
+])
+def test_a_ros_map_beyond_the_coordinate_limit_is_refused_naming_the_map(tmp_path: Path, values: str, match: str) -> None:
+    """An origin of 1e12 m gave "origin has a coordinate of 1.000000e+12 m" and a resolution of 1e9 m
+    the core's "plan has a coordinate of 1.45e10 m", neither naming the map."""
+    a_map_image(tmp_path)
+    (tmp_path / "m.yaml").write_text(f"image: m.pgm\n{values}\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml: " + match):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
+@pytest.mark.parametrize("damage", ["an unterminated header", "a shape of 10^11"])
+def test_a_cache_entry_with_a_damaged_array_header_is_rebuilt(tmp_path: Path, damage: str) -> None:
+    """An entry whose .npy header was cut raised tokenize.TokenError from np.load, and one claiming
+    a shape of 10^11 made numpy allocate 745 GiB (MemoryError) before reading it."""
+    import re
+    import zipfile
+
+    path, cache = _plan_image(tmp_path), tmp_path / "cache"
+    first = PlanMap.from_image(path, 0.05, cache=cache)
+    (entry,) = cache.glob("*.npz")
+    with zipfile.ZipFile(entry) as archive:
+        members = [(info.filename, archive.read(info)) for info in archive.infolist()]
+    name, body = members[0]
+    if damage == "an unterminated header":
+        body = body.replace(b"'descr':", b"'descr': (", 1)
+    else:
+        body = re.sub(rb"'shape': \([^)]*\)", b"'shape': (100000000000,)", body, count=1)
+    members[0] = (name, body)
+    with zipfile.ZipFile(entry, "w") as archive:
+        for member, data in members:
+            archive.writestr(member, data)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    again = PlanMap.from_image(path, 0.05, cache=cache)
+    assert not again.from_cache and _peak_growth_kib(before) < 100_000
+    np.testing.assert_array_equal(again.points, first.points)
+
+
+def test_a_pgm_header_claiming_a_width_of_hundreds_of_digits_is_refused_briefly(tmp_path: Path) -> None:
+    """A PGM header giving a width of 400 digits raised OverflowError ("int too large to convert to
+    float") from the message that refused it."""
+    (tmp_path / "p.pgm").write_bytes(b"P5\n" + b"9" * 400 + b" 10\n255\n" + b"\x00" * 100)
+    with pytest.raises(ValueError, match=r"p\.pgm is 999\.\.\.\(400 digits\) x 10 pixels \(999\.\.\.\(395 digits\) million\)"):
+        PlanMap.from_image(tmp_path / "p.pgm", 0.05, cache=False)
+
+
+@pytest.mark.parametrize(("image", "match"), [
+    ('"m\\0.pgm"', r"image 'm\\x00\.pgm' is no file name: it holds a NUL character"),
+    ("m" * 300 + ".pgm", r"image 'mmm.*' cannot be opened: File name too long"),
+])
+def test_a_ros_map_image_name_the_file_system_cannot_take_is_refused_naming_the_map(tmp_path: Path, image: str,
+                                                                                     match: str) -> None:
+    """An image name holding a NUL raised ValueError "embedded null byte" (naming no map), and one of
+    300 characters OSError [Errno 36] File name too long."""
+    (tmp_path / "m.yaml").write_text(f"image: {image}\norigin: [0, 0, 0]\n" + MAP_KEYS)
+    with pytest.raises(ValueError, match=r"ROS map .*m\.yaml: " + match):
+        PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)
+
+
+def test_a_house_expo_file_without_its_keys_lists_the_keys_it_has_briefly(tmp_path: Path) -> None:
+    """A HouseExpo file whose 'verts' key was renamed to a 6,000-character name listed every key
+    whole: a 6 KB message."""
+    import json
+
+    (tmp_path / "h.json").write_text(json.dumps({"bbox": {"min": [0, 0], "max": [1, 1]}, "v" * 6000: [[0, 0]]}))
+    with pytest.raises(ValueError, match=r"h\.json' has no 'verts' key \(keys: \['bbox', 'vvvv") as info:
+        PlanMap.from_house_expo(tmp_path / "h.json")
+    assert len(str(info.value)) < 300
+
+
+@pytest.mark.parametrize(("line", "key"), [
+    ("plans: [{path: hall.png, resolution: 0.05, origin: [1, 2, BIG]}]", r"'plans\[0\]': origin"),
+    ("plans: [default]\nfurniture: [BIG]", r"'furniture\[0\]': furniture"),
+    ("plans: [default]\nsensors: {a: {range_max: BIG}}", r"'sensors\.a': range_max"),
+])
+def test_a_study_number_of_hundreds_of_digits_is_a_study_error(tmp_path: Path, line: str, key: str) -> None:
+    """An integer of 400 digits where a float belongs raised OverflowError ("int too large to convert
+    to float") from load_study."""
+    (tmp_path / "s.yaml").write_text("name: x\n" + line.replace("BIG", "9" * 400) + "\n")
+    with pytest.raises(StudyError, match=rf"key {key} is too large a number, got 9{{18}}\.\.\.9{{19}}"):
+        load_study(tmp_path / "s.yaml")

@@ -257,7 +257,7 @@ def test_robotlaser1_wrong_remission_count(tmp_path: Path) -> None:
 
 def test_log_without_laser_lines(tmp_path: Path) -> None:
     path = write(tmp_path, ["ODOM 1 2 0.1 0 0 0 1.0 h 1.0", "FOO bar"])
-    with pytest.raises(ValueError, match=r"no usable FLASER, RLASER or ROBOTLASER1 line.*'FOO': 1"):
+    with pytest.raises(ValueError, match=r"no usable FLASER, RLASER or ROBOTLASER1 line.*skipped: FOO: 1"):
         read_carmen(path)
     with pytest.raises(FileNotFoundError, match="log file not found"):
         read_carmen(tmp_path / "missing.log")

@@ -77,7 +77,7 @@ def test_zip_with_two_files_is_refused(tmp_path: Path) -> None:
 def test_broken_graph_lines(tmp_path: Path) -> None:
     lines = KILLIAN.read_text().splitlines()[:12]  # 6 vertices with their scans
     lines.insert(0, lines[1])  # a scan before any vertex
-    lines[5] = "VERTEX_SE2 2 1.0 nan 0.0"  # replaces vertex 1: its scan then belongs to vertex 0
+    lines[5] = "VERTEX_SE2 2 1.0 nan 0.0"  # replaces vertex 1: its scan belongs to no vertex read
     lines.append("EDGE_SE2 0 1 0.5 0.0")
     lines.append("FIX 0")
     path = tmp_path / "broken.g2o"
@@ -87,7 +87,7 @@ def test_broken_graph_lines(tmp_path: Path) -> None:
     reasons = {b.line: b.reason for b in log.bad_lines}
     assert reasons[1] == "a ROBOTLASER1 line needs a VERTEX_SE2 before it"
     assert reasons[6].startswith("the vertex pose must be finite")
-    assert reasons[7] == "vertex 1 already has a scan"
+    assert reasons[7] == "the VERTEX_SE2 line before it is malformed: the scan has no pose"
     assert reasons[14].startswith("truncated: EDGE_SE2")
     assert log.skipped == {"ROBOTLASER1 (malformed)": 2, "VERTEX_SE2 (malformed)": 1, "EDGE_SE2 (malformed)": 1,
                            "FIX": 1}

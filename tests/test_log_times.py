@@ -13,6 +13,7 @@ import pytest
 import carmen_excerpt as ex
 from planicp.cli import main as cli_main
 from planicp.io import DEFAULT_SCAN_PERIOD, read_carmen, repair_times
+from planicp.io.log_times import late_copies
 
 
 def test_increasing_stamps_are_kept_exactly() -> None:
@@ -112,6 +113,51 @@ def test_reader_keeps_a_line_whose_stamp_goes_back(tmp_path: Path) -> None:
     assert log[20].time == pytest.approx(1.0 + 20 * ex.SCAN_DT)
     # Odometry from the ODOM stream at the repaired stamp, as for every other scan.
     np.testing.assert_allclose(log[20].odometry, ex.odom_pose(1.0 + 20 * ex.SCAN_DT), atol=1e-3)
+
+
+def test_reader_drops_a_line_written_late(tmp_path: Path) -> None:
+    """A FLASER line of scan 5 (its stamp, its pose, no returns) written again after scan 30: before,
+    it was re-stamped between scans 30 and 31 and fed to the tracker, whose odometry then went back
+    and forth (28 scans 0.40 m off in the probe). It is a late copy: dropped, counted and warned of,
+    and the log reads exactly as the clean one."""
+    lines = ex.log_lines()
+    flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
+    fields = lines[flaser[5]].split()
+    fields[2:2 + ex.BEAMS] = ["nan"] * ex.BEAMS
+    dirty = lines[:flaser[30] + 1] + [" ".join(fields)] + lines[flaser[30] + 1:]
+    clean_path, dirty_path = tmp_path / "clean.log", tmp_path / "late.log"
+    clean_path.write_text("\n".join(lines) + "\n")
+    dirty_path.write_text("\n".join(dirty) + "\n")
+    clean = read_carmen(clean_path)
+    with pytest.warns(UserWarning, match=rf"dropped 1 FLASER line\(s\) written late .* line {flaser[30] + 2}"):
+        log = read_carmen(dirty_path)
+    assert log.skipped["FLASER (late copy: stamped before earlier records)"] == 1
+    assert len(log) == len(clean) == ex.SCANS and log.time_repair is not None and log.time_repair.out_of_order == 0
+    for a, b in zip(log, clean):
+        assert a.time == b.time and a.odometry == b.odometry
+        np.testing.assert_array_equal(a.ranges, b.ranges)
+
+
+def test_late_copies_tell_a_late_message_from_a_glitched_clock() -> None:
+    # A straight drive at 1 m per record. Record 3's stamp goes back a little and its pose is in
+    # place (a clock glitch, as the Intel log's four): kept. Record 6 carries record 1's stamp and
+    # pose (a message written late): a late copy.
+    poses = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0], [1, 0, 0], [6, 0, 0],
+                      [7, 0, 0]], dtype=float)
+    times = np.array([0.0, 1.0, 2.0, 1.9, 4.0, 5.0, 1.0, 6.0, 7.0])
+    # Many more records in order so that two stamps going back are a small share of the steps.
+    poses = np.vstack([poses, np.column_stack([np.arange(8, 60), np.zeros(52), np.zeros(52)])])
+    times = np.concatenate([times, np.arange(8, 60, dtype=float)])
+    late = late_copies(times, poses)
+    assert np.flatnonzero(late).tolist() == [6]
+    # A turn on the spot weighs like a translation: the copy of a heading left long ago is late too.
+    turning = np.column_stack([np.zeros(60), np.zeros(60), np.linspace(0.0, 3.0, 60)])
+    stamps = np.arange(60, dtype=float)
+    turning[40], stamps[40] = turning[10], stamps[10]
+    assert np.flatnonzero(late_copies(stamps, turning)).tolist() == [40]
+    # When many stamps go back, they say nothing: no record is dropped on their word.
+    shuffled = np.random.default_rng(3).permutation(60).astype(float)
+    assert not late_copies(shuffled, turning).any()
 
 
 def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path,

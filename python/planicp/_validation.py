@@ -113,3 +113,10 @@ def brief(value: Any) -> str:
     whatever `value` is): how a message quotes input, which may be huge or nested without end."""
     text = _BRIEF.repr(value)
     return text if len(text) <= 200 else text[:197] + "..."
+
+
+def one_line(text: str, limit: int = 200) -> str:
+    """`text` with its white space runs made single spaces, cut to at most `limit` characters: how
+    a message quotes another message or a name read from a file."""
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."

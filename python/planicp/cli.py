@@ -58,11 +58,11 @@ def _input_files(source: Path) -> list[Path]:
     """The files a plan is read from: `source`, and for a map_server YAML the image it names."""
     files = [source]
     if source.suffix.lower() in (".yaml", ".yml") and source.is_file():
-        from .io.yaml_documents import load_yaml
+        from .io.yaml_documents import read_yaml_file
 
         try:
-            meta = load_yaml(source.read_text(), str(source))
-        except (ValueError, UnicodeDecodeError):
+            meta = read_yaml_file(source, str(source))
+        except (ValueError, OSError):
             return files
         if isinstance(meta, dict) and isinstance(meta.get("image"), str):
             files.append(source.parent / meta["image"])

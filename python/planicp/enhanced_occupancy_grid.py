@@ -147,6 +147,17 @@ class OccupancyGridMessage:
         return int(self.data.shape[0])
 
 
+def _finest_resolution(width: float, height: float, max_cells: int) -> float:
+    """Metres: the smallest cell size r with (width / r + 2) * (height / r + 2) <= max_cells, rounded up
+    to two significant digits so that the quoted value itself fits."""
+    # (w/r + 2)(h/r + 2) = c  <=>  (c - 4) r^2 - 2 (w + h) r - w h = 0.
+    a = max(float(max_cells) - 4.0, 1.0)
+    b = 2.0 * (width + height)
+    r = (b + math.sqrt(b * b + 4.0 * a * width * height)) / (2.0 * a)
+    digits = 10.0 ** (math.floor(math.log10(r)) - 1)
+    return math.ceil(r / digits) * digits
+
+
 class EnhancedOccupancyGrid:
     """Scans at estimated poses fused with the plan; see the module documentation for the states.
 
@@ -202,9 +213,12 @@ class EnhancedOccupancyGrid:
             span = np.maximum(span, corners.max(axis=0) - corners.min(axis=0))
         upper = float(np.prod(np.ceil((span + 2.0 * margin) / self.resolution) + 2.0))
         if upper > max_cells:
-            raise _core.PlanicpError(f"the occupancy grid over the plan at {self.resolution:g} m would need about "
-                             f"{upper:.3g} cells (max_cells {max_cells}); give a coarser resolution, a smaller "
-                             f"margin or a larger max_cells")
+            # The finest cell that fits: (w/r + 2)(h/r + 2) <= max_cells, solved for r (slightly rounded up).
+            w, h = (float(v) for v in span + 2.0 * margin)
+            finest = _finest_resolution(w, h, max_cells)
+            raise _core.PlanicpError(f"the occupancy grid over the plan ({w:.1f} x {h:.1f} m) at {self.resolution:g} m "
+                                     f"would need about {upper:.3g} cells (max_cells {max_cells}); give a resolution "
+                                     f"of at least {finest:.2g} m, a smaller margin or a larger max_cells")
         self._wall_samples = _wall_samples(plan, self.resolution)
         raster = plan.raster
         anchor = (raster.origin[0], raster.origin[1]) if raster is not None and raster.origin[2] == 0.0 else (0.0, 0.0)

@@ -75,9 +75,17 @@ def check_image_file(path: Path, what: str) -> None:
         return
     width, height = dimensions
     if width * height > MAX_IMAGE_PIXELS:
-        raise ValueError(f"{what} {path} is {width} x {height} pixels ({width * height / 1e6:.0f} million); plan "
-                         f"images are read up to {MAX_IMAGE_PIXELS / 1e6:.0f} million pixels: crop the image or "
-                         f"scale it down (and its resolution up by the same factor)")
+        raise ValueError(f"{what} {path} is {_count(width)} x {_count(height)} pixels "
+                         f"({_count(width * height // 10**6)} million); plan images are read up to "
+                         f"{MAX_IMAGE_PIXELS / 1e6:.0f} million pixels: crop the image or scale it down (and its "
+                         f"resolution up by the same factor)")
+
+
+def _count(n: int) -> str:
+    """`n` written out, or its first digits and length when it has more than 15 (a PGM header may
+    give a width of any number of digits)."""
+    text = str(n)
+    return text if len(text) <= 15 else f"{text[:3]}...({len(text)} digits)"
 
 
 def _netpbm_dimensions(data: bytes) -> tuple[int, int] | None:

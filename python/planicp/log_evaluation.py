@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 from ._validation import Pose, positive, whole_number
 from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+from .image_files import MAX_IMAGE_PIXELS
 from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame
 from .log_replay import TrackedLog, track_log
@@ -88,12 +89,21 @@ def plan_from_scans(frames: Sequence[ScanFrame], resolution: float = 0.05, min_h
         raise ValueError("the scans have no returns to draw a plan from")
     xy = np.concatenate(clouds)
     lo = np.floor((xy.min(axis=0) - margin) / resolution) * resolution
-    cols, rows = (int(v) for v in np.ceil((xy.max(axis=0) + margin - lo) / resolution))
-    c = np.floor((xy[:, 0] - lo[0]) / resolution).astype(np.int64)
-    r = np.floor((xy[:, 1] - lo[1]) / resolution).astype(np.int64)
-    counts = np.zeros((rows, cols), dtype=np.int32)
-    np.add.at(counts, (r, c), 1)
-    walls = counts >= min_hits
+    extent = xy.max(axis=0) + margin - lo
+    pixels = float(np.prod(np.ceil(extent / resolution)))
+    if pixels > MAX_IMAGE_PIXELS:
+        finest = math.sqrt(float(np.prod(extent)) / MAX_IMAGE_PIXELS)
+        raise ValueError(f"the scans span {extent[0]:.1f} x {extent[1]:.1f} m: a plan of {resolution:g} m pixels "
+                         f"would have {pixels:.3g} pixels (at most {MAX_IMAGE_PIXELS:.3g}); give a resolution of "
+                         f"at least {float(f'{finest:.2g}') * 1.1:.2g} m")
+    cols, rows = (int(v) for v in np.ceil(extent / resolution))
+    c = np.minimum(np.floor((xy[:, 0] - lo[0]) / resolution).astype(np.int64), cols - 1)
+    r = np.minimum(np.floor((xy[:, 1] - lo[1]) / resolution).astype(np.int64), rows - 1)
+    # Hits per pixel counted over the pixels that have any, not in a full-size counter image.
+    cells, hits = np.unique(r * cols + c, return_counts=True)
+    flat = np.zeros(rows * cols, dtype=bool)
+    flat[cells[hits >= min_hits]] = True
+    walls = flat.reshape(rows, cols)
     if not walls.any():
         raise ValueError(f"no pixel of {resolution} m holds {min_hits} scan end points: no walls to draw")
     # Rows grow with +y here; images put the top row first. The wall pixels are where the surfaces

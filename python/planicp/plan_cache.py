@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import tempfile
 import warnings
@@ -108,13 +109,38 @@ def _checksum(key: str, arrays: Arrays) -> bytes:
 
 def _verified(path: Path, key: str) -> Arrays | None:
     """The arrays of the entry at `path` when it loads and its checksum matches them and `key`;
-    None otherwise."""
+    None otherwise (whatever is wrong with the file: an entry is an optimisation, never an error)."""
     try:
+        if not _sizes_fit(path):
+            return None
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in data.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError):
+    except Exception:  # noqa: BLE001 - numpy and zipfile raise a dozen types on a damaged file
         return None
     stored = arrays.pop(CHECKSUM, None)
     if stored is None or stored.dtype != np.uint8 or stored.tobytes() != _checksum(key, arrays):
         return None
     return arrays
+
+
+def _sizes_fit(path: Path) -> bool:
+    """Whether every member of the entry is an uncompressed .npy whose header claims exactly the
+    bytes the member holds. numpy allocates the array a header claims before reading it, so a
+    damaged header (a shape of 10^12) would otherwise ask for terabytes; checked this way, loading
+    an entry takes no more memory than its size on disk."""
+    limit = path.stat().st_size
+    with zipfile.ZipFile(path) as archive:
+        for info in archive.infolist():
+            if info.compress_type != zipfile.ZIP_STORED or info.file_size > limit:
+                return False
+            with archive.open(info) as member:
+                version = np.lib.format.read_magic(member)
+                if version == (1, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_1_0(member)
+                elif version == (2, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_2_0(member)
+                else:
+                    return False
+                if dtype.hasobject or member.tell() + math.prod(shape) * dtype.itemsize != info.file_size:
+                    return False
+    return True

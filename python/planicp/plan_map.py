@@ -14,8 +14,14 @@ from .plan_cache import cache_key, cached, default_cache_dir
 from .image_files import check_image_file, require_regular_file
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
-from .vector_plan import dxf_segments, house_expo_segments, sample_segments
+from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments
 from .wall_index_stats import WallIndexStats
+
+VISIBILITY_RASTER_CELLS = 256 * 1024 * 1024
+"""Most cells of a plan's visibility raster: the native core's limit (`MAX_RASTER_CELLS`,
+crates/icp_core/src/wall_raster.rs), checked here as well so that wall segments spanning too wide
+an extent for their spacing are refused before their points are sampled (a 4 KB HouseExpo file
+with one vertex 260 km away had 26 million points sampled, 2.5 GB, before the core refused them)."""
 
 CacheSetting = bool | str | Path
 """True: the default cache folder; False: no cache; a path: that folder."""
@@ -29,6 +35,16 @@ def _cache_folder(cache: CacheSetting) -> Path | None:
     if isinstance(cache, (str, Path)):
         return Path(cache)
     raise TypeError(f"cache must be True, False or a folder path, got {cache!r}")
+
+
+def _naming(exc: ValueError, name: str) -> ValueError:
+    """`exc` (a ValueError or PlanicpError) again, its message starting with `name`: what a reader
+    raises when the plan a file holds cannot be prepared."""
+    message = f"{name}: {exc}"
+    try:
+        return type(exc)(message)
+    except TypeError:  # a subclass with another constructor
+        return ValueError(message)
 
 
 class PlanMap:
@@ -206,8 +222,22 @@ class PlanMap:
     @classmethod
     def from_segments(cls, segments: Any, spacing: float = 0.02) -> PlanMap:
         """A plan from wall segments (M, 2, 2) in metres, map frame, sampled every `spacing` metres
-        (both ends included). Each segment is one wall surface: give both faces of a thick wall."""
-        return cls.from_points(sample_segments(segments, spacing), resolution=1.5 * spacing)
+        (both ends included). Each segment is one wall surface: give both faces of a thick wall.
+
+        Segments spanning more than the visibility raster allows at 1.5 `spacing`
+        (`VISIBILITY_RASTER_CELLS`) are refused before they are sampled."""
+        segs = as_segments(segments, "segments")
+        step = positive(spacing, "spacing", "metres")
+        resolution = 1.5 * step
+        corners = segs.reshape(-1, 2)
+        span = corners.max(axis=0) - corners.min(axis=0)
+        with np.errstate(over="ignore"):
+            cells = float(np.prod(span / resolution + 3.0))  # the core's raster: a cell of margin either side
+        if not cells <= VISIBILITY_RASTER_CELLS:
+            raise ValueError(f"walls spanning {span[0]:.6g} x {span[1]:.6g} m need a visibility raster of {cells:.3g} "
+                             f"cells at {resolution:g} m (limit {VISIBILITY_RASTER_CELLS}): use a larger spacing, or "
+                             f"check the plan's units")
+        return cls.from_points(sample_segments(segs, step), resolution=resolution)
 
     @classmethod
     def from_house_expo(cls, source: str | Path | dict[str, Any], spacing: float = 0.02, *,
@@ -221,9 +251,13 @@ class PlanMap:
         simulation (`planicp.sim`, `planicp sweep`) needs; its points are the wall surfaces of that
         raster, at most half a pixel from the outline."""
         segments, _ = house_expo_segments(source)
-        if resolution is None:
-            return cls.from_segments(segments, spacing)
-        return cls.from_raster(PlanRaster.from_free_polygon(segments[:, 0, :], resolution, wall_thickness))
+        name = "HouseExpo data (dict)" if isinstance(source, dict) else f"HouseExpo file {str(source)!r}"
+        try:
+            if resolution is None:
+                return cls.from_segments(segments, spacing)
+            return cls.from_raster(PlanRaster.from_free_polygon(segments[:, 0, :], resolution, wall_thickness))
+        except ValueError as exc:  # too many points, too large a raster: the plan's size, so the file's
+            raise _naming(exc, name) from None
 
     @classmethod
     def from_dxf(
@@ -237,7 +271,11 @@ class PlanMap:
         """A plan from a DXF drawing: LINE, LWPOLYLINE (with bulges), POLYLINE, ARC and CIRCLE on
         `layers` (all when None), in metres from `$INSUNITS`, sampled every `spacing` metres.
         Needs the optional extra: `pip install 'planicp[cad]'`."""
-        return cls.from_segments(dxf_segments(path, layers, arc_tolerance=arc_tolerance), spacing)
+        segments = dxf_segments(path, layers, arc_tolerance=arc_tolerance)
+        try:
+            return cls.from_segments(segments, spacing)
+        except ValueError as exc:  # too many points, too large a raster: the drawing's size, so the file's
+            raise _naming(exc, f"DXF file {str(path)!r}") from None
 
     def to_ros_map(self, yaml_path: str | Path, resolution: float | None = None) -> Path:
         """Writes the plan as a map_server map (YAML + PGM beside it): walls occupied (0), the

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
-from ._validation import Pose, as_points, as_pose, positive, whole_number
+from ._validation import Pose, as_points, as_pose, brief, positive, whole_number
 
 
 def _cv2() -> Any:
@@ -302,9 +302,15 @@ def wall_mask(
         if isinstance(threshold, bool) or not isinstance(threshold, (int, np.integer)) or not 1 <= threshold <= 255:
             raise ValueError(f"threshold must be an integer grey level in 1..255, got {threshold!r}")
         mask = gray < threshold
-    for size, op in ((open_px, cv2.MORPH_OPEN), (close_px, cv2.MORPH_CLOSE)):
+    largest = max(gray.shape)
+    for name, size, op in (("open_px", open_px, cv2.MORPH_OPEN), ("close_px", close_px, cv2.MORPH_CLOSE)):
         if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0:
-            raise ValueError(f"morphology sizes must be integers >= 0, got {size!r}")
+            raise ValueError(f"{name} must be an integer number of pixels >= 0, got {brief(size)}")
+        if size > largest:
+            raise ValueError(
+                f"{name}={size} pixels is larger than the {what} itself ({gray.shape[1]} x {gray.shape[0]} "
+                f"pixels); give the size of the specks or gaps to remove, a few pixels"
+            )
         if size > 0:
             kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (int(size), int(size)))
             mask = cv2.morphologyEx(mask.astype(np.uint8), op, kernel) > 0

@@ -20,10 +20,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, brief
+from ._validation import MAX_COORDINATE, Pose, brief, one_line
 from .image_files import require_regular_file
 from .io.atomic_files import write_atomically
-from .io.yaml_documents import load_yaml
+from .io.yaml_documents import read_yaml_file
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")
@@ -95,11 +95,7 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     if not path.is_file():
         raise FileNotFoundError(f"ROS map YAML {path} does not exist")
     _yaml()  # PyYAML is there, or a message says how to get it
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise ValueError(f"ROS map {path} is not valid YAML: it is not UTF-8 text") from None
-    meta = load_yaml(text, f"ROS map {path}")
+    meta = read_yaml_file(path, f"ROS map {path}")
     if not isinstance(meta, dict):
         raise ValueError(f"ROS map {path} must be a YAML mapping, got {type(meta).__name__}")
     missing = [k for k in REQUIRED_KEYS if k not in meta]
@@ -119,6 +115,9 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         raise ValueError(f"ROS map {path}: origin must be three numbers, got {brief(origin)}") from None
     if not all(math.isfinite(v) for v in origin_pose):
         raise ValueError(f"ROS map {path}: origin must be finite, got {brief(origin)}")
+    if max(abs(origin_pose[0]), abs(origin_pose[1])) > MAX_COORDINATE:
+        raise ValueError(f"ROS map {path}: origin {brief(origin)} is beyond +-{MAX_COORDINATE:.0e} m; planicp works "
+                         f"in metres: give the map's origin in a local frame")
     occ = _number(meta, "occupied_thresh", path)
     free = _number(meta, "free_thresh", path)
     if not 0.0 <= free <= occ <= 1.0:
@@ -132,15 +131,27 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     image = meta["image"]
     if not isinstance(image, str) or not image:
         raise ValueError(f"ROS map {path}: image must be the image file's name, got {brief(image)}")
+    if "\0" in image:
+        raise ValueError(f"ROS map {path}: image {brief(image)} is no file name: it holds a NUL character")
     image_path = path.parent / image
     try:
         image_path = image_path.resolve()
     except (OSError, RuntimeError):  # a symlink loop: require_regular_file says so
         pass
-    if not image_path.exists() and not image_path.is_symlink():
-        raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist ({image_path})")
+    try:
+        absent = not image_path.exists() and not image_path.is_symlink()
+    except OSError as exc:  # a name too long for the file system
+        raise ValueError(f"ROS map {path}: image {brief(image)} cannot be opened: {exc.strerror or exc}") from None
+    if absent:
+        raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist "
+                                f"({one_line(str(image_path), 300)})")
     require_regular_file(image_path, f"ROS map image (from {path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
+    reach = math.hypot(*gray.shape) * resolution  # farthest a pixel corner lies from the origin, metres
+    if max(abs(origin_pose[0]), abs(origin_pose[1])) + reach > MAX_COORDINATE:
+        raise ValueError(f"ROS map {path}: its {gray.shape[1]} x {gray.shape[0]} pixels at {resolution:g} m from "
+                         f"origin {brief(origin)} reach beyond +-{MAX_COORDINATE:.0e} m; check resolution (metres per "
+                         f"pixel) and origin")
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
     edge_detector = meta.get(EDGE_DETECTOR_KEY)
     if edge_detector is not None and (not isinstance(edge_detector, str) or edge_detector not in EDGE_DETECTORS):

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import positive
+from ._validation import brief, one_line, positive
 
 if TYPE_CHECKING:
     # ezdxf is optional: without it (no 'cad' extra) mypy sees Any here, with it the real types.
@@ -90,7 +90,7 @@ def sample_segments(segments: Any, spacing: float = 0.02) -> NDArray[np.float64]
         ValueError: wrong shape, no segments, a NaN/inf coordinate, `spacing` <= 0, or more than
             50 million points (the spacing is far too fine for the plan's size).
     """
-    segs = _as_segments(segments, "segments")
+    segs = as_segments(segments, "segments")
     step = positive(spacing, "spacing", "metres")
     p0, p1 = segs[:, 0, :], segs[:, 1, :]
     delta = p1 - p0
@@ -163,7 +163,7 @@ def house_expo_segments(
         raise ValueError(f"{name} must hold a JSON object with 'verts' and 'bbox', got {type(data).__name__}")
     for key in ("verts", "bbox"):
         if key not in data:
-            raise ValueError(f"{name} has no {key!r} key (keys: {sorted(map(str, data))})")
+            raise ValueError(f"{name} has no {key!r} key (keys: {brief(sorted(map(str, data)))})")
 
     verts = _json_points(data["verts"], f"{name}, key 'verts'")
     if len(verts) >= 2 and (verts[-1] == verts[0]).all():
@@ -241,42 +241,53 @@ def dxf_segments(
         raise FileNotFoundError(f"{name} does not exist" if not file.exists() else f"{name} is not a file")
     try:
         doc, _auditor = ezdxf.recover.readfile(file)
-    except (DXFError, OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{name} could not be read as DXF: {exc}") from None
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - ezdxf's recovery raises what its parsing meets (IndexError, ...)
+        known = isinstance(exc, (DXFError, OSError, UnicodeDecodeError))
+        reason = str(exc) if known else f"{type(exc).__name__}: {exc}"
+        raise ValueError(f"{name} could not be read as DXF: {one_line(reason)}") from None
 
-    code = doc.header.get("$INSUNITS", 0)
+    try:
+        code = doc.header.get("$INSUNITS", 0)
+        msp = doc.modelspace()
+        entities = [(entity, str(entity.dxf.layer), str(entity.dxftype())) for entity in msp]
+        existing = {str(layer.dxf.name) for layer in doc.layers}
+    except _DAMAGED as exc:
+        raise ValueError(f"{name} could not be read as DXF: its header, layers or modelspace are damaged "
+                         f"({type(exc).__name__}: {one_line(str(exc))})") from None
     if isinstance(code, bool) or not isinstance(code, int) or code not in _METRES_PER_UNIT:
-        raise ValueError(f"{name} has unknown drawing units $INSUNITS = {code!r}")
+        raise ValueError(f"{name} has unknown drawing units $INSUNITS = {brief(code)}")
     scale = _METRES_PER_UNIT[code]
-    msp = doc.modelspace()
-
-    existing = {str(layer.dxf.name) for layer in doc.layers}
-    existing.update(str(entity.dxf.layer) for entity in msp)
+    existing.update(layer for _, layer, _ in entities)
     if wanted is not None:
         folded = {layer.casefold() for layer in existing}
         missing = sorted(layer for layer in wanted if layer not in folded)
         if missing:
             raise ValueError(
-                f"{name} has no layer {', '.join(map(repr, missing))}; its layers are: {', '.join(sorted(existing))}"
+                f"{name} has no layer {', '.join(map(repr, missing))}; its layers are: "
+                f"{one_line(', '.join(sorted(existing)), 300)}"
             )
 
     tol_units = tolerance / scale
     pieces: list[NDArray[np.float64]] = []
-    for entity in msp:
-        if wanted is not None and str(entity.dxf.layer).casefold() not in wanted:
+    for entity, layer, kind in entities:
+        if wanted is not None and layer.casefold() not in wanted:
             continue
         try:
             polyline = _entity_polyline(entity, tol_units)
-        except ValueError as exc:
-            raise ValueError(f"{name}: {entity.dxftype()} {entity.dxf.handle} on layer {entity.dxf.layer}: {exc}") from None
+        except _DAMAGED as exc:  # besides the ValueErrors here: a value ezdxf's recovery left unset (a None point)
+            reason = str(exc) if type(exc) is ValueError else f"damaged ({type(exc).__name__}: {exc})"
+            raise ValueError(f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
+                             f"{one_line(layer, 60)}: {one_line(reason)}") from None
         if polyline is not None:
             pieces.append(np.stack([polyline[:-1], polyline[1:]], axis=1))
     if not pieces:
         where = "any layer" if wanted is None else f"layer(s) {', '.join(sorted(wanted))}"
-        types = sorted({entity.dxftype() for entity in msp})
+        types = sorted({kind for _, _, kind in entities})
         raise ValueError(
             f"{name} has no wall entities ({', '.join(_WALL_TYPES)}) on {where} of its modelspace; "
-            f"entity types there: {', '.join(types) if types else 'none'}"
+            f"entity types there: {one_line(', '.join(types), 300) if types else 'none'}"
         )
     segments = np.concatenate(pieces) * scale
     if not np.isfinite(segments).all():
@@ -284,7 +295,12 @@ def dxf_segments(
     return np.ascontiguousarray(segments)
 
 
-def _as_segments(value: Any, name: str) -> NDArray[np.float64]:
+_DAMAGED = (AttributeError, TypeError, IndexError, KeyError, ZeroDivisionError, OverflowError, ValueError)
+"""What ezdxf raises when a document its recovery returned lacks a value (a None where a point
+should be): reading such a document is refused naming the file (and the entity)."""
+
+
+def as_segments(value: Any, name: str) -> NDArray[np.float64]:
     """`value` as a C-contiguous (M, 2, 2) float64 array of finite coordinates, M >= 1."""
     try:
         arr = np.asarray(value)

@@ -50,18 +50,26 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import Pose, as_pose, brief
+from .._validation import MAX_COORDINATE, Pose, as_pose, brief
 from ..se2 import between, compose, inverse
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog
-from .line_records import LineTally, records
-from .log_times import repair_times
+from .line_records import LineTally, records, skipped_summary
+from .log_times import late_copies, repair_times
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
 AUTO_ORDER: tuple[LaserKind, ...] = ("ROBOTLASER1", "FLASER", "RLASER")
 NO_RETURN_RANGE = 80.0
 """Metres: FLASER/RLASER readings at or above this are "no return" unless the log says otherwise."""
+
+
+MAX_MOUNT_OFFSET = 100.0
+"""Metres: a laser mount PARAM farther from the base than this is a bad line (a robot is not that big)."""
+
+_RANGE_PARAMS = ("robot_front_laser_max", "robot_rear_laser_max")
+_MOUNT_PARAMS = tuple(f"robot_{laser}_{part}" for laser in ("frontlaser", "rearlaser")
+                      for part in ("offset", "side_offset", "angular_offset"))
 
 
 class _BadLine(Exception):
@@ -95,11 +103,36 @@ def _finite(fields: list[str], start: int, count: int, what: str) -> tuple[float
     return values
 
 
+def _poses(fields: list[str], start: int, count: int, what: str) -> tuple[float, ...]:
+    """`count` consecutive (x, y, yaw) poses: finite, and x, y within `MAX_COORDINATE` metres."""
+    values = _finite(fields, start, 3 * count, what)
+    for k in range(count):
+        for v in values[3 * k:3 * k + 2]:
+            if abs(v) > MAX_COORDINATE:
+                raise _BadLine(f"{what}: a coordinate of {v:.6g} m is beyond +-{MAX_COORDINATE:.0e} m")
+    return values
+
+
 def _count(fields: list[str], index: int, what: str) -> int:
     value = _number(fields, index)
     if not (value.is_integer() and 0 <= value <= 1_000_000):
         raise _BadLine(f"{what} must be a whole number >= 0, got {brief(fields[index])}")
     return int(value)
+
+
+def _check_param(name: str, text: str) -> None:
+    """A PARAM planicp reads must hold a usable value; a bad one is a bad line (its default is kept)."""
+    if name not in _RANGE_PARAMS and name not in _MOUNT_PARAMS:
+        return
+    try:
+        value = float(text)
+    except ValueError:
+        raise _BadLine(f"{name} ({brief(text)}) is not a number; the default is used") from None
+    if name in _RANGE_PARAMS and not (math.isfinite(value) and value > 0.0):
+        raise _BadLine(f"{name} must be a positive number of metres, got {brief(text)}; the default is used")
+    if name in _MOUNT_PARAMS and not (math.isfinite(value) and abs(value) <= MAX_MOUNT_OFFSET):
+        raise _BadLine(f"{name} must be a finite number within +-{MAX_MOUNT_OFFSET:g} (metres or radians), "
+                       f"got {brief(text)}; the default is used (or pass laser_pose)")
 
 
 def _expect_fields(fields: list[str], needed: int, layout: str) -> None:
@@ -142,7 +175,7 @@ def _parse_old_laser(kind: LaserKind, fields: list[str], line: int) -> _LaserRec
         raise _BadLine(f"needs at least 2 beams, got {n}")
     _expect_fields(fields, n + 11, f"{kind} with n={n} (n + 11)")
     ranges = _ranges(fields, 2, n)
-    pose = _finite(fields, 2 + n, 6, "the laser and odometry poses")
+    pose = _poses(fields, 2 + n, 2, "the laser and odometry poses")
     (t,) = _finite(fields, 8 + n, 1, "the timestamp")
     return _LaserRecord(line, kind, t, ranges, -math.pi / 2.0, flaser_angle_increment(n), None,
                         (pose[0], pose[1], pose[2]), (pose[3], pose[4], pose[5]))
@@ -163,7 +196,7 @@ def _parse_robotlaser(fields: list[str], line: int) -> _LaserRecord:
     _expect_fields(fields, n + n_rem + 24, f"ROBOTLASER1 with n={n}, n_rem={n_rem} (n + n_rem + 24)")
     ranges = _ranges(fields, 9, n)
     base = 10 + n + n_rem
-    pose = _finite(fields, base, 6, "the laser and robot poses")
+    pose = _poses(fields, base, 2, "the laser and robot poses")
     (t,) = _finite(fields, base + 11, 1, "the timestamp")
     return _LaserRecord(line, "ROBOTLASER1", t, ranges, start, res, max_range,
                         (pose[0], pose[1], pose[2]), (pose[3], pose[4], pose[5]))
@@ -186,6 +219,8 @@ def _param_mount(params: dict[str, str], kind: LaserKind) -> Pose | None:
     if not any(n in params for n in names) and kind == "ROBOTLASER1":
         return None
     x, y, yaw = (_param_float(params, n, 0.0) for n in names)
+    if abs(x) > MAX_COORDINATE or abs(y) > MAX_COORDINATE:  # no mount: ignored, as an offset that is no number
+        x, y = 0.0, 0.0
     if kind == "RLASER":
         yaw += math.pi
     return (x, y, math.atan2(math.sin(yaw), math.cos(yaw)))
@@ -231,10 +266,11 @@ def read_carmen(
             if kind == "PARAM":
                 if len(fields) < 3:
                     raise _BadLine(f"truncated: PARAM needs a name and a value, got {len(fields)} fields")
+                _check_param(fields[1], fields[2])
                 params[fields[1]] = fields[2]
             elif kind == "ODOM":
                 _expect_fields(fields, 10, "ODOM x y theta tv rv accel ts host logger_ts")
-                x, y, yaw = _finite(fields, 1, 3, "the odometry pose")
+                x, y, yaw = _poses(fields, 1, 1, "the odometry pose")
                 (t,) = _finite(fields, 7, 1, "the timestamp")
                 odom_rows.append((t, x, y, yaw))
             elif kind == "FLASER":
@@ -252,20 +288,29 @@ def read_carmen(
     chosen = laser if laser is not None else (present[0] if present else None)
     if chosen is None or not lasers[chosen]:
         what = chosen or "FLASER, RLASER or ROBOTLASER1"
-        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {tally.skipped or 'nothing'})")
+        raise ValueError(f"{source}: no usable {what} line in the log (skipped: {skipped_summary(tally.skipped)})")
     for other in LASER_KINDS:
         if other != chosen and lasers[other]:
             tally.skip(f"{other} (other laser)", len(lasers[other]))
 
-    times, repair = repair_times(np.array([r.time for r in lasers[chosen]], dtype=np.float64))
-    chosen_records = [replace(r, time=float(t)) for r, t in zip(lasers[chosen], times)]
+    kept = lasers[chosen]
+    late = late_copies(np.array([r.time for r in kept]), np.array([r.robot_world for r in kept]))
+    if late.any():
+        tally.skip(f"{chosen} (late copy: stamped before earlier records)", int(np.count_nonzero(late)))
+        warnings.warn(f"{source}: dropped {int(np.count_nonzero(late))} {chosen} line(s) written late (stamped "
+                      f"before earlier lines, with an old pose); first at line {kept[int(np.argmax(late))].line}",
+                      stacklevel=2)
+        kept = [r for r, drop in zip(kept, late) if not drop]
+    times, repair = repair_times(np.array([r.time for r in kept], dtype=np.float64))
+    chosen_records = [replace(r, time=float(t)) for r, t in zip(kept, times)]
     # Stamps made up for coarse or missing ones cannot be matched against the ODOM stream's: each
     # line's own odometry is used.
     stream_rows = odom_rows if repair.fallback == "none" else []
     if repair.fallback != "none" and odom_rows:
         tally.skip("ODOM (scan timestamps repaired: the laser lines' odometry is used)", len(odom_rows))
-    frames, odo_t, odo_p = _frames(chosen_records, stream_rows, params, mount_override, max_range, reference,
-                                   tally.skipped)
+    frames, odo_t, odo_p = _frames(chosen_records, stream_rows, params, mount_override, max_range, reference, tally)
+    if not frames:
+        raise ValueError(f"{source}: no usable {chosen} line in the log (skipped: {skipped_summary(tally.skipped)})")
     tally.warn(stacklevel=2)
     if repair.message:
         warnings.warn(f"{source}: {repair.message}", stacklevel=2)
@@ -279,22 +324,26 @@ def _frames(
     mount_override: Pose | None,
     max_range: float | None,
     reference: bool,
-    skipped: dict[str, int],
+    tally: LineTally,
 ) -> tuple[list[ScanFrame], NDArray[np.float64], NDArray[np.float64]]:
+    """The scans of `records`; a record whose poses or ranges make no scan (a mount or reference
+    pose beyond the coordinate limit, say) is a malformed line of `tally`."""
     kind = records[0].kind
     param_mount = _param_mount(params, kind)
-    param_max = params.get("robot_rear_laser_max" if kind == "RLASER" else "robot_front_laser_max")
     default_max = _param_float(params, "robot_rear_laser_max" if kind == "RLASER" else "robot_front_laser_max",
-                               NO_RETURN_RANGE) if param_max is not None else NO_RETURN_RANGE
+                               NO_RETURN_RANGE)
+    if default_max <= 0.0:  # a maximum range of 0 or less is no range: the PARAM is ignored, as text would be
+        default_max = NO_RETURN_RANGE
     odom = np.array(odom_rows, dtype=np.float64).reshape(-1, 4)
     use_stream = odom.shape[0] > 0 and bool(np.any(odom[:, 1:] != 0.0))
     if odom.shape[0] and not use_stream:
-        skipped["ODOM (all-zero placeholders)"] = int(odom.shape[0])
+        tally.skipped["ODOM (all-zero placeholders)"] = int(odom.shape[0])
     if use_stream:
         order = np.argsort(odom[:, 0], kind="stable")
         odo_t, odo_p = odom[order, 0], odom[order, 1:]
         at_scans, inside = interpolate_poses(odo_t, odo_p, np.array([r.time for r in records]))
     frames = []
+    kept = []
     for k, rec in enumerate(records):
         mount = mount_override or param_mount or between(rec.robot_world, rec.laser_world)
         limit = max_range or rec.max_range or default_max
@@ -307,10 +356,15 @@ def _frames(
                                      float(at_scans[k, 2])) if inside[k] else None
         else:
             odometry = rec.robot_world
-        ref = compose(rec.laser_world, inverse(mount)) if reference else None
-        frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0, limit,
-                                laser_pose=mount, odometry=odometry, reference=ref))
+        try:
+            ref = compose(rec.laser_world, inverse(mount)) if reference else None
+            frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0, limit,
+                                    laser_pose=mount, odometry=odometry, reference=ref))
+        except ValueError as exc:
+            tally.reject(rec.line, rec.kind, str(exc))
+            continue
+        kept.append(rec)
     if not use_stream:
-        odo_t = np.array([r.time for r in records], dtype=np.float64)
-        odo_p = np.array([r.robot_world for r in records], dtype=np.float64).reshape(-1, 3)
+        odo_t = np.array([r.time for r in kept], dtype=np.float64)
+        odo_p = np.array([r.robot_world for r in kept], dtype=np.float64).reshape(-1, 3)
     return frames, odo_t, odo_p

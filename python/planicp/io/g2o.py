@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from .._validation import Pose
 from ..se2 import between
-from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser
+from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser, _poses
 from .scan_log import ScanFrame, ScanLog
-from .line_records import LineTally, records
+from .line_records import LineTally, records, skipped_summary
 from .log_times import repair_times
 
 
@@ -73,15 +73,18 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
     info: list[tuple[float, ...]] = []
     frames: list[ScanFrame] = []
     scanned: set[int] = set()
+    last_vertex_bad = False  # a scan after a malformed VERTEX_SE2 belongs to no vertex read
 
     for line, kind, fields in records(tally):
         try:
             if kind == "VERTEX_SE2":
+                last_vertex_bad = True
                 _expect_fields(fields, 5, "VERTEX_SE2 id x y theta")
                 vid = _count(fields, 1, "vertex id")
-                x, y, yaw = _finite(fields, 2, 3, "the vertex pose")
+                x, y, yaw = _poses(fields, 2, 1, "the vertex pose")
                 ids.append(vid)
                 poses.append((x, y, yaw))
+                last_vertex_bad = False
             elif kind == "EDGE_SE2":
                 _expect_fields(fields, 12, "EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33")
                 edges.append((_count(fields, 1, "vertex id i"), _count(fields, 2, "vertex id j")))
@@ -90,6 +93,8 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
             elif kind == "ROBOTLASER1":
                 if not ids:
                     raise _BadLine("a ROBOTLASER1 line needs a VERTEX_SE2 before it")
+                if last_vertex_bad:
+                    raise _BadLine("the VERTEX_SE2 line before it is malformed: the scan has no pose")
                 if ids[-1] in scanned:
                     raise _BadLine(f"vertex {ids[-1]} already has a scan")
                 rec = _parse_robotlaser(fields, line)
@@ -97,17 +102,20 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
                 with np.errstate(invalid="ignore"):
                     ranges[ranges >= (rec.max_range or math.inf)] = np.inf
                     ranges[ranges <= 0.0] = np.nan
-                frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
-                                        rec.max_range or math.inf, laser_pose=between(rec.robot_world,
-                                                                                      rec.laser_world),
-                                        odometry=poses[-1]))
+                try:
+                    frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
+                                            rec.max_range or math.inf, laser_pose=between(rec.robot_world,
+                                                                                          rec.laser_world),
+                                            odometry=poses[-1]))
+                except ValueError as exc:  # e.g. a laser mount beyond the coordinate limit
+                    raise _BadLine(str(exc)) from None
                 scanned.add(ids[-1])
             else:
                 tally.skip(kind)
         except _BadLine as exc:
             tally.reject(line, kind, str(exc))
     if not ids:
-        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {tally.skipped or 'nothing'})")
+        raise ValueError(f"{source}: no VERTEX_SE2 line in the file (skipped: {skipped_summary(tally.skipped)})")
     tally.warn(stacklevel=3)
     info_m = np.zeros((len(info), 3, 3))
     for k, (i11, i12, i13, i22, i23, i33) in enumerate(info):

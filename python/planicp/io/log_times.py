@@ -20,6 +20,7 @@ Times are seconds; the result is strictly increasing.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -53,6 +54,55 @@ class TimeRepair:
     out_of_order: int
     repeated: int
     message: str
+
+
+POSE_METRES_PER_RADIAN = 1.0
+"""How `late_copies` weighs a turn against a translation when it measures a jump of the pose: one
+radian counts as one metre (a robot's size, the distance at which a turn moves its outline as much)."""
+
+
+def late_copies(times: NDArray[np.float64], poses: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which records are late copies of earlier messages (dropped by the readers), from their stamps
+    (seconds, in file order) and the (N, 3) odometry poses (x, y, yaw) they carry.
+
+    A record stamped before an earlier one is either a glitch of the clock (the record is in its
+    place and only its stamp is wrong: `repair_times` re-stamps it) or a message written late (its
+    stamp is right and the file's order is wrong: the tracker has long passed that time, and feeding
+    it would send the odometry back and forth). The poses tell which: a late copy continues the motion
+    where its stamp puts it, a glitched stamp where the file puts it. A record is a late copy when the
+    detour through its pose is shorter at its stamp's place than at its place in the file (a jump
+    weighs metres plus `POSE_METRES_PER_RADIAN` per radian); on a tie it stays.
+    """
+    t = np.asarray(times, dtype=np.float64)
+    p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+    late = np.zeros(t.shape[0], dtype=bool)
+    if t.shape[0] < 3:
+        return late
+    earlier_max = np.maximum.accumulate(np.concatenate([[-np.inf], t[:-1]]))
+    candidates = np.flatnonzero(t < earlier_max)
+    if candidates.shape[0] == 0 or candidates.shape[0] > MAX_DISORDERED_SHARE * (t.shape[0] - 1):
+        return late  # none, or so many that the stamps say nothing (`repair_times` ignores them)
+
+    def jump(a: int, b: int) -> float:
+        turn = math.remainder(float(p[b, 2] - p[a, 2]), math.tau)
+        return float(np.hypot(*(p[b, :2] - p[a, :2]))) + POSE_METRES_PER_RADIAN * abs(turn)
+
+    def detour(a: int, k: int, b: int | None) -> float:
+        return jump(a, k) if b is None else jump(a, k) + jump(k, b) - jump(a, b)
+
+    in_order = np.flatnonzero(t >= earlier_max)
+    for k in candidates:
+        after = int(k) + 1 if k + 1 < t.shape[0] else None
+        here = detour(int(k) - 1, int(k), after)
+        # Its stamp's place: between the last in-order record stamped at or before it and the next.
+        slot = int(np.searchsorted(t[in_order], t[k], side="right"))
+        before_k = in_order[in_order < k]
+        if slot >= before_k.shape[0]:
+            continue
+        nxt = int(before_k[slot])
+        there = jump(int(k), nxt) if slot == 0 else detour(int(before_k[slot - 1]), int(k), nxt)
+        late[k] = there < here
+    return late
 
 
 def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD

@@ -41,8 +41,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .._validation import unknown_fields
-from ..io.yaml_documents import load_yaml
+from .._validation import brief, one_line, unknown_fields
+from ..io.yaml_documents import read_yaml_file
 from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
@@ -90,18 +90,19 @@ class PlanSource:
 
     def __post_init__(self) -> None:
         if not isinstance(self.path, str) or not self.path:
-            raise ValueError(f"path must be a non-empty string, got {self.path!r}")
+            raise ValueError(f"path must be a non-empty string, got {brief(self.path)}")
         if self.resolution is not None:
             value = _number(self.resolution, "resolution")
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"resolution must be a positive number of metres per pixel, got {self.resolution!r}")
+                raise ValueError(f"resolution must be a positive number of metres per pixel, got "
+                                 f"{brief(self.resolution)}")
             object.__setattr__(self, "resolution", value)
         origin = self.origin
         if isinstance(origin, (str, bytes)) or not isinstance(origin, (list, tuple)) or len(origin) != 3:
-            raise ValueError(f"origin must be [x, y, yaw], got {origin!r}")
+            raise ValueError(f"origin must be [x, y, yaw], got {brief(origin)}")
         values = tuple(_number(v, "origin") for v in origin)
         if not all(math.isfinite(v) for v in values):
-            raise ValueError(f"origin must be finite, got {origin!r}")
+            raise ValueError(f"origin must be finite, got {brief(origin)}")
         object.__setattr__(self, "origin", values)
 
     def to_yaml(self) -> str | dict[str, Any]:
@@ -145,7 +146,7 @@ class SensorSetting:
             if f.name == "mount":
                 mount = self.mount
                 if isinstance(mount, (str, bytes)) or not isinstance(mount, (list, tuple)) or len(mount) != 3:
-                    raise ValueError(f"mount must be [x, y, yaw], got {mount!r}")
+                    raise ValueError(f"mount must be [x, y, yaw], got {brief(mount)}")
                 object.__setattr__(self, "mount", tuple(_number(v, "mount") for v in mount))
             elif f.name != "beams":
                 object.__setattr__(self, f.name, _number(getattr(self, f.name), f.name))
@@ -185,7 +186,7 @@ class OdometrySetting:
         self.error_generator()
         self.noise()
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ValueError(f"rate_hz must be a positive number of messages per second, got {self.rate_hz!r}")
+            raise ValueError(f"rate_hz must be a positive number of messages per second, got {brief(self.rate_hz)}")
 
     def error_generator(self) -> ErrorGenerator:
         """The systematic error of every message."""
@@ -218,10 +219,10 @@ class SuccessCriterion:
     def __post_init__(self) -> None:
         value = _number(self.max_position_error_m, "max_position_error_m")
         if not (math.isfinite(value) and value > 0):
-            raise ValueError(f"max_position_error_m must be a positive number of metres, got {value!r}")
+            raise ValueError(f"max_position_error_m must be a positive number of metres, got {brief(value)}")
         object.__setattr__(self, "max_position_error_m", value)
         if not isinstance(self.allow_lost_at_end, bool):
-            raise ValueError(f"allow_lost_at_end must be true or false, got {self.allow_lost_at_end!r}")
+            raise ValueError(f"allow_lost_at_end must be true or false, got {brief(self.allow_lost_at_end)}")
 
 
 def _default_sensors() -> dict[str, SensorSetting]:
@@ -267,7 +268,7 @@ class Study:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.strip():
-            raise StudyError(f"key 'name' must be a non-empty string, got {self.name!r}")
+            raise StudyError(f"key 'name' must be a non-empty string, got {brief(self.name)}")
         if not self.plans:
             raise StudyError("key 'plans' must list at least one plan")
         for key in ("seeds", "furniture", "people"):
@@ -275,38 +276,39 @@ class Study:
             if not values:
                 raise StudyError(f"key {key!r} must list at least one value")
             if len(set(values)) != len(values):
-                raise StudyError(f"key {key!r} lists a value twice: {list(values)}")
+                raise StudyError(f"key {key!r} lists a value twice: {brief(list(values))}")
         for s in self.seeds:
             if isinstance(s, bool) or not isinstance(s, int) or not 0 <= s < 2**63:
-                raise StudyError(f"key 'seeds' must hold integers in [0, 2^63), got {s!r}")
+                raise StudyError(f"key 'seeds' must hold integers in [0, 2^63), got {brief(s)}")
         for key in ("furniture", "people"):
             for v in getattr(self, key):
                 if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and v >= 0):
-                    raise StudyError(f"key {key!r} must hold finite numbers >= 0 (per 100 m^2), got {v!r}")
+                    raise StudyError(f"key {key!r} must hold finite numbers >= 0 (per 100 m^2), got {brief(v)}")
         d = self.duration_s
         if isinstance(d, bool) or not isinstance(d, (int, float)) or not (math.isfinite(d) and d > 0):
-            raise StudyError(f"key 'duration_s' must be a positive number of seconds, got {d!r}")
+            raise StudyError(f"key 'duration_s' must be a positive number of seconds, got {brief(d)}")
         for key in ("sensors", "odometry", "icp"):
             settings = getattr(self, key)
             if not settings:
                 raise StudyError(f"key {key!r} must name at least one setting")
             for name in settings:
                 if not isinstance(name, str) or not name:
-                    raise StudyError(f"key {key!r}: setting names must be non-empty strings, got {name!r}")
+                    raise StudyError(f"key {key!r}: setting names must be non-empty strings, got {brief(name)}")
         icp_keys = sorted(f.name for f in dataclasses.fields(IcpConfig) if f.init)
         for name, changes in self.icp.items():
             unknown = sorted(str(k) for k in changes if k not in icp_keys)
             if unknown:
-                raise StudyError(f"unknown key(s) {[f'icp.{name}.{k}' for k in unknown]}; known: {icp_keys}")
+                raise StudyError(f"unknown key(s) {brief([f'icp.{name}.{k}' for k in unknown])}; known: {icp_keys}")
             try:
                 IcpConfig.for_tracking(**dict(changes))
-            except (TypeError, ValueError) as exc:
-                raise StudyError(f"key 'icp.{name}': {exc}") from None
+            except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
+                raise StudyError(f"key {brief(f'icp.{name}')}: {one_line(str(exc), 300)}") from None
         for name, sensor in self.sensors.items():
             for oname, odom in self.odometry.items():
                 if odom.rate_hz < sensor.rate_hz:
-                    raise StudyError(f"key 'odometry.{oname}.rate_hz' ({odom.rate_hz}) is below the scan rate of "
-                                     f"sensors.{name} ({sensor.rate_hz}): odometry must be at least as fast")
+                    raise StudyError(f"key {brief(f'odometry.{oname}.rate_hz')} ({odom.rate_hz}) is below the scan "
+                                     f"rate of {brief(f'sensors.{name}')} ({sensor.rate_hz}): odometry must be at "
+                                     f"least as fast")
 
     def icp_config(self, name: str) -> IcpConfig:
         """The ICP settings named `name`."""
@@ -344,7 +346,7 @@ class Study:
             raise StudyError(f"a study must be a mapping of keys, got {type(data).__name__}")
         unknown, known = unknown_fields(cls, data)
         if unknown:
-            raise StudyError(f"unknown key(s) {unknown}; known: {known}")
+            raise StudyError(f"unknown key(s) {brief(unknown)}; known: {known}")
         for key in ("name", "plans"):
             if key not in data:
                 raise StudyError(f"missing key {key!r}")
@@ -385,15 +387,17 @@ def load_study(path: str | Path) -> tuple[Study, Path]:
     if not source.is_file():
         raise FileNotFoundError(f"study file {source} does not exist")
     try:
-        data = load_yaml(source.read_text(encoding="utf-8"), f"study {source}")
-    except UnicodeDecodeError:
-        raise StudyError(f"study {source} is not valid YAML: it is not UTF-8 text") from None
+        data = read_yaml_file(source, f"study {source}")
     except ValueError as exc:
         raise StudyError(str(exc)) from None
     try:
         return Study.from_dict(data), source.resolve().parent
     except StudyError as exc:
         raise StudyError(f"study {source}: {exc}") from None
+
+
+MAX_SEEDS = 100_000
+"""Most seeds `seeds: {count: ...}` may ask for (each is a run per combination of the other keys)."""
 
 
 def _changed(setting: Any) -> dict[str, Any]:
@@ -411,8 +415,11 @@ def _number(value: Any, name: str) -> float:
     if isinstance(value, str):
         value = _number_text(value)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    return float(value)
+        raise ValueError(f"{name} must be a number, got {brief(value)}")
+    try:
+        return float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise ValueError(f"{name} is too large a number, got {brief(value)}") from None
 
 
 def _number_text(text: str) -> Any:
@@ -426,21 +433,21 @@ def _number_text(text: str) -> Any:
 def _at(where: str, convert: Any, value: Any, name: str) -> Any:
     try:
         return convert(value, name)
-    except (TypeError, ValueError) as exc:
-        raise StudyError(f"key {where!r}: {exc}") from None
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
+        raise StudyError(f"key {brief(where)}: {one_line(str(exc), 300)}") from None
 
 
 def _list(value: Any, key: str) -> list[Any]:
     if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, list):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             return [value]
-        raise StudyError(f"key {key!r} must be a list, got {value!r}")
+        raise StudyError(f"key {key!r} must be a list, got {brief(value)}")
     return value
 
 
 def _mapping(value: Any, key: str) -> Mapping[Any, Any]:
     if not isinstance(value, Mapping):
-        raise StudyError(f"key {key!r} must be a mapping, got {value!r}")
+        raise StudyError(f"key {key!r} must be a mapping, got {brief(value)}")
     return value
 
 
@@ -449,11 +456,11 @@ def _dataclass(cls: Any, value: Any, key: str) -> Any:
     known = [f.name for f in dataclasses.fields(cls)]
     unknown = sorted(str(k) for k in values if k not in known)
     if unknown:
-        raise StudyError(f"unknown key(s) {[f'{key}.{k}' for k in unknown]}; known: {known}")
+        raise StudyError(f"unknown key(s) {brief([f'{key}.{k}' for k in unknown])}; known: {known}")
     try:
         return cls(**{str(k): v for k, v in values.items()})
-    except (TypeError, ValueError) as exc:
-        raise StudyError(f"key {key!r}: {exc}") from None
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int past float
+        raise StudyError(f"key {brief(key)}: {one_line(str(exc), 300)}") from None
 
 
 def _named(value: Any, key: str, cls: Any) -> dict[str, Any]:
@@ -466,7 +473,7 @@ def _plans(value: Any) -> tuple[PlanSource, ...]:
         if isinstance(item, str):
             item = {"path": item}
         if not isinstance(item, Mapping):
-            raise StudyError(f"key 'plans[{i}]' must be a path or a mapping with 'path', got {item!r}")
+            raise StudyError(f"key 'plans[{i}]' must be a path or a mapping with 'path', got {brief(item)}")
         if "path" not in item:
             raise StudyError(f"key 'plans[{i}]' has no 'path'")
         plans.append(_dataclass(PlanSource, item, f"plans[{i}]"))
@@ -477,14 +484,16 @@ def _seeds(value: Any) -> tuple[int, ...]:
     if isinstance(value, Mapping):
         unknown = sorted(str(k) for k in value if k not in ("start", "count"))
         if unknown or "count" not in value:
-            raise StudyError(f"key 'seeds' as a mapping needs 'count' and may have 'start', got {dict(value)}")
+            raise StudyError(f"key 'seeds' as a mapping needs 'count' and may have 'start', got {brief(dict(value))}")
         start, count = value.get("start", 0), value["count"]
         for k, v in (("start", start), ("count", count)):
             if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "count" else 0):
-                raise StudyError(f"key 'seeds.{k}' must be an integer >= {1 if k == 'count' else 0}, got {v!r}")
+                raise StudyError(f"key 'seeds.{k}' must be an integer >= {1 if k == 'count' else 0}, got {brief(v)}")
+        if count > MAX_SEEDS:
+            raise StudyError(f"key 'seeds.count' asks for {count} seeds; a study runs at most {MAX_SEEDS}")
         return tuple(range(start, start + count))
     seeds = _list(value, "seeds")
     for s in seeds:
         if isinstance(s, bool) or not isinstance(s, int):
-            raise StudyError(f"key 'seeds' must hold integers, got {s!r}")
+            raise StudyError(f"key 'seeds' must hold integers, got {brief(s)}")
     return tuple(seeds)
