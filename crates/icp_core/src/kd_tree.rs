@@ -14,9 +14,9 @@
 //! equal coordinates may fall on both sides, and a query searches the far side whenever the
 //! split is closer than its current best. Distances are squared and computed as
 //! `dx * dx + dy * dy`. Among points at the same distance the k-nearest query keeps the lowest
-//! indices (the wall normals it serves, fitted to a point's six nearest on a plan's pixel lattice,
-//! would otherwise depend on the tree's layout); the nearest and radius queries return the first
-//! they meet, which is the same every time.
+//! indices, so that its answer depends on the points, not on the tree's layout (the wall normals
+//! go further and take every tie at the sixth distance, `covariance::estimate_normals`); the
+//! nearest and radius queries return the first they meet, which is the same every time.
 
 /// Most points in a leaf.
 pub const LEAF: usize = 8;
