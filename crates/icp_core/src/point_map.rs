@@ -120,7 +120,7 @@ impl PointMap {
         let raster = WallRaster::new(&points, resolution)?;
         let normals = match normals {
             Some(n) => n,
-            None => covariance::estimate_normals_interruptible(&points, &tree, cancel)?,
+            None => covariance::estimate_normals(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,

@@ -11,6 +11,7 @@ mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
 use icp_core::acceleration::{extrapolation, truncated_cost, Update};
+use icp_core::cancel;
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, trim, Pair, TargetSet};
 use icp_core::covariance::{estimate_normals, pose_covariance};
@@ -339,7 +340,7 @@ fn fuzz_align() {
 fn fuzz_covariance_and_normals() {
     run("covariance", 3, |c| {
         let Some(map) = random_map(c, 1500)? else { return Ok(()) };
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         ensure!(normals.len() == map.len(), "normals length");
         let pose =
             Pose2 { x: c.f64_or_special(-5.0, 5.0, 0.1), y: c.uniform(-5.0, 5.0), yaw: c.uniform(-PI, PI) };
