@@ -7,7 +7,7 @@ use crate::error::{check_finite, IcpError, Result};
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
-use crate::wall_facing::visibility_masks_interruptible;
+use crate::wall_facing::visibility_masks;
 use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
@@ -200,7 +200,7 @@ impl PointMap {
             }
             cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
         };
-        let seen = visibility_masks_interruptible(&self.points, &self.normals, &self.raster, cancel)?;
+        let seen = visibility_masks(&self.points, &self.normals, &self.raster, cancel)?;
         NearestWallIndex::new_interruptible(
             &self.points,
             &self.tree,
