@@ -8,6 +8,7 @@
 //! room, with 1.5 cm noise. Run `cargo bench`; compare numbers within one run only.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use icp_core::cancel;
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::icp::CorrespondenceSearch;
@@ -38,8 +39,15 @@ fn benches(c: &mut Criterion) {
     let tree = Tree2::new_from_slice(&pts);
     g.bench_function("nearest_wall_index", |b| {
         b.iter(|| {
-            NearestWallIndex::new(black_box(&pts), &tree, None, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH)
-                .unwrap()
+            NearestWallIndex::new(
+                black_box(&pts),
+                &tree,
+                None,
+                DEFAULT_INDEX_CELL,
+                DEFAULT_INDEX_REACH,
+                cancel::NEVER,
+            )
+            .unwrap()
         })
     });
     g.bench_function("wall_index_with_facing", |b| {

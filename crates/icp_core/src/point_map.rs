@@ -201,14 +201,7 @@ impl PointMap {
             cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
         };
         let seen = visibility_masks(&self.points, &self.normals, &self.raster, cancel)?;
-        NearestWallIndex::new_interruptible(
-            &self.points,
-            &self.tree,
-            Some(&seen),
-            cell,
-            self.index_reach,
-            cancel,
-        )
+        NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach, cancel)
     }
 
     /// The wall points, metres, map frame.
