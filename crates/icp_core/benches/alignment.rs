@@ -53,7 +53,7 @@ fn benches(c: &mut Criterion) {
     g.bench_function("wall_index_with_facing", |b| {
         b.iter(|| {
             let map = PointMap::new(black_box(pts.clone()), None).unwrap();
-            map.wall_index().unwrap();
+            map.wall_index(cancel::NEVER).unwrap();
             map
         })
     });
@@ -63,7 +63,7 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(scan.len() as u64));
     let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
     let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
-    let wall = map.wall_index().unwrap();
+    let wall = map.wall_index(cancel::NEVER).unwrap();
     let bearings = SensorView::bearings_of(&scan);
     let sensor = Some(SensorView::new(&bearings, guess.yaw));
     g.bench_function("wall_index", |b| {

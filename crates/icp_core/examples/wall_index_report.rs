@@ -41,7 +41,7 @@ fn main() {
         );
     }
     let t = Instant::now();
-    let index = map.wall_index().unwrap();
+    let index = map.wall_index(cancel::NEVER).unwrap();
     println!(
         "default (cell {DEFAULT_INDEX_CELL} m, reach {DEFAULT_INDEX_REACH} m) with visibility masks: {:.2} s, {:.1} MB",
         t.elapsed().as_secs_f64(),

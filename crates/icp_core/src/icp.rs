@@ -253,7 +253,7 @@ pub fn align_interruptible(
     let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
     let largest_distance = largest_factor * config.max_correspondence_distance;
     let indexed = match config.search {
-        CorrespondenceSearch::WallIndex => match map.wall_index_interruptible(cancel) {
+        CorrespondenceSearch::WallIndex => match map.wall_index(cancel) {
             Err(IcpError::Interrupted) => return Err(IcpError::Interrupted),
             built => built.ok().filter(|w| largest_distance <= w.reach()),
         },
@@ -592,7 +592,7 @@ mod tests {
             });
         assert_eq!(out, Err(IcpError::Interrupted));
         assert!(map.built_wall_index().is_none());
-        assert!(map.wall_index().is_ok() && map.built_wall_index().is_some());
+        assert!(map.wall_index(cancel::NEVER).is_ok() && map.built_wall_index().is_some());
     }
 
     #[test]

@@ -871,15 +871,15 @@ mod tests {
             ));
         }
         let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
-        let index = custom.wall_index().unwrap();
+        let index = custom.wall_index(cancel::NEVER).unwrap();
         assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
         // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
         // explicit one is refused.
         let mut wide = pts.clone();
         wide.push([1000.0, 1000.0]);
         let map = PointMap::new(wide.clone(), None).unwrap();
-        assert!(map.wall_index().unwrap().cell() > DEFAULT_INDEX_CELL);
+        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
         let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
-        assert!(matches!(explicit.wall_index(), Err(IcpError::RasterTooLarge { .. })));
+        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
     }
 }

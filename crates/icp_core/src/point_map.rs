@@ -156,16 +156,13 @@ impl PointMap {
     }
 
     /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
-    /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
-    /// plan's extent at its cell size.
-    pub fn wall_index(&self) -> Result<&NearestWallIndex> {
-        self.wall_index_interruptible(cancel::NEVER)
-    }
-
-    /// [`PointMap::wall_index`] that polls `cancel` while it builds the index and stops with
-    /// [`IcpError::Interrupted`] when it says so; an interrupted build is not kept, the next
-    /// call starts it again. Threads that ask while another builds wait for its index.
-    pub fn wall_index_interruptible(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
+    /// on the first call (thread-safe) and kept. Threads that ask while another builds wait for its
+    /// index. Errors: the index would be too large for the plan's extent at its cell size.
+    ///
+    /// `cancel` is polled while the index is built; when it returns true the build stops with
+    /// [`IcpError::Interrupted`], is not kept, and the next call starts it again (callers that
+    /// cannot be cancelled pass [`cancel::NEVER`]).
+    pub fn wall_index(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
         if let Some(built) = self.wall_index.get() {
             return built.as_ref().map_err(Clone::clone);
         }
