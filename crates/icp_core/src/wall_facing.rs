@@ -155,7 +155,7 @@ mod tests {
         // (The 54 copies of one point the target gave are thinned to one by the map; the raster
         // is the same, and so is the march.)
         let points = vec![[0.3, -0.2]; 54];
-        let map = crate::PointMap::with_normals(points.clone(), None, Some(5e-324)).unwrap();
+        let map = crate::PointMap::build(points.clone(), None, Some(5e-324), cancel::NEVER).unwrap();
         let masks = visibility_masks(&points, &vec![[0.0, 0.0]; 54], map.raster(), cancel::NEVER).unwrap();
         assert_eq!(masks.len(), 54);
     }

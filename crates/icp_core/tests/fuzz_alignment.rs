@@ -1,4 +1,4 @@
-//! Fuzz targets over the alignment half of the core: `PointMap::new`/`with_normals`, `nearest`,
+//! Fuzz targets over the alignment half of the core: `PointMap::new`/`build`, `nearest`,
 //! `visible_from`, `align` with random `IcpConfig`s, the covariance and normals, the
 //! correspondence search and its cache, the rigid solver and the extrapolation.
 //!
@@ -77,7 +77,7 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
         .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
         .flatten();
     let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
-    let result = PointMap::with_normals(pts, normals.clone(), res);
+    let result = PointMap::build(pts, normals.clone(), res, cancel::NEVER);
     match result {
         Ok(map) => {
             ensure!(valid_points && valid_res && valid_normals, "accepted an invalid plan");
