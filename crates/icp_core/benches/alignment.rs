@@ -121,7 +121,7 @@ fn benches(c: &mut Criterion) {
         ),
     ] {
         g.bench_with_input(BenchmarkId::from_parameter(name), &cfg, |b, cfg| {
-            b.iter(|| align(&map, black_box(&scan), guess, cfg).unwrap())
+            b.iter(|| align(&map, black_box(&scan), guess, cfg, None, cancel::NEVER).unwrap())
         });
     }
     g.finish();

@@ -13,7 +13,7 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{invalid, Result};
 use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
-use crate::icp::{align_interruptible, IcpConfig, IcpResult};
+use crate::icp::{align, IcpConfig, IcpResult};
 use crate::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 
@@ -87,7 +87,7 @@ pub fn relocalize(
 }
 
 /// [`relocalize`] that polls `cancel` during the search and the alignments (see
-/// [`GlobalMatcher::search_interruptible`], [`crate::icp::align_interruptible`]) and stops with
+/// [`GlobalMatcher::search_interruptible`], [`crate::icp::align`]) and stops with
 /// [`crate::error::IcpError::Interrupted`] when it says so.
 pub fn relocalize_interruptible(
     map: &PointMap,
@@ -133,7 +133,7 @@ pub fn refine_interruptible(
     ranking.validate()?;
     let mut refined = Vec::with_capacity(search.candidates.len());
     for c in &search.candidates {
-        let alignment = align_interruptible(map, scan, c.pose, icp, None, cancel)?;
+        let alignment = align(map, scan, c.pose, icp, None, cancel)?;
         refined.push(RankedCandidate {
             pose: alignment.pose,
             score: alignment.inlier_ratio,

@@ -298,7 +298,7 @@ fn fuzz_align() {
         let cfg = random_config(c);
         c.note(|| format!("scan {scan:?}\n  initial {initial:?}\n  config {cfg:?}"));
         let valid = align_input_valid(&cfg, &scan, &initial);
-        match align(&map, &scan, initial, &cfg) {
+        match align(&map, &scan, initial, &cfg, None, cancel::NEVER) {
             Ok(res) => {
                 ensure!(valid, "accepted invalid input");
                 check_pose(&res.pose)?;

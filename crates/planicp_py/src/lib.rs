@@ -415,7 +415,7 @@ fn align(
     let initial = Pose2::new(initial.0, initial.1, initial.2);
     let view = view.map(|v| Arc::clone(&v.inner));
     let inner = interruptible(py, |cancel| {
-        icp_core::icp::align_interruptible(
+        icp_core::icp::align(
             &map,
             &pts,
             initial,
