@@ -87,7 +87,7 @@ pub fn relocalize(
 }
 
 /// [`relocalize`] that polls `cancel` during the search and the alignments (see
-/// [`GlobalMatcher::search_interruptible`], [`crate::icp::align`]) and stops with
+/// [`GlobalMatcher::search`], [`crate::icp::align`]) and stops with
 /// [`crate::error::IcpError::Interrupted`] when it says so.
 pub fn relocalize_interruptible(
     map: &PointMap,
@@ -100,7 +100,7 @@ pub fn relocalize_interruptible(
 ) -> Result<Relocalization> {
     icp.validate()?;
     ranking.validate()?;
-    let search = matcher.search_interruptible(scan, window, cancel)?;
+    let search = matcher.search(scan, window, cancel)?;
     refine_interruptible(map, matcher, scan, search, icp, ranking, cancel)
 }
 

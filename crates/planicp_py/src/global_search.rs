@@ -139,7 +139,7 @@ impl SearchRun {
     /// returns whether the search has ended.
     fn advance(&mut self, py: Python<'_>, budget: u64) -> PyResult<bool> {
         let (run, matcher) = (&mut self.run, &self.matcher);
-        interruptible(py, |cancel| run.advance_interruptible(matcher, budget, cancel))
+        interruptible(py, |cancel| run.advance(matcher, budget, cancel))
     }
 
     /// Whether the search has ended.
