@@ -39,7 +39,7 @@ fn benches(c: &mut Criterion) {
 
     // The office's rooms are alike: the result should say so rather than pick one with confidence.
     let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
-    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking).unwrap();
+    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking, cancel::NEVER).unwrap();
     for c in &out.candidates {
         eprintln!("candidate {:?} inlier ratio {:.3}", c.pose, c.score);
     }
@@ -58,7 +58,7 @@ fn benches(c: &mut Criterion) {
         b.iter(|| matcher.search(black_box(&scan), Some(&window), cancel::NEVER).unwrap())
     });
     g.bench_function("relocalize_whole_plan", |b| {
-        b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking).unwrap())
+        b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking, cancel::NEVER).unwrap())
     });
     g.finish();
 }
