@@ -19,16 +19,10 @@ pub const NORMAL_NEIGHBOURS: usize = 6;
 /// Unit normal of the plan's wall at every point (least-squares line through the point's
 /// [`NORMAL_NEIGHBOURS`] nearest plan points and every other point as near as the last of them);
 /// `[0, 0]` where no direction can be fitted.
-pub fn estimate_normals(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2) -> Vec<[f64; 2]> {
-    match estimate_normals_interruptible(map_points, tree, cancel::NEVER) {
-        Ok(normals) => normals,
-        Err(_) => unreachable!("a hook that never stops cannot interrupt"),
-    }
-}
-
-/// [`estimate_normals`] that polls `cancel` every [`cancel::POLL_EVERY`] points and stops with
-/// [`crate::error::IcpError::Interrupted`] when it says so.
-pub fn estimate_normals_interruptible(
+///
+/// `cancel` is polled every [`cancel::POLL_EVERY`] points; when it returns true the fit stops with
+/// [`crate::error::IcpError::Interrupted`] ([`cancel::NEVER`]: it cannot be stopped, and never fails).
+pub fn estimate_normals(
     map_points: &[[f64; 2]],
     tree: &crate::point_map::Tree2,
     cancel: Cancel<'_>,
@@ -172,7 +166,7 @@ mod tests {
     fn normals_of_a_straight_wall_are_perpendicular() {
         let pts: Vec<[f64; 2]> = (0..50).map(|i| [i as f64 * 0.05, 1.0]).collect();
         let map = PointMap::new(pts, None).unwrap();
-        for n in estimate_normals(map.points(), map.tree()) {
+        for n in estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap() {
             assert!(n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9, "{n:?}");
         }
     }
@@ -191,10 +185,10 @@ mod tests {
             }
         }
         let forward = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(forward.points(), forward.tree());
+        let normals = estimate_normals(forward.points(), forward.tree(), cancel::NEVER).unwrap();
         let reversed_pts: Vec<[f64; 2]> = pts.iter().rev().copied().collect();
         let reversed = PointMap::new(reversed_pts, None).unwrap();
-        let reversed_normals = estimate_normals(reversed.points(), reversed.tree());
+        let reversed_normals = estimate_normals(reversed.points(), reversed.tree(), cancel::NEVER).unwrap();
         let n = pts.len();
         for (i, a) in normals.iter().enumerate() {
             // A line's normal has no preferred side: compare up to sign.
@@ -217,7 +211,7 @@ mod tests {
             pts.push([x, -1.0]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(10.0, 0.0, 0.0);
         let pairs: Vec<([f64; 2], u32)> = (0..pts.len())
             .step_by(3)
@@ -243,7 +237,7 @@ mod tests {
             pts.extend([[1e8 + t, 0.0], [1e8 + t, 5.0], [1e8, t], [1e8 + 5.0, t]]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(0.0, 2.5, 0.0);
         let pairs: Vec<([f64; 2], u32)> = pts
             .iter()
@@ -267,7 +261,7 @@ mod tests {
             pts.extend([[t, 0.0], [t, 5.0], [0.0, t], [5.0, t]]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(2.5, 2.5, 0.0);
         let covariance_for = |noise: f64| {
             let pairs: Vec<([f64; 2], u32)> = pts

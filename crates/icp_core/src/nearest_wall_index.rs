@@ -131,21 +131,12 @@ impl NearestWallIndex {
     /// everywhere) with square
     /// cells of `cell` metres, answering exactly for queries up to `reach` metres from the walls.
     ///
+    /// `cancel` is polled every [`cancel::POLL_EVERY`] blocks; when it returns true the build stops
+    /// with [`IcpError::Interrupted`] (callers that cannot be cancelled pass [`cancel::NEVER`]).
+    ///
     /// Errors: `cell` or `reach` not positive and finite, no points, more than
     /// [`MAX_INDEX_POINTS`] points or [`MAX_INDEX_CELLS`] cells, `seen` of another length.
     pub fn new(
-        points: &[[f64; 2]],
-        tree: &Tree2,
-        seen: Option<&[u16]>,
-        cell: f64,
-        reach: f64,
-    ) -> Result<Self> {
-        Self::new_interruptible(points, tree, seen, cell, reach, cancel::NEVER)
-    }
-
-    /// [`NearestWallIndex::new`] that polls `cancel` every [`cancel::POLL_EVERY`] blocks and stops
-    /// with [`IcpError::Interrupted`] when it says so.
-    pub fn new_interruptible(
         points: &[[f64; 2]],
         tree: &Tree2,
         seen: Option<&[u16]>,
@@ -714,7 +705,7 @@ mod tests {
         let pts = walls(&mut rng);
         let tree = Tree2::new_from_slice(&pts);
         let seen: Vec<u16> = (0..pts.len()).map(|_| rng.random_range(0..=u16::MAX)).collect();
-        let index = NearestWallIndex::new(&pts, &tree, Some(&seen), 0.03, 0.5).unwrap();
+        let index = NearestWallIndex::new(&pts, &tree, Some(&seen), 0.03, 0.5, cancel::NEVER).unwrap();
         let mut queries: Vec<[f64; 2]> =
             (0..5000).map(|_| [rng.random_range(-3.0..23.0), rng.random_range(-3.0..9.0)]).collect();
         queries.extend([[f64::NAN, 1.0], [1.0, f64::NAN], [f64::INFINITY, 0.0], [-1e300, 1e300]]);
@@ -770,7 +761,7 @@ mod tests {
         let pts = walls(&mut rng);
         let tree = Tree2::new_from_slice(&pts);
         for (cell, reach) in [(0.02, 0.4), (0.05, 0.25), (0.11, 1.0)] {
-            let index = NearestWallIndex::new(&pts, &tree, None, cell, reach).unwrap();
+            let index = NearestWallIndex::new(&pts, &tree, None, cell, reach, cancel::NEVER).unwrap();
             let (mut answered, mut beyond) = (0, 0);
             for _ in 0..20_000 {
                 let q = [rng.random_range(-2.0..22.0), rng.random_range(-2.0..8.0)];
@@ -802,7 +793,7 @@ mod tests {
         let mut pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
         pts.push([40.0, 40.0]);
         let tree = Tree2::new_from_slice(&pts);
-        let index = NearestWallIndex::new(&pts, &tree, None, 0.05, 0.3).unwrap();
+        let index = NearestWallIndex::new(&pts, &tree, None, 0.05, 0.3, cancel::NEVER).unwrap();
         let stats = index.stats();
         assert!(stats.stored_blocks * 50 < stats.blocks, "{stats:?}");
         assert!(stats.memory_bytes < 200_000, "{stats:?}");
@@ -841,22 +832,30 @@ mod tests {
         let tree = Tree2::new_from_slice(&pts);
         for (cell, reach) in [(0.0, 0.3), (f64::NAN, 0.3), (0.05, -1.0), (0.05, f64::INFINITY)] {
             assert!(matches!(
-                NearestWallIndex::new(&pts, &tree, None, cell, reach),
+                NearestWallIndex::new(&pts, &tree, None, cell, reach, cancel::NEVER),
                 Err(IcpError::InvalidParameter { .. })
             ));
         }
         let far = vec![[0.0, 0.0], [1e6, 1e6]];
         let tree = Tree2::new_from_slice(&far);
         assert!(matches!(
-            NearestWallIndex::new(&far, &tree, None, 0.01, 0.3),
+            NearestWallIndex::new(&far, &tree, None, 0.01, 0.3, cancel::NEVER),
             Err(IcpError::RasterTooLarge { .. })
         ));
         assert!(matches!(
-            NearestWallIndex::new(&pts, &Tree2::new_from_slice(&pts), Some(&[0u16; 3]), 0.05, 0.3),
+            NearestWallIndex::new(
+                &pts,
+                &Tree2::new_from_slice(&pts),
+                Some(&[0u16; 3]),
+                0.05,
+                0.3,
+                cancel::NEVER
+            ),
             Err(IcpError::InvalidParameter { name: "visibility masks", .. })
         ));
         assert_eq!(
-            NearestWallIndex::new(&[], &Tree2::new_from_slice(&[]), None, 0.05, 0.3).unwrap_err(),
+            NearestWallIndex::new(&[], &Tree2::new_from_slice(&[]), None, 0.05, 0.3, cancel::NEVER)
+                .unwrap_err(),
             IcpError::Empty { what: "plan" }
         );
     }
@@ -872,15 +871,15 @@ mod tests {
             ));
         }
         let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
-        let index = custom.wall_index().unwrap();
+        let index = custom.wall_index(cancel::NEVER).unwrap();
         assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
         // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
         // explicit one is refused.
         let mut wide = pts.clone();
         wide.push([1000.0, 1000.0]);
         let map = PointMap::new(wide.clone(), None).unwrap();
-        assert!(map.wall_index().unwrap().cell() > DEFAULT_INDEX_CELL);
+        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
         let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
-        assert!(matches!(explicit.wall_index(), Err(IcpError::RasterTooLarge { .. })));
+        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
     }
 }

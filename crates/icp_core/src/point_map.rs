@@ -7,7 +7,7 @@ use crate::error::{check_finite, IcpError, Result};
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
-use crate::wall_facing::visibility_masks_interruptible;
+use crate::wall_facing::visibility_masks;
 use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
@@ -61,22 +61,19 @@ impl PointMap {
     ///
     /// `raster_resolution` is the cell size of the visibility raster in metres; `None` estimates it
     /// from the point spacing (see [`estimate_raster_resolution`]).
+    ///
+    /// The wall normals are fitted here, and the build cannot be stopped: [`PointMap::build`]
+    /// takes normals computed before and a cancel hook.
     pub fn new(points: Vec<[f64; 2]>, raster_resolution: Option<f64>) -> Result<Self> {
-        Self::with_normals(points, None, raster_resolution)
+        Self::build(points, None, raster_resolution, cancel::NEVER)
     }
 
     /// Like [`PointMap::new`], with wall normals computed before (e.g. stored with a cached plan)
-    /// instead of fitted again: one per point, unit length or `[0, 0]` (thinned with the points).
-    pub fn with_normals(
-        points: Vec<[f64; 2]>,
-        normals: Option<Vec<[f64; 2]>>,
-        raster_resolution: Option<f64>,
-    ) -> Result<Self> {
-        Self::build(points, normals, raster_resolution, cancel::NEVER)
-    }
-
-    /// [`PointMap::with_normals`] that polls `cancel` while it fits the normals and stops with
-    /// [`IcpError::Interrupted`] when it says so.
+    /// instead of fitted again: one per point, unit length or `[0, 0]` (thinned with the points);
+    /// `None` fits them.
+    ///
+    /// `cancel` is polled while the normals are fitted; when it returns true the build stops with
+    /// [`IcpError::Interrupted`] (callers that cannot be cancelled pass [`cancel::NEVER`]).
     pub fn build(
         points: Vec<[f64; 2]>,
         normals: Option<Vec<[f64; 2]>>,
@@ -120,7 +117,7 @@ impl PointMap {
         let raster = WallRaster::new(&points, resolution)?;
         let normals = match normals {
             Some(n) => n,
-            None => covariance::estimate_normals_interruptible(&points, &tree, cancel)?,
+            None => covariance::estimate_normals(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,
@@ -156,16 +153,13 @@ impl PointMap {
     }
 
     /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
-    /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
-    /// plan's extent at its cell size.
-    pub fn wall_index(&self) -> Result<&NearestWallIndex> {
-        self.wall_index_interruptible(cancel::NEVER)
-    }
-
-    /// [`PointMap::wall_index`] that polls `cancel` while it builds the index and stops with
-    /// [`IcpError::Interrupted`] when it says so; an interrupted build is not kept, the next
-    /// call starts it again. Threads that ask while another builds wait for its index.
-    pub fn wall_index_interruptible(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
+    /// on the first call (thread-safe) and kept. Threads that ask while another builds wait for its
+    /// index. Errors: the index would be too large for the plan's extent at its cell size.
+    ///
+    /// `cancel` is polled while the index is built; when it returns true the build stops with
+    /// [`IcpError::Interrupted`], is not kept, and the next call starts it again (callers that
+    /// cannot be cancelled pass [`cancel::NEVER`]).
+    pub fn wall_index(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
         if let Some(built) = self.wall_index.get() {
             return built.as_ref().map_err(Clone::clone);
         }
@@ -200,15 +194,8 @@ impl PointMap {
             }
             cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
         };
-        let seen = visibility_masks_interruptible(&self.points, &self.normals, &self.raster, cancel)?;
-        NearestWallIndex::new_interruptible(
-            &self.points,
-            &self.tree,
-            Some(&seen),
-            cell,
-            self.index_reach,
-            cancel,
-        )
+        let seen = visibility_masks(&self.points, &self.normals, &self.raster, cancel)?;
+        NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach, cancel)
     }
 
     /// The wall points, metres, map frame.
@@ -431,7 +418,7 @@ mod tests {
         pts.extend(two_walls(0.05));
         let normals: Vec<[f64; 2]> =
             (0..pts.len()).map(|i| if i < 1000 { [1.0, 0.0] } else { [0.0, 1.0] }).collect();
-        let map = PointMap::with_normals(pts.clone(), Some(normals), None).unwrap();
+        let map = PointMap::build(pts.clone(), Some(normals), None, cancel::NEVER).unwrap();
         assert_eq!(map.len(), pts.len() - 999);
         assert_eq!(map.points()[0], [1.0, 1.0]);
         assert_eq!(map.normals()[0], [1.0, 0.0]);
@@ -442,14 +429,15 @@ mod tests {
     fn given_normals_are_used_and_checked() {
         let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
         let fitted = PointMap::new(pts.clone(), None).unwrap();
-        let given = PointMap::with_normals(pts.clone(), Some(fitted.normals().to_vec()), None).unwrap();
+        let given =
+            PointMap::build(pts.clone(), Some(fitted.normals().to_vec()), None, cancel::NEVER).unwrap();
         assert_eq!(given.normals(), fitted.normals());
         assert!(matches!(
-            PointMap::with_normals(pts.clone(), Some(vec![[0.0, 1.0]; 3]), None),
+            PointMap::build(pts.clone(), Some(vec![[0.0, 1.0]; 3]), None, cancel::NEVER),
             Err(IcpError::InvalidParameter { name: "normals", .. })
         ));
         assert!(matches!(
-            PointMap::with_normals(pts, Some(vec![[f64::NAN, 1.0]; 100]), None),
+            PointMap::build(pts, Some(vec![[f64::NAN, 1.0]; 100]), None, cancel::NEVER),
             Err(IcpError::NonFinite { what: "normals", row: 0 })
         ));
     }

@@ -31,16 +31,11 @@ pub const SEEN_FROM_EVERYWHERE: u16 = u16::MAX;
 /// `normals` are the points' wall normals (`[0, 0]` where none was fitted): wall cells within a
 /// cell and a half of the point's own wall line are the wall itself (a rotated wall's raster
 /// staircase), not an occluder.
-pub fn visibility_masks(points: &[[f64; 2]], normals: &[[f64; 2]], raster: &WallRaster) -> Vec<u16> {
-    match visibility_masks_interruptible(points, normals, raster, cancel::NEVER) {
-        Ok(masks) => masks,
-        Err(_) => unreachable!("a hook that never stops cannot interrupt"),
-    }
-}
-
-/// [`visibility_masks`] that polls `cancel` every [`cancel::POLL_EVERY`] points and stops with
-/// [`crate::error::IcpError::Interrupted`] when it says so.
-pub fn visibility_masks_interruptible(
+///
+/// `cancel` is polled every [`cancel::POLL_EVERY`] points; when it returns true the marches stop
+/// with [`crate::error::IcpError::Interrupted`] ([`cancel::NEVER`]: they cannot be stopped, and
+/// never fail).
+pub fn visibility_masks(
     points: &[[f64; 2]],
     normals: &[[f64; 2]],
     raster: &WallRaster,
@@ -160,8 +155,8 @@ mod tests {
         // (The 54 copies of one point the target gave are thinned to one by the map; the raster
         // is the same, and so is the march.)
         let points = vec![[0.3, -0.2]; 54];
-        let map = crate::PointMap::with_normals(points.clone(), None, Some(5e-324)).unwrap();
-        let masks = visibility_masks(&points, &vec![[0.0, 0.0]; 54], map.raster());
+        let map = crate::PointMap::build(points.clone(), None, Some(5e-324), cancel::NEVER).unwrap();
+        let masks = visibility_masks(&points, &vec![[0.0, 0.0]; 54], map.raster(), cancel::NEVER).unwrap();
         assert_eq!(masks.len(), 54);
     }
 
@@ -194,7 +189,8 @@ mod tests {
         sample(&mut pts, [10.0, -3.0], [10.0, 3.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
         let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let masks = visibility_masks(&pts, &crate::covariance::estimate_normals(&pts, &tree), &raster);
+        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         for (i, p) in pts.iter().enumerate() {
             if p[0] < 1.0 || (p[0] > 5.0 && p[0] < 9.0) || p[1].abs() > 2.5 {
                 continue;
@@ -232,11 +228,11 @@ mod tests {
             sample(&mut pts, a, b);
         }
         let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::covariance::estimate_normals(&pts, &tree);
+        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         for resolution in [0.075, 0.031] {
             let raster = WallRaster::new(&pts, resolution).unwrap();
-            let jumping = visibility_masks(&pts, &normals, &raster);
-            let stepping = visibility_masks(&pts, &normals, &raster.without_jumps());
+            let jumping = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
+            let stepping = visibility_masks(&pts, &normals, &raster.without_jumps(), cancel::NEVER).unwrap();
             assert_eq!(jumping, stepping, "at {resolution} m");
             assert!(jumping.iter().any(|&m| m != SEEN_FROM_EVERYWHERE));
         }
@@ -250,7 +246,8 @@ mod tests {
         sample(&mut pts, [0.0, 0.05], [0.0, 4.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
         let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let masks = visibility_masks(&pts, &crate::covariance::estimate_normals(&pts, &tree), &raster);
+        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         let i = pts.iter().position(|p| (p[0] - 0.3).abs() < 1e-9 && p[1] == 0.0).unwrap();
         // Seen from the room (up and to the right), hidden from behind the x = 0 wall.
         assert!(seen_from(masks[i], pts[i], [2.0, 2.0]));

@@ -1,4 +1,4 @@
-//! Fuzz targets over the alignment half of the core: `PointMap::new`/`with_normals`, `nearest`,
+//! Fuzz targets over the alignment half of the core: `PointMap::new`/`build`, `nearest`,
 //! `visible_from`, `align` with random `IcpConfig`s, the covariance and normals, the
 //! correspondence search and its cache, the rigid solver and the extrapolation.
 //!
@@ -11,6 +11,7 @@ mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
 use icp_core::acceleration::{extrapolation, truncated_cost, Update};
+use icp_core::cancel;
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, trim, Pair, TargetSet};
 use icp_core::covariance::{estimate_normals, pose_covariance};
@@ -76,7 +77,7 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
         .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
         .flatten();
     let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
-    let result = PointMap::with_normals(pts, normals.clone(), res);
+    let result = PointMap::build(pts, normals.clone(), res, cancel::NEVER);
     match result {
         Ok(map) => {
             ensure!(valid_points && valid_res && valid_normals, "accepted an invalid plan");
@@ -297,7 +298,7 @@ fn fuzz_align() {
         let cfg = random_config(c);
         c.note(|| format!("scan {scan:?}\n  initial {initial:?}\n  config {cfg:?}"));
         let valid = align_input_valid(&cfg, &scan, &initial);
-        match align(&map, &scan, initial, &cfg) {
+        match align(&map, &scan, initial, &cfg, None, cancel::NEVER) {
             Ok(res) => {
                 ensure!(valid, "accepted invalid input");
                 check_pose(&res.pose)?;
@@ -339,7 +340,7 @@ fn fuzz_align() {
 fn fuzz_covariance_and_normals() {
     run("covariance", 3, |c| {
         let Some(map) = random_map(c, 1500)? else { return Ok(()) };
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         ensure!(normals.len() == map.len(), "normals length");
         let pose =
             Pose2 { x: c.f64_or_special(-5.0, 5.0, 0.1), y: c.uniform(-5.0, 5.0), yaw: c.uniform(-PI, PI) };
