@@ -12,6 +12,7 @@ import pytest
 import planicp
 from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels, synthetic
 from planicp.cli import main as cli_main
+from planicp.plan_raster import wall_mask
 from planicp.ros_map import write_ros_map
 
 DATA = Path(__file__).parent / "data"
@@ -201,6 +202,26 @@ def test_canny_option_loses_faces_on_a_real_map() -> None:
     canny = raster.surface_points("canny")
     assert len(boundary) == raster.boundary_face_count()
     assert 0.8 * len(boundary) < len(canny) < len(boundary)
+
+
+def test_an_image_finer_than_useful_is_thinned_and_cached_as_thinned(cache_dir: Path) -> None:
+    """An image at 1 mm per pixel has more than two wall-surface points per 5 mm square: its plan
+    keeps one per square, and the cache stores that plan (its points with their normals), so that
+    a second load gives the same plan."""
+    image = np.full((1500, 2500), 255, np.uint8)  # 2.5 x 1.5 m
+    image[:40, :] = image[-40:, :] = 0  # 4 cm walls all round
+    image[:, :40] = image[:, -40:] = 0
+    image[600:900, 1200:1240] = 0  # a pillar
+    surfaces = PlanRaster(wall_mask(image, None), 0.001, (0.0, 0.0, 0.0)).surface_points("boundary")
+    first = PlanMap.from_image(image, 0.001)
+    second = PlanMap.from_image(image, 0.001)
+    assert not first.from_cache and second.from_cache
+    assert len(first) < len(surfaces) / 4  # about one of the 5 points per 5 mm of surface
+    np.testing.assert_array_equal(first.points, second.points)
+    np.testing.assert_array_equal(first.normals, second.normals)
+    pose = (1.0, 0.75, 0.2)
+    scan = planicp.se2.transform_points(planicp.se2.inverse(pose), first.visible_from(pose)[::3])
+    assert math.dist(planicp.localize(scan, second, (1.03, 0.73, 0.21)).pose[:2], pose[:2]) < 0.005
 
 
 def test_cache_hits_misses_and_corruption(floor: synthetic.Floor, tmp_path: Path, cache_dir: Path) -> None:

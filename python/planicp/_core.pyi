@@ -40,7 +40,8 @@ class PlanicpInternalError(RuntimeError):
 
 @final
 class PointMap:
-    """Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster."""
+    """Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster;
+    points denser than two per 5 mm square on average are thinned to one per square."""
 
     def __new__(
         cls,

@@ -29,8 +29,10 @@ from numpy.typing import NDArray
 
 from . import _core
 
-FORMAT = 4
-"""Bumped whenever what an entry holds, or how a plan is prepared, changes."""
+FORMAT = 6
+"""Bumped whenever what an entry holds, or how a plan is prepared, changes (5: points thinned when far
+denser than useful; 6: normals fitted to the six nearest points and every point as near as the
+sixth)."""
 
 
 def default_cache_dir() -> Path:

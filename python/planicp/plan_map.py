@@ -84,6 +84,12 @@ class PlanMap:
                 It should be about 1.5 times the spacing of neighbouring points along a wall, so
                 that rays cannot slip between them; None estimates it that way from the points.
 
+        Points far denser than an alignment can use (more than two per 5 mm square on average,
+        e.g. walls sampled every 0.4 mm) are thinned to the first point of each 5 mm square, so
+        that the plan's size, and the time and memory to build and use it, follow the length of
+        its walls; `len(plan)` is the number kept. Plans drawn every 1-5 cm keep every point.
+        Building takes O(n log n); Ctrl-C interrupts it.
+
         Raises:
             TypeError: `xy` does not hold real numbers.
             ValueError: wrong shape, no points, a NaN/inf coordinate, or a bad resolution.
@@ -177,11 +183,11 @@ class PlanMap:
 
     @staticmethod
     def _prepared(raster: PlanRaster, edge_detector: str) -> dict[str, NDArray[Any]]:
-        """What a cache entry holds: points, their wall normals (the slow part of a map build), and
-        the packed wall raster."""
-        points = raster.surface_points(edge_detector)
-        normals = _core.PointMap(points, 1.5 * raster.resolution).normals
-        return {"points": points, "normals": normals, "walls": np.packbits(raster.walls),
+        """What a cache entry holds: the map's points (thinned when far denser than useful: see
+        `from_points`), their wall normals (the slow part of a map build), and the packed wall
+        raster."""
+        native = _core.PointMap(raster.surface_points(edge_detector), 1.5 * raster.resolution)
+        return {"points": native.points, "normals": native.normals, "walls": np.packbits(raster.walls),
                 "shape": np.array(raster.walls.shape)}
 
     @classmethod

@@ -8,6 +8,7 @@
 //! room, with 1.5 cm noise. Run `cargo bench`; compare numbers within one run only.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use icp_core::cancel;
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, Pair, TargetSet};
 use icp_core::icp::CorrespondenceSearch;
@@ -38,14 +39,21 @@ fn benches(c: &mut Criterion) {
     let tree = Tree2::new_from_slice(&pts);
     g.bench_function("nearest_wall_index", |b| {
         b.iter(|| {
-            NearestWallIndex::new(black_box(&pts), &tree, None, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH)
-                .unwrap()
+            NearestWallIndex::new(
+                black_box(&pts),
+                &tree,
+                None,
+                DEFAULT_INDEX_CELL,
+                DEFAULT_INDEX_REACH,
+                cancel::NEVER,
+            )
+            .unwrap()
         })
     });
     g.bench_function("wall_index_with_facing", |b| {
         b.iter(|| {
             let map = PointMap::new(black_box(pts.clone()), None).unwrap();
-            map.wall_index().unwrap();
+            map.wall_index(cancel::NEVER).unwrap();
             map
         })
     });
@@ -55,7 +63,7 @@ fn benches(c: &mut Criterion) {
     g.throughput(Throughput::Elements(scan.len() as u64));
     let moved: Vec<[f64; 2]> = scan.iter().map(|p| guess.transform_point(*p)).collect();
     let mut pairs: Vec<Pair> = Vec::with_capacity(scan.len());
-    let wall = map.wall_index().unwrap();
+    let wall = map.wall_index(cancel::NEVER).unwrap();
     let bearings = SensorView::bearings_of(&scan);
     let sensor = Some(SensorView::new(&bearings, guess.yaw));
     g.bench_function("wall_index", |b| {
@@ -113,7 +121,7 @@ fn benches(c: &mut Criterion) {
         ),
     ] {
         g.bench_with_input(BenchmarkId::from_parameter(name), &cfg, |b, cfg| {
-            b.iter(|| align(&map, black_box(&scan), guess, cfg).unwrap())
+            b.iter(|| align(&map, black_box(&scan), guess, cfg, None, cancel::NEVER).unwrap())
         });
     }
     g.finish();

@@ -7,6 +7,7 @@
 //! 1.5 cm noise. Run `cargo bench --bench global_search`; compare numbers within one run only.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use icp_core::cancel;
 use icp_core::global_search::{GlobalMatcher, GlobalSearchConfig, SearchWindow};
 use icp_core::relocalization::{relocalize, RankingConfig};
 use icp_core::{IcpConfig, PointMap, Pose2};
@@ -27,7 +28,7 @@ fn benches(c: &mut Criterion) {
     let scan = noisy_scan(&map, truth, 1081, &mut rng);
     let config = GlobalSearchConfig::default();
     let matcher = GlobalMatcher::new(&map, config.clone()).unwrap();
-    let found = matcher.search(&scan, None).unwrap();
+    let found = matcher.search(&scan, None, cancel::NEVER).unwrap();
     eprintln!(
         "whole-plan search: {} rotations, {} nodes, complete {}, best {:?}",
         found.rotations,
@@ -38,7 +39,7 @@ fn benches(c: &mut Criterion) {
 
     // The office's rooms are alike: the result should say so rather than pick one with confidence.
     let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
-    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking).unwrap();
+    let out = relocalize(&map, &matcher, &scan, None, &icp, &ranking, cancel::NEVER).unwrap();
     for c in &out.candidates {
         eprintln!("candidate {:?} inlier ratio {:.3}", c.pose, c.score);
     }
@@ -49,13 +50,15 @@ fn benches(c: &mut Criterion) {
     g.bench_function("build_pyramid", |b| {
         b.iter(|| GlobalMatcher::new(black_box(&map), config.clone()).unwrap())
     });
-    g.bench_function("search_whole_plan", |b| b.iter(|| matcher.search(black_box(&scan), None).unwrap()));
+    g.bench_function("search_whole_plan", |b| {
+        b.iter(|| matcher.search(black_box(&scan), None, cancel::NEVER).unwrap())
+    });
     let window = SearchWindow { center: Pose2::new(6.5, 4.6, 1.4), half_width: 1.0, half_angle: 0.35 };
     g.bench_function("search_window_1m_20deg", |b| {
-        b.iter(|| matcher.search(black_box(&scan), Some(&window)).unwrap())
+        b.iter(|| matcher.search(black_box(&scan), Some(&window), cancel::NEVER).unwrap())
     });
     g.bench_function("relocalize_whole_plan", |b| {
-        b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking).unwrap())
+        b.iter(|| relocalize(&map, &matcher, black_box(&scan), None, &icp, &ranking, cancel::NEVER).unwrap())
     });
     g.finish();
 }

@@ -9,6 +9,7 @@
 #[path = "../benches/common/mod.rs"]
 mod common;
 
+use icp_core::cancel;
 use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
 use icp_core::point_map::{DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{PointMap, Pose2};
@@ -28,7 +29,7 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     for (cell, reach) in [(0.02, 0.25), (0.02, 0.5), (0.03, 0.5), (0.05, 0.5), (0.05, 1.0)] {
         let t = Instant::now();
-        let index = NearestWallIndex::new(&pts, map.tree(), None, cell, reach).unwrap();
+        let index = NearestWallIndex::new(&pts, map.tree(), None, cell, reach, cancel::NEVER).unwrap();
         let s = index.stats();
         println!(
             "| {cell} m | {reach} m | {:.2} s | {:.1} MB | {} of {} | {:.2} |",
@@ -40,7 +41,7 @@ fn main() {
         );
     }
     let t = Instant::now();
-    let index = map.wall_index().unwrap();
+    let index = map.wall_index(cancel::NEVER).unwrap();
     println!(
         "default (cell {DEFAULT_INDEX_CELL} m, reach {DEFAULT_INDEX_REACH} m) with visibility masks: {:.2} s, {:.1} MB",
         t.elapsed().as_secs_f64(),

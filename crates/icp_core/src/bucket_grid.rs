@@ -1,7 +1,8 @@
 //! A uniform bucket grid for exact fixed-radius range queries over a small point set.
 //!
-//! The candidate cache fetches, for every scan point, all plan points within a radius. kiddo's
-//! radius query runs a general n-nearest search (a few thousand instructions per call here); a
+//! The candidate cache fetches, for every scan point, all plan points within a radius. A KD-tree
+//! radius query descends the tree at every call (kiddo's, used before, ran a general n-nearest
+//! search: a few thousand instructions per call here); a
 //! grid whose cells are as large as the radius answers the same query by scanning the 3 x 3
 //! cells around the query, exactly. It is built per alignment over the visible subset (a few
 //! thousand points), in linear time.

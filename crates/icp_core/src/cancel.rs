@@ -17,7 +17,8 @@ fn never_stop() -> bool {
     false
 }
 
-/// A hook that never asks to stop: what the functions without a hook use.
+/// A hook that never asks to stop, for callers that cannot be cancelled: given it, no function
+/// returns [`IcpError::Interrupted`].
 pub const NEVER: Cancel<'static> = &never_stop;
 
 /// `Err(Interrupted)` when `cancel` asks to stop.

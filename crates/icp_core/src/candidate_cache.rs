@@ -16,7 +16,6 @@
 
 use crate::bucket_grid::BucketGrid;
 use crate::correspondence::{Pair, TargetSet};
-use kiddo::SquaredEuclidean;
 
 /// Candidate plan points per scan point, fetched by radius queries: through a [`BucketGrid`]
 /// over a subset target (the visible points), through the KD-tree over the full plan.
@@ -169,14 +168,10 @@ impl TargetSet<'_> {
         let r2 = radius * radius;
         match self {
             TargetSet::Full(map) => {
-                for n in map.tree().within_unsorted::<SquaredEuclidean>(&q, r2) {
-                    f(n.item);
-                }
+                map.tree().for_each_within(&q, r2, |item, _| f(item));
             }
             TargetSet::Subset { indices, tree, .. } => {
-                for n in tree.within_unsorted::<SquaredEuclidean>(&q, r2) {
-                    f(indices[n.item as usize]);
-                }
+                tree.for_each_within(&q, r2, |item, _| f(indices[item as usize]));
             }
         }
     }

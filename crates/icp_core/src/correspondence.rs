@@ -2,7 +2,6 @@
 //! when nearer than a maximum distance (furniture, people and robots are not in the plan).
 
 use crate::point_map::{PointMap, Tree2};
-use kiddo::SquaredEuclidean;
 
 /// A scan point paired with a plan point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,7 +68,7 @@ impl<'a> TargetSet<'a> {
         match self {
             Self::Full(map) => map.nearest(q),
             Self::Subset { indices, tree, .. } => {
-                let nn = tree.nearest_one::<SquaredEuclidean>(&q);
+                let nn = tree.nearest_one(&q);
                 (indices[nn.item as usize], nn.distance)
             }
         }

@@ -17,17 +17,12 @@ use nalgebra::{Matrix3, Vector3};
 pub const NORMAL_NEIGHBOURS: usize = 6;
 
 /// Unit normal of the plan's wall at every point (least-squares line through the point's
-/// [`NORMAL_NEIGHBOURS`] nearest plan points); `[0, 0]` where no direction can be fitted.
-pub fn estimate_normals(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2) -> Vec<[f64; 2]> {
-    match estimate_normals_interruptible(map_points, tree, cancel::NEVER) {
-        Ok(normals) => normals,
-        Err(_) => unreachable!("a hook that never stops cannot interrupt"),
-    }
-}
-
-/// [`estimate_normals`] that polls `cancel` every [`cancel::POLL_EVERY`] points and stops with
-/// [`crate::error::IcpError::Interrupted`] when it says so.
-pub fn estimate_normals_interruptible(
+/// [`NORMAL_NEIGHBOURS`] nearest plan points and every other point as near as the last of them);
+/// `[0, 0]` where no direction can be fitted.
+///
+/// `cancel` is polled every [`cancel::POLL_EVERY`] points; when it returns true the fit stops with
+/// [`crate::error::IcpError::Interrupted`] ([`cancel::NEVER`]: it cannot be stopped, and never fails).
+pub fn estimate_normals(
     map_points: &[[f64; 2]],
     tree: &crate::point_map::Tree2,
     cancel: Cancel<'_>,
@@ -42,10 +37,16 @@ pub fn estimate_normals_interruptible(
 
 /// The wall normal at `p` (see [`estimate_normals`]).
 fn normal_at(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2, p: &[f64; 2]) -> [f64; 2] {
-    let k = std::num::NonZero::new(NORMAL_NEIGHBOURS).expect("k > 0");
-    let nn = tree.nearest_n::<kiddo::SquaredEuclidean>(p, k);
+    let mut nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
     if nn.len() < 3 {
         return [0.0, 0.0];
+    }
+    if nn.len() == NORMAL_NEIGHBOURS {
+        // On a plan's pixel lattice the sixth neighbour is often one of several at the same
+        // distance: take them all (to a relative 1e-9, the rounding of lattice coordinates), so
+        // that the fit is symmetric and does not depend on which of the ties a query keeps.
+        let reach = nn[NORMAL_NEIGHBOURS - 1].distance * (1.0 + 1e-9);
+        nn = tree.within_unsorted(p, reach);
     }
     let inv = 1.0 / nn.len() as f64;
     let (mut mx, mut my) = (0.0, 0.0);
@@ -165,9 +166,39 @@ mod tests {
     fn normals_of_a_straight_wall_are_perpendicular() {
         let pts: Vec<[f64; 2]> = (0..50).map(|i| [i as f64 * 0.05, 1.0]).collect();
         let map = PointMap::new(pts, None).unwrap();
-        for n in estimate_normals(map.points(), map.tree()) {
+        for n in estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap() {
             assert!(n[0].abs() < 1e-9 && (n[1].abs() - 1.0).abs() < 1e-9, "{n:?}");
         }
+    }
+
+    #[test]
+    fn normals_do_not_depend_on_the_order_of_the_points() {
+        // A plan's pixel lattice: an L of walls two cells thick, where a point's sixth-nearest
+        // neighbour is often one of several at the same distance.
+        let mut pts = Vec::new();
+        for i in 0..60 {
+            for j in 0..2 {
+                pts.push([i as f64 * 0.05, j as f64 * 0.05]);
+                if i >= 2 {
+                    pts.push([j as f64 * 0.05, i as f64 * 0.05]);
+                }
+            }
+        }
+        let forward = PointMap::new(pts.clone(), None).unwrap();
+        let normals = estimate_normals(forward.points(), forward.tree(), cancel::NEVER).unwrap();
+        let reversed_pts: Vec<[f64; 2]> = pts.iter().rev().copied().collect();
+        let reversed = PointMap::new(reversed_pts, None).unwrap();
+        let reversed_normals = estimate_normals(reversed.points(), reversed.tree(), cancel::NEVER).unwrap();
+        let n = pts.len();
+        for (i, a) in normals.iter().enumerate() {
+            // A line's normal has no preferred side: compare up to sign.
+            let b = reversed_normals[n - 1 - i];
+            let same = (a[0] * b[0] + a[1] * b[1]).abs();
+            assert!((same - 1.0).abs() < 1e-9, "point {i}: {a:?} vs {b:?}");
+        }
+        // Along the middle of a straight stretch the fit is symmetric: the normal is the wall's.
+        let mid = pts.iter().position(|p| (p[0] - 1.5).abs() < 1e-9 && p[1] == 0.0).unwrap();
+        assert!(normals[mid][0].abs() < 1e-9, "{:?}", normals[mid]);
     }
 
     #[test]
@@ -180,7 +211,7 @@ mod tests {
             pts.push([x, -1.0]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(10.0, 0.0, 0.0);
         let pairs: Vec<([f64; 2], u32)> = (0..pts.len())
             .step_by(3)
@@ -206,7 +237,7 @@ mod tests {
             pts.extend([[1e8 + t, 0.0], [1e8 + t, 5.0], [1e8, t], [1e8 + 5.0, t]]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(0.0, 2.5, 0.0);
         let pairs: Vec<([f64; 2], u32)> = pts
             .iter()
@@ -230,7 +261,7 @@ mod tests {
             pts.extend([[t, 0.0], [t, 5.0], [0.0, t], [5.0, t]]);
         }
         let map = PointMap::new(pts.clone(), None).unwrap();
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(2.5, 2.5, 0.0);
         let covariance_for = |noise: f64| {
             let pairs: Vec<([f64; 2], u32)> = pts

@@ -366,20 +366,17 @@ impl GlobalMatcher {
 
     /// Searches the whole plan (`window` `None`) or a window for the poses that best explain
     /// `scan` (points in the robot frame, metres).
-    pub fn search(&self, scan: &[[f64; 2]], window: Option<&SearchWindow>) -> Result<SearchOutcome> {
-        self.search_interruptible(scan, window, cancel::NEVER)
-    }
-
-    /// [`GlobalMatcher::search`] that polls `cancel` every [`NODES_PER_POLL`] nodes and stops
-    /// with [`IcpError::Interrupted`] when it says so.
-    pub fn search_interruptible(
+    ///
+    /// `cancel` is polled every [`NODES_PER_POLL`] nodes; when it returns true the search stops
+    /// with [`IcpError::Interrupted`] (callers that cannot be cancelled pass [`cancel::NEVER`]).
+    pub fn search(
         &self,
         scan: &[[f64; 2]],
         window: Option<&SearchWindow>,
         cancel: Cancel<'_>,
     ) -> Result<SearchOutcome> {
         let mut run = self.start(scan, window)?;
-        run.advance_interruptible(self, u64::MAX, cancel)?;
+        run.advance(self, u64::MAX, cancel)?;
         Ok(run.outcome())
     }
 
@@ -533,22 +530,12 @@ impl SearchRun {
     /// children) with `matcher`'s pyramid (the matcher that started the run); returns whether the
     /// search has ended (every node that could beat the
     /// candidates expanded, or `max_nodes` scored in all).
-    pub fn advance(&mut self, matcher: &GlobalMatcher, budget: u64) -> bool {
-        match self.advance_interruptible(matcher, budget, cancel::NEVER) {
-            Ok(ended) => ended,
-            Err(_) => unreachable!("a hook that never stops cannot interrupt"),
-        }
-    }
-
-    /// [`SearchRun::advance`] that polls `cancel` every [`NODES_PER_POLL`] nodes and stops with
-    /// [`IcpError::Interrupted`] when it says so. The run stays where it stopped, between two
-    /// nodes: advanced again, it goes on as if it had not been interrupted.
-    pub fn advance_interruptible(
-        &mut self,
-        matcher: &GlobalMatcher,
-        budget: u64,
-        cancel: Cancel<'_>,
-    ) -> Result<bool> {
+    ///
+    /// `cancel` is polled every [`NODES_PER_POLL`] nodes; when it returns true the call stops with
+    /// [`IcpError::Interrupted`] ([`cancel::NEVER`]: it cannot be stopped, and never fails). The
+    /// run stays where it stopped, between two nodes: advanced again, it goes on as if it had not
+    /// been interrupted.
+    pub fn advance(&mut self, matcher: &GlobalMatcher, budget: u64, cancel: Cancel<'_>) -> Result<bool> {
         let pyramid = &matcher.pyramid;
         let mut next_poll = self.nodes.saturating_add(NODES_PER_POLL);
         let stop_at = self.nodes.saturating_add(budget.max(1));
@@ -737,13 +724,13 @@ pub(crate) mod tests {
         let truth = Pose2::new(2.5, 2.0, 0.7);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let huge = SearchWindow { center: Pose2::new(6.0, 4.0, 0.0), half_width: 1e4, half_angle: PI };
-        let clipped = matcher.search(&scan, Some(&huge)).unwrap();
-        let whole = matcher.search(&scan, None).unwrap();
+        let clipped = matcher.search(&scan, Some(&huge), cancel::NEVER).unwrap();
+        let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
         assert_eq!(clipped.nodes, whole.nodes);
         assert!(close(&clipped.candidates[0].pose, &truth, 0.3, 0.1), "{:?}", clipped.candidates[0]);
         // Wholly outside the plan: searched where it is (nothing to find), no error.
         let away = SearchWindow { center: Pose2::new(500.0, 4.0, 0.0), half_width: 2.0, half_angle: 0.1 };
-        assert!(matcher.search(&scan, Some(&away)).is_ok());
+        assert!(matcher.search(&scan, Some(&away), cancel::NEVER).is_ok());
     }
 
     #[test]
@@ -760,7 +747,7 @@ pub(crate) mod tests {
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let centre = Pose2::new(0.33, 3.0, 0.4);
         let window = SearchWindow { center: centre, half_width: 1.0, half_angle: 0.2 };
-        let out = matcher.search(&scan, Some(&window)).unwrap();
+        let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
         assert!(out.complete && !out.candidates.is_empty());
         for c in &out.candidates {
             for (v, c0) in [(c.pose.x, centre.x), (c.pose.y, centre.y)] {
@@ -778,7 +765,7 @@ pub(crate) mod tests {
         let matcher = GlobalMatcher::new(&map, config).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
-        let out = matcher.search(&scan, None).unwrap();
+        let out = matcher.search(&scan, None, cancel::NEVER).unwrap();
         assert!(!out.complete && out.nodes == 100, "{out:?}");
     }
 
@@ -789,7 +776,7 @@ pub(crate) mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for truth in [Pose2::new(2.5, 2.0, 0.7), Pose2::new(9.5, 6.5, -2.4), Pose2::new(7.0, 3.0, 3.0)] {
             let scan = scan_from(&map, truth, &mut rng, 0.01);
-            let out = matcher.search(&scan, None).unwrap();
+            let out = matcher.search(&scan, None, cancel::NEVER).unwrap();
             assert!(out.complete);
             let best = out.candidates[0];
             assert!(close(&best.pose, &truth, 0.15, 0.04), "{truth:?}: best {best:?}");
@@ -807,7 +794,7 @@ pub(crate) mod tests {
         let truth = Pose2::new(3.0, 5.0, 0.2);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let window = SearchWindow { center: Pose2::new(3.3, 4.8, 0.25), half_width: 0.6, half_angle: 0.1 };
-        let out = matcher.search(&scan, Some(&window)).unwrap();
+        let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
         let best = out.candidates[0];
         // Exhaustive: every lattice translation at every swept rotation.
         let points = matcher.thin_scan(&scan).unwrap();
@@ -845,7 +832,7 @@ pub(crate) mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(13);
         let truth = Pose2::new(3.0, 2.0, 0.4);
         let scan = scan_from(&map, truth, &mut rng, 0.005);
-        let out = matcher.search(&scan, None).unwrap();
+        let out = matcher.search(&scan, None, cancel::NEVER).unwrap();
         assert!(out.candidates.len() >= 2, "{:?}", out.candidates);
         let mirrored = Pose2::new(7.0, 4.0, 0.4 + PI);
         let (a, b) = (out.candidates[0], out.candidates[1]);
@@ -865,8 +852,8 @@ pub(crate) mod tests {
         let truth = Pose2::new(10.0, 3.5, 1.0);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let window = SearchWindow { center: Pose2::new(10.4, 3.2, 1.2), half_width: 1.0, half_angle: 0.4 };
-        let out = matcher.search(&scan, Some(&window)).unwrap();
-        let full = matcher.search(&scan, None).unwrap();
+        let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
+        let full = matcher.search(&scan, None, cancel::NEVER).unwrap();
         assert!(out.nodes < full.nodes / 5, "window {} vs whole plan {} nodes", out.nodes, full.nodes);
         assert!(close(&out.candidates[0].pose, &truth, 0.15, 0.04), "{:?}", out.candidates[0]);
         for c in &out.candidates {
@@ -875,7 +862,7 @@ pub(crate) mod tests {
         }
         // A window that excludes the truth finds nothing as good.
         let away = SearchWindow { center: Pose2::new(2.0, 2.0, -2.0), half_width: 0.5, half_angle: 0.1 };
-        let out = matcher.search(&scan, Some(&away)).unwrap();
+        let out = matcher.search(&scan, Some(&away), cancel::NEVER).unwrap();
         assert!(out.candidates.iter().all(|c| c.score < full.candidates[0].score - 0.2));
     }
 
@@ -885,11 +872,11 @@ pub(crate) mod tests {
         let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
-        let whole = matcher.search(&scan, None).unwrap();
+        let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
         let mut run = matcher.start(&scan, None).unwrap();
         let mut calls = 0;
         let mut before = 0;
-        while !run.advance(&matcher, 500) {
+        while !run.advance(&matcher, 500, cancel::NEVER).unwrap() {
             calls += 1;
             // An expansion scores up to four children: a call ends at most three past its budget.
             assert!(
@@ -906,7 +893,7 @@ pub(crate) mod tests {
         );
         assert_eq!(run.outcome(), whole);
         // A finished run stays finished and scores nothing more.
-        assert!(run.advance(&matcher, 500));
+        assert!(run.advance(&matcher, 500, cancel::NEVER).unwrap());
         assert_eq!(run.nodes(), whole.nodes);
     }
 
@@ -916,7 +903,7 @@ pub(crate) mod tests {
         let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
-        let whole = matcher.search(&scan, None).unwrap();
+        let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
         assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to interrupt", whole.nodes);
         // Stop at the third poll: after 3 * NODES_PER_POLL nodes (up to three more), not later.
         let polls = std::cell::Cell::new(0u32);
@@ -925,12 +912,12 @@ pub(crate) mod tests {
             polls.get() >= 3
         };
         let mut run = matcher.start(&scan, None).unwrap();
-        assert_eq!(run.advance_interruptible(&matcher, u64::MAX, &third), Err(IcpError::Interrupted));
+        assert_eq!(run.advance(&matcher, u64::MAX, &third), Err(IcpError::Interrupted));
         assert_eq!(polls.get(), 3);
         assert!(!run.finished() && (3 * NODES_PER_POLL..3 * NODES_PER_POLL + 4).contains(&run.nodes()));
-        assert!(run.advance(&matcher, u64::MAX));
+        assert!(run.advance(&matcher, u64::MAX, cancel::NEVER).unwrap());
         assert_eq!(run.outcome(), whole);
-        assert_eq!(matcher.search_interruptible(&scan, None, &|| true).unwrap_err(), IcpError::Interrupted);
+        assert_eq!(matcher.search(&scan, None, &|| true).unwrap_err(), IcpError::Interrupted);
     }
 
     #[test]
@@ -942,7 +929,7 @@ pub(crate) mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(15);
         let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
         let window = SearchWindow { center: Pose2::new(2.5, 2.0, 0.7), half_width: 1.0, half_angle: 0.3 };
-        let out = matcher.search(&scan, Some(&window)).unwrap();
+        let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
         assert!(!out.complete && out.nodes <= 25 + 3, "{out:?}");
     }
 
@@ -952,12 +939,15 @@ pub(crate) mod tests {
         let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
         let good: Vec<[f64; 2]> =
             (0..50).map(|i| [(i as f64 * 0.3).cos() * 3.0, (i as f64 * 0.3).sin()]).collect();
-        assert_eq!(matcher.search(&[], None).unwrap_err(), IcpError::Empty { what: "scan" });
+        assert_eq!(matcher.search(&[], None, cancel::NEVER).unwrap_err(), IcpError::Empty { what: "scan" });
         let mut nan = good.clone();
         nan[7][1] = f64::NAN;
-        assert_eq!(matcher.search(&nan, None).unwrap_err(), IcpError::NonFinite { what: "scan", row: 7 });
+        assert_eq!(
+            matcher.search(&nan, None, cancel::NEVER).unwrap_err(),
+            IcpError::NonFinite { what: "scan", row: 7 }
+        );
         assert!(matches!(
-            matcher.search(&[[1.0, 0.0], [1.0, 0.01], [0.0, 2.0]], None),
+            matcher.search(&[[1.0, 0.0], [1.0, 0.01], [0.0, 2.0]], None, cancel::NEVER),
             Err(IcpError::TooFewPoints { need: MIN_SEARCH_POINTS, .. })
         ));
         for w in [
@@ -966,7 +956,10 @@ pub(crate) mod tests {
             SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1.0, half_angle: f64::INFINITY },
         ] {
             assert!(
-                matches!(matcher.search(&good, Some(&w)), Err(IcpError::InvalidParameter { .. })),
+                matches!(
+                    matcher.search(&good, Some(&w), cancel::NEVER),
+                    Err(IcpError::InvalidParameter { .. })
+                ),
                 "{w:?}"
             );
         }
@@ -992,7 +985,7 @@ pub(crate) mod tests {
         let tiny = GlobalSearchConfig { angular_step: Some(1e-6), ..cfg };
         let m = GlobalMatcher::new(&map, tiny).unwrap();
         assert!(matches!(
-            m.search(&good, None),
+            m.search(&good, None, cancel::NEVER),
             Err(IcpError::InvalidParameter { name: "angular_step", .. })
         ));
     }

@@ -198,31 +198,18 @@ pub struct IcpResult {
 
 /// Aligns `scan` (points in the robot frame, metres) to `map` starting from `initial`
 /// (`T_map_base` guess).
-pub fn align(map: &PointMap, scan: &[[f64; 2]], initial: Pose2, config: &IcpConfig) -> Result<IcpResult> {
-    align_seen(map, scan, initial, config, None)
-}
-
-/// [`align`] with the plan points visible from `initial` already cast (for instance
+///
+/// `visible` are the plan points visible from `initial` already cast (for instance
 /// [`crate::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
 /// returns): the KD-tree search with `use_visibility` matches against them instead of casting its
-/// own. `None` casts them here. Other searches ignore them.
+/// own. `None` casts them here. Other searches ignore them. An index that is not a plan point is
+/// an error.
 ///
-/// Errors: as [`align`], and a visible index that is not a plan point.
-pub fn align_seen(
-    map: &PointMap,
-    scan: &[[f64; 2]],
-    initial: Pose2,
-    config: &IcpConfig,
-    visible: Option<&[u32]>,
-) -> Result<IcpResult> {
-    align_interruptible(map, scan, initial, config, visible, cancel::NEVER)
-}
-
-/// [`align_seen`] that polls `cancel` before every iteration (and while it builds the plan's
-/// nearest-wall index, when this alignment is the first to need it) and stops with
-/// [`IcpError::Interrupted`] when it says so: a budget of `max_iterations` that would run for
-/// hours can still be stopped.
-pub fn align_interruptible(
+/// `cancel` is polled before every iteration (and while the plan's nearest-wall index is built,
+/// when this alignment is the first to need it); when it returns true the alignment stops with
+/// [`IcpError::Interrupted`]: a budget of `max_iterations` that would run for hours can still be
+/// stopped. Callers that cannot be cancelled pass [`cancel::NEVER`].
+pub fn align(
     map: &PointMap,
     scan: &[[f64; 2]],
     initial: Pose2,
@@ -253,7 +240,7 @@ pub fn align_interruptible(
     let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
     let largest_distance = largest_factor * config.max_correspondence_distance;
     let indexed = match config.search {
-        CorrespondenceSearch::WallIndex => match map.wall_index_interruptible(cancel) {
+        CorrespondenceSearch::WallIndex => match map.wall_index(cancel) {
             Err(IcpError::Interrupted) => return Err(IcpError::Interrupted),
             built => built.ok().filter(|w| largest_distance <= w.reach()),
         },
@@ -511,7 +498,7 @@ mod tests {
         let truth = Pose2::new(5.5, 2.2, 0.4);
         let scan = scan_from(&map, truth, &mut rng, 0.0);
         let guess = Pose2::new(5.7, 2.05, 0.45);
-        let res = align(&map, &scan, guess, &IcpConfig::default()).unwrap();
+        let res = align(&map, &scan, guess, &IcpConfig::default(), None, cancel::NEVER).unwrap();
         // Point-to-point pairs with 5 cm plan spacing: a few millimetres of discretisation error.
         assert!((res.pose.x - truth.x).abs() < 0.005, "{:?}", res.pose);
         assert!((res.pose.y - truth.y).abs() < 0.005, "{:?}", res.pose);
@@ -533,10 +520,12 @@ mod tests {
             max_iterations: 17,
             ..IcpConfig::default()
         };
-        let res = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &cfg).unwrap();
+        let res = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &cfg, None, cancel::NEVER).unwrap();
         assert_eq!(res.iterations, 17);
         assert!(res.converged, "a fixed point should be reached within 17 iterations");
-        let early = align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &IcpConfig::default()).unwrap();
+        let early =
+            align(&map, &scan, Pose2::new(5.1, 2.4, -0.15), &IcpConfig::default(), None, cancel::NEVER)
+                .unwrap();
         assert!(
             early.iterations < IcpConfig::default().max_iterations,
             "tolerances should stop early, ran {}",
@@ -565,7 +554,7 @@ mod tests {
                 polls.set(polls.get() + 1);
                 polls.get() > 200
             };
-            let out = align_interruptible(&map, &scan, guess, &endless, None, &after_200);
+            let out = align(&map, &scan, guess, &endless, None, &after_200);
             assert_eq!(out, Err(IcpError::Interrupted));
             // It stopped at the first poll that asked: no iteration ran after it.
             assert_eq!(polls.get(), 201);
@@ -575,8 +564,8 @@ mod tests {
                 polls.set(polls.get() + 1);
                 false
             };
-            let res = align_interruptible(&map, &scan, guess, &bounded, None, &counting).unwrap();
-            assert_eq!(res, align(&map, &scan, guess, &bounded).unwrap());
+            let res = align(&map, &scan, guess, &bounded, None, &counting).unwrap();
+            assert_eq!(res, align(&map, &scan, guess, &bounded, None, cancel::NEVER).unwrap());
             // At least once per iteration (the index, built already, polls no more).
             assert!(polls.get() >= 17, "{} polls", polls.get());
         }
@@ -586,13 +575,10 @@ mod tests {
     fn an_interrupted_index_build_is_not_kept() {
         let map = PointMap::new(rooms(), None).unwrap();
         let scan = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
-        let out =
-            align_interruptible(&map, &scan, Pose2::new(5.0, 2.5, 0.0), &IcpConfig::default(), None, &|| {
-                true
-            });
+        let out = align(&map, &scan, Pose2::new(5.0, 2.5, 0.0), &IcpConfig::default(), None, &|| true);
         assert_eq!(out, Err(IcpError::Interrupted));
         assert!(map.built_wall_index().is_none());
-        assert!(map.wall_index().is_ok() && map.built_wall_index().is_some());
+        assert!(map.wall_index(cancel::NEVER).is_ok() && map.built_wall_index().is_some());
     }
 
     #[test]
@@ -602,7 +588,7 @@ mod tests {
         let truth = Pose2::new(5.0, 2.5, 0.0);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
         let cfg = IcpConfig { max_iterations: 1, ..IcpConfig::default() };
-        let res = align(&map, &scan, Pose2::new(5.2, 2.4, 0.05), &cfg).unwrap();
+        let res = align(&map, &scan, Pose2::new(5.2, 2.4, 0.05), &cfg, None, cancel::NEVER).unwrap();
         assert_eq!(res.iterations, 1);
         assert!(!res.converged);
     }
@@ -618,7 +604,8 @@ mod tests {
         for i in 0..150 {
             scan.push(truth.inverse().transform_point([4.0 + i as f64 * 0.01, 4.5]));
         }
-        let res = align(&map, &scan, Pose2::new(6.1, 1.6, 0.12), &IcpConfig::default()).unwrap();
+        let res = align(&map, &scan, Pose2::new(6.1, 1.6, 0.12), &IcpConfig::default(), None, cancel::NEVER)
+            .unwrap();
         assert!((res.pose.x - truth.x).abs() < 0.01 && (res.pose.y - truth.y).abs() < 0.01, "{:?}", res.pose);
         assert!(res.inlier_mask[clean..].iter().all(|&m| !m), "cabinet points counted as inliers");
         assert!(res.num_inliers >= clean * 95 / 100);
@@ -633,7 +620,7 @@ mod tests {
         let scan = scan_from(&map, truth, &mut rng, 0.005);
         let cfg =
             IcpConfig { max_correspondence_distance: 50.0, use_visibility: false, ..IcpConfig::default() };
-        let res = align(&map, &scan, Pose2::new(5.05, 2.05, 0.12), &cfg).unwrap();
+        let res = align(&map, &scan, Pose2::new(5.05, 2.05, 0.12), &cfg, None, cancel::NEVER).unwrap();
         assert_eq!(res.num_inliers, scan.len());
         assert!((res.pose.x - truth.x).abs() < 0.02 && (res.pose.y - truth.y).abs() < 0.02, "{:?}", res.pose);
     }
@@ -644,7 +631,15 @@ mod tests {
         // the public fields) came back as the result's yaw when the scan found no pairs.
         let map = PointMap::new(rooms(), None).unwrap();
         let initial = Pose2 { x: 1e6, y: 1e6, yaw: -1e9 };
-        let res = align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], initial, &IcpConfig::default()).unwrap();
+        let res = align(
+            &map,
+            &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            initial,
+            &IcpConfig::default(),
+            None,
+            cancel::NEVER,
+        )
+        .unwrap();
         assert_eq!(res.iterations, 0);
         assert!(
             res.pose.yaw > -std::f64::consts::PI && res.pose.yaw <= std::f64::consts::PI,
@@ -664,9 +659,9 @@ mod tests {
             (Pose2::new(6.7, 3.9, 2.9), Pose2::new(6.6, 4.0, 2.95)),
         ] {
             let scan = scan_from(&map, truth, &mut rng, 0.01);
-            let fast = align(&map, &scan, guess, &IcpConfig::default()).unwrap();
+            let fast = align(&map, &scan, guess, &IcpConfig::default(), None, cancel::NEVER).unwrap();
             let kd = IcpConfig { search: CorrespondenceSearch::KdTree, ..IcpConfig::default() };
-            let exact = align(&map, &scan, guess, &kd).unwrap();
+            let exact = align(&map, &scan, guess, &kd, None, cancel::NEVER).unwrap();
             for res in [&fast, &exact] {
                 assert!((res.pose.x - truth.x).hypot(res.pose.y - truth.y) < 0.005, "{:?}", res.pose);
             }
@@ -688,13 +683,13 @@ mod tests {
         // The set the alignment would cast itself: the same result, bit for bit.
         let cast = map.visible_from(guess, visibility_range(&scan, &kd)).unwrap();
         assert_eq!(
-            align_seen(&map, &scan, guess, &kd, Some(&cast)).unwrap(),
-            align(&map, &scan, guess, &kd).unwrap()
+            align(&map, &scan, guess, &kd, Some(&cast), cancel::NEVER).unwrap(),
+            align(&map, &scan, guess, &kd, None, cancel::NEVER).unwrap()
         );
         // Only the right room's walls (x > 3.1): the scan points on the left room's walls (more
         // than the largest pair distance, 0.25 m, from them) find nothing to pair with.
         let right: Vec<u32> = cast.iter().copied().filter(|&i| map.points()[i as usize][0] > 3.1).collect();
-        let seen = align_seen(&map, &scan, guess, &kd, Some(&right)).unwrap();
+        let seen = align(&map, &scan, guess, &kd, Some(&right), cancel::NEVER).unwrap();
         assert_eq!(seen.num_target_points, right.len());
         let left = scan.iter().filter(|p| truth.transform_point(**p)[0] < 2.8).count();
         assert!(
@@ -705,7 +700,7 @@ mod tests {
         // An index that is not a plan point is refused.
         let bad = [0, map.len() as u32];
         assert!(matches!(
-            align_seen(&map, &scan, guess, &kd, Some(&bad)),
+            align(&map, &scan, guess, &kd, Some(&bad), cancel::NEVER),
             Err(IcpError::InvalidParameter { .. })
         ));
     }
@@ -715,13 +710,16 @@ mod tests {
         let map = PointMap::new(rooms(), None).unwrap();
         let cfg = IcpConfig::default();
         let p = Pose2::new(1.0, 1.0, 0.0);
-        assert_eq!(align(&map, &[], p, &cfg).unwrap_err(), IcpError::Empty { what: "scan" });
+        assert_eq!(
+            align(&map, &[], p, &cfg, None, cancel::NEVER).unwrap_err(),
+            IcpError::Empty { what: "scan" }
+        );
         assert!(matches!(
-            align(&map, &[[0.0, 0.0], [1.0, f64::INFINITY]], p, &cfg),
+            align(&map, &[[0.0, 0.0], [1.0, f64::INFINITY]], p, &cfg, None, cancel::NEVER),
             Err(IcpError::NonFinite { row: 1, .. })
         ));
         assert!(matches!(
-            align(&map, &[[0.0, 0.0], [1.0, 0.0]], p, &cfg),
+            align(&map, &[[0.0, 0.0], [1.0, 0.0]], p, &cfg, None, cancel::NEVER),
             Err(IcpError::TooFewPoints { .. })
         ));
         for bad in [
@@ -738,7 +736,7 @@ mod tests {
         ] {
             assert!(
                 matches!(
-                    align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], p, &bad),
+                    align(&map, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], p, &bad, None, cancel::NEVER),
                     Err(IcpError::InvalidParameter { .. })
                 ),
                 "{bad:?}"

@@ -6,6 +6,7 @@
 //! One concept per module:
 //! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
+//! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
 //! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
 //! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
@@ -40,6 +41,7 @@ pub mod covariance;
 pub mod error;
 pub mod global_search;
 pub mod icp;
+pub mod kd_tree;
 pub mod likelihood_field;
 pub mod log_odds_grid;
 pub mod nearest_wall_index;

@@ -36,7 +36,6 @@ use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
 use crate::point_map::Tree2;
 use crate::wall_facing::SEEN_FROM_EVERYWHERE;
-use kiddo::SquaredEuclidean;
 
 /// Cells per block side.
 pub const BLOCK: usize = 8;
@@ -132,21 +131,12 @@ impl NearestWallIndex {
     /// everywhere) with square
     /// cells of `cell` metres, answering exactly for queries up to `reach` metres from the walls.
     ///
+    /// `cancel` is polled every [`cancel::POLL_EVERY`] blocks; when it returns true the build stops
+    /// with [`IcpError::Interrupted`] (callers that cannot be cancelled pass [`cancel::NEVER`]).
+    ///
     /// Errors: `cell` or `reach` not positive and finite, no points, more than
     /// [`MAX_INDEX_POINTS`] points or [`MAX_INDEX_CELLS`] cells, `seen` of another length.
     pub fn new(
-        points: &[[f64; 2]],
-        tree: &Tree2,
-        seen: Option<&[u16]>,
-        cell: f64,
-        reach: f64,
-    ) -> Result<Self> {
-        Self::new_interruptible(points, tree, seen, cell, reach, cancel::NEVER)
-    }
-
-    /// [`NearestWallIndex::new`] that polls `cancel` every [`cancel::POLL_EVERY`] blocks and stops
-    /// with [`IcpError::Interrupted`] when it says so.
-    pub fn new_interruptible(
         points: &[[f64; 2]],
         tree: &Tree2,
         seen: Option<&[u16]>,
@@ -274,7 +264,7 @@ impl NearestWallIndex {
                 let corner =
                     [self.origin[0] + bcol as f64 * block_size, self.origin[1] + brow as f64 * block_size];
                 let centre = [corner[0] + 0.5 * block_size, corner[1] + 0.5 * block_size];
-                let nn = tree.nearest_one::<SquaredEuclidean>(&centre);
+                let nn = tree.nearest_one(&centre);
                 let d_block = nn.distance.sqrt();
                 if d_block > self.reach + half_diagonal + block_half_diagonal {
                     continue;
@@ -283,9 +273,7 @@ impl NearestWallIndex {
                 // d_block + 2R of the block centre; its list within d(c) + 2r of the cell.
                 let radius = d_block + 2.0 * block_half_diagonal + 2.0 * half_diagonal;
                 nearby.clear();
-                for n in tree.within_unsorted::<SquaredEuclidean>(&centre, radius * radius) {
-                    nearby.push((n.distance, n.item));
-                }
+                tree.for_each_within(&centre, radius * radius, |item, d2| nearby.push((d2, item)));
                 nearby.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let stored = (self.building.len() / BLOCK_CELLS) as u32;
                 self.blocks[brow * self.block_cols + bcol] = stored;
@@ -717,7 +705,7 @@ mod tests {
         let pts = walls(&mut rng);
         let tree = Tree2::new_from_slice(&pts);
         let seen: Vec<u16> = (0..pts.len()).map(|_| rng.random_range(0..=u16::MAX)).collect();
-        let index = NearestWallIndex::new(&pts, &tree, Some(&seen), 0.03, 0.5).unwrap();
+        let index = NearestWallIndex::new(&pts, &tree, Some(&seen), 0.03, 0.5, cancel::NEVER).unwrap();
         let mut queries: Vec<[f64; 2]> =
             (0..5000).map(|_| [rng.random_range(-3.0..23.0), rng.random_range(-3.0..9.0)]).collect();
         queries.extend([[f64::NAN, 1.0], [1.0, f64::NAN], [f64::INFINITY, 0.0], [-1e300, 1e300]]);
@@ -773,7 +761,7 @@ mod tests {
         let pts = walls(&mut rng);
         let tree = Tree2::new_from_slice(&pts);
         for (cell, reach) in [(0.02, 0.4), (0.05, 0.25), (0.11, 1.0)] {
-            let index = NearestWallIndex::new(&pts, &tree, None, cell, reach).unwrap();
+            let index = NearestWallIndex::new(&pts, &tree, None, cell, reach, cancel::NEVER).unwrap();
             let (mut answered, mut beyond) = (0, 0);
             for _ in 0..20_000 {
                 let q = [rng.random_range(-2.0..22.0), rng.random_range(-2.0..8.0)];
@@ -805,7 +793,7 @@ mod tests {
         let mut pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
         pts.push([40.0, 40.0]);
         let tree = Tree2::new_from_slice(&pts);
-        let index = NearestWallIndex::new(&pts, &tree, None, 0.05, 0.3).unwrap();
+        let index = NearestWallIndex::new(&pts, &tree, None, 0.05, 0.3, cancel::NEVER).unwrap();
         let stats = index.stats();
         assert!(stats.stored_blocks * 50 < stats.blocks, "{stats:?}");
         assert!(stats.memory_bytes < 200_000, "{stats:?}");
@@ -844,22 +832,30 @@ mod tests {
         let tree = Tree2::new_from_slice(&pts);
         for (cell, reach) in [(0.0, 0.3), (f64::NAN, 0.3), (0.05, -1.0), (0.05, f64::INFINITY)] {
             assert!(matches!(
-                NearestWallIndex::new(&pts, &tree, None, cell, reach),
+                NearestWallIndex::new(&pts, &tree, None, cell, reach, cancel::NEVER),
                 Err(IcpError::InvalidParameter { .. })
             ));
         }
         let far = vec![[0.0, 0.0], [1e6, 1e6]];
         let tree = Tree2::new_from_slice(&far);
         assert!(matches!(
-            NearestWallIndex::new(&far, &tree, None, 0.01, 0.3),
+            NearestWallIndex::new(&far, &tree, None, 0.01, 0.3, cancel::NEVER),
             Err(IcpError::RasterTooLarge { .. })
         ));
         assert!(matches!(
-            NearestWallIndex::new(&pts, &Tree2::new_from_slice(&pts), Some(&[0u16; 3]), 0.05, 0.3),
+            NearestWallIndex::new(
+                &pts,
+                &Tree2::new_from_slice(&pts),
+                Some(&[0u16; 3]),
+                0.05,
+                0.3,
+                cancel::NEVER
+            ),
             Err(IcpError::InvalidParameter { name: "visibility masks", .. })
         ));
         assert_eq!(
-            NearestWallIndex::new(&[], &Tree2::new_from_slice(&[]), None, 0.05, 0.3).unwrap_err(),
+            NearestWallIndex::new(&[], &Tree2::new_from_slice(&[]), None, 0.05, 0.3, cancel::NEVER)
+                .unwrap_err(),
             IcpError::Empty { what: "plan" }
         );
     }
@@ -875,15 +871,15 @@ mod tests {
             ));
         }
         let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
-        let index = custom.wall_index().unwrap();
+        let index = custom.wall_index(cancel::NEVER).unwrap();
         assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
         // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
         // explicit one is refused.
         let mut wide = pts.clone();
         wide.push([1000.0, 1000.0]);
         let map = PointMap::new(wide.clone(), None).unwrap();
-        assert!(map.wall_index().unwrap().cell() > DEFAULT_INDEX_CELL);
+        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
         let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
-        assert!(matches!(explicit.wall_index(), Err(IcpError::RasterTooLarge { .. })));
+        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
     }
 }

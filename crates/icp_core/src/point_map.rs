@@ -7,15 +7,12 @@ use crate::error::{check_finite, IcpError, Result};
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
-use crate::wall_facing::visibility_masks_interruptible;
+use crate::wall_facing::visibility_masks;
 use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
-use kiddo::SquaredEuclidean;
 use std::sync::{Mutex, OnceLock};
 
-/// KD-tree over 2D points; items are indices into the point slice it was built from.
-pub type Tree2 = ImmutableKdTree<f64, u32, 2, 16>;
+pub use crate::kd_tree::Tree2;
 
 /// Largest number of points a map may hold (indices are `u32`).
 pub const MAX_POINTS: usize = u32::MAX as usize;
@@ -58,26 +55,25 @@ impl Clone for BuildLock {
 }
 
 impl PointMap {
-    /// Builds the map from wall points (metres, map frame).
+    /// Builds the map from wall points (metres, map frame). A plan denser than [`THIN_ABOVE`]
+    /// points per [`THIN_CELL`] square is thinned first (see [`thinned`]): [`PointMap::points`]
+    /// are the points kept.
     ///
     /// `raster_resolution` is the cell size of the visibility raster in metres; `None` estimates it
     /// from the point spacing (see [`estimate_raster_resolution`]).
+    ///
+    /// The wall normals are fitted here, and the build cannot be stopped: [`PointMap::build`]
+    /// takes normals computed before and a cancel hook.
     pub fn new(points: Vec<[f64; 2]>, raster_resolution: Option<f64>) -> Result<Self> {
-        Self::with_normals(points, None, raster_resolution)
+        Self::build(points, None, raster_resolution, cancel::NEVER)
     }
 
     /// Like [`PointMap::new`], with wall normals computed before (e.g. stored with a cached plan)
-    /// instead of fitted again: one per point, unit length or `[0, 0]`.
-    pub fn with_normals(
-        points: Vec<[f64; 2]>,
-        normals: Option<Vec<[f64; 2]>>,
-        raster_resolution: Option<f64>,
-    ) -> Result<Self> {
-        Self::build(points, normals, raster_resolution, cancel::NEVER)
-    }
-
-    /// [`PointMap::with_normals`] that polls `cancel` while it fits the normals and stops with
-    /// [`IcpError::Interrupted`] when it says so.
+    /// instead of fitted again: one per point, unit length or `[0, 0]` (thinned with the points);
+    /// `None` fits them.
+    ///
+    /// `cancel` is polled while the normals are fitted; when it returns true the build stops with
+    /// [`IcpError::Interrupted`] (callers that cannot be cancelled pass [`cancel::NEVER`]).
     pub fn build(
         points: Vec<[f64; 2]>,
         normals: Option<Vec<[f64; 2]>>,
@@ -95,6 +91,23 @@ impl PointMap {
             });
         }
         check_finite("plan", &points)?;
+        if let Some(n) = &normals {
+            if n.len() != points.len() {
+                return Err(IcpError::InvalidParameter {
+                    name: "normals",
+                    value: format!("{} rows", n.len()),
+                    requirement: "must have one row per plan point",
+                });
+            }
+            check_finite("normals", n)?;
+        }
+        let (points, normals) = match thinned(&points) {
+            None => (points, normals),
+            Some(kept) => {
+                let pick = |v: &[[f64; 2]]| kept.iter().map(|&i| v[i as usize]).collect::<Vec<_>>();
+                (pick(&points), normals.as_deref().map(pick))
+            }
+        };
         let tree = Tree2::new_from_slice(&points);
         let spacing = median_spacing(&points, &tree);
         let resolution = match raster_resolution {
@@ -103,18 +116,8 @@ impl PointMap {
         };
         let raster = WallRaster::new(&points, resolution)?;
         let normals = match normals {
-            Some(n) if n.len() != points.len() => {
-                return Err(IcpError::InvalidParameter {
-                    name: "normals",
-                    value: format!("{} rows", n.len()),
-                    requirement: "must have one row per plan point",
-                })
-            }
-            Some(n) => {
-                check_finite("normals", &n)?;
-                n
-            }
-            None => covariance::estimate_normals_interruptible(&points, &tree, cancel)?,
+            Some(n) => n,
+            None => covariance::estimate_normals(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,
@@ -150,16 +153,13 @@ impl PointMap {
     }
 
     /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
-    /// on the first call (thread-safe) and kept. Errors: the index would be too large for the
-    /// plan's extent at its cell size.
-    pub fn wall_index(&self) -> Result<&NearestWallIndex> {
-        self.wall_index_interruptible(cancel::NEVER)
-    }
-
-    /// [`PointMap::wall_index`] that polls `cancel` while it builds the index and stops with
-    /// [`IcpError::Interrupted`] when it says so; an interrupted build is not kept, the next
-    /// call starts it again. Threads that ask while another builds wait for its index.
-    pub fn wall_index_interruptible(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
+    /// on the first call (thread-safe) and kept. Threads that ask while another builds wait for its
+    /// index. Errors: the index would be too large for the plan's extent at its cell size.
+    ///
+    /// `cancel` is polled while the index is built; when it returns true the build stops with
+    /// [`IcpError::Interrupted`], is not kept, and the next call starts it again (callers that
+    /// cannot be cancelled pass [`cancel::NEVER`]).
+    pub fn wall_index(&self, cancel: Cancel<'_>) -> Result<&NearestWallIndex> {
         if let Some(built) = self.wall_index.get() {
             return built.as_ref().map_err(Clone::clone);
         }
@@ -194,15 +194,8 @@ impl PointMap {
             }
             cell_within_budget(DEFAULT_INDEX_CELL, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
         };
-        let seen = visibility_masks_interruptible(&self.points, &self.normals, &self.raster, cancel)?;
-        NearestWallIndex::new_interruptible(
-            &self.points,
-            &self.tree,
-            Some(&seen),
-            cell,
-            self.index_reach,
-            cancel,
-        )
+        let seen = visibility_masks(&self.points, &self.normals, &self.raster, cancel)?;
+        NearestWallIndex::new(&self.points, &self.tree, Some(&seen), cell, self.index_reach, cancel)
     }
 
     /// The wall points, metres, map frame.
@@ -243,7 +236,7 @@ impl PointMap {
     /// Index and squared distance of the plan point nearest to `q`.
     #[inline]
     pub fn nearest(&self, q: [f64; 2]) -> (u32, f64) {
-        let nn = self.tree.nearest_one::<SquaredEuclidean>(&q);
+        let nn = self.tree.nearest_one(&q);
         (nn.item, nn.distance)
     }
 
@@ -268,17 +261,53 @@ impl PointMap {
     }
 }
 
+/// Side of the squares a plan denser than [`THIN_ABOVE`] points per square is thinned on, metres:
+/// a sixth of the nearest-wall index's cell ([`DEFAULT_INDEX_CELL`]), a fraction of a LIDAR's
+/// range noise. Plans drawn as they usually are (points 1 to 5 cm apart: an image at 2.5 cm per
+/// pixel, segments sampled every 2 cm) hold about one point per square and are never thinned.
+pub const THIN_CELL: f64 = 0.005;
+
+/// A plan holding more than this many points per occupied [`THIN_CELL`] square, on average, is
+/// thinned (see [`thinned`]).
+pub const THIN_ABOVE: f64 = 2.0;
+
+/// Which points a plan keeps: `None` for all of them, or, when they hold more than [`THIN_ABOVE`]
+/// points per occupied [`THIN_CELL`] square on average, the indices (ascending) of the first point
+/// in each occupied square.
+///
+/// Points far denser than that add nothing to an alignment, whose pairs are a LIDAR's centimetres
+/// apart, but every part of a plan costs in proportion to them: the nearest-wall index lists,
+/// per 3 cm cell, every point whose Voronoi region meets it (75 at 0.4 mm spacing), and 10^7 points
+/// on two 2 km walls took 660 s to build and 3 GB for the first alignment (issue 19). Thinned, a
+/// plan's size follows its walls' length, not the density it was drawn at: `O(n log n)` to find
+/// the squares, then a plan of at most one point per 5 mm of wall.
+pub fn thinned(points: &[[f64; 2]]) -> Option<Vec<u32>> {
+    // Coordinates are checked finite and within +-1e9 m: the square numbers fit an i64.
+    let mut keyed: Vec<(i64, i64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| ((p[0] / THIN_CELL).floor() as i64, (p[1] / THIN_CELL).floor() as i64, i as u32))
+        .collect();
+    keyed.sort_unstable();
+    keyed.dedup_by_key(|k| (k.0, k.1));
+    if points.len() as f64 <= THIN_ABOVE * keyed.len() as f64 {
+        return None;
+    }
+    let mut kept: Vec<u32> = keyed.into_iter().map(|k| k.2).collect();
+    kept.sort_unstable();
+    Some(kept)
+}
+
 /// Median distance from a point to its nearest other point, over up to 4096 evenly strided
 /// points; 0.05 m when every point coincides with another or there is only one.
 pub fn median_spacing(points: &[[f64; 2]], tree: &Tree2) -> f64 {
     const FALLBACK: f64 = 0.05;
     let stride = (points.len() / 4096).max(1);
-    let two = std::num::NonZero::new(2).expect("2 > 0");
     let mut spacing: Vec<f64> = points
         .iter()
         .step_by(stride)
         .filter_map(|p| {
-            let nn = tree.nearest_n::<SquaredEuclidean>(p, two);
+            let nn = tree.nearest_n(p, 2);
             nn.iter().map(|n| n.distance).find(|&d| d > 0.0).map(f64::sqrt)
         })
         .collect();
@@ -363,18 +392,52 @@ mod tests {
         assert!(PointMap::build(pts, Some(normals), None, &|| true).is_ok());
     }
 
+    /// Two 20 m walls drawn at `spacing` metres.
+    fn two_walls(spacing: f64) -> Vec<[f64; 2]> {
+        let n = (20.0 / spacing).round() as usize;
+        let mut pts: Vec<[f64; 2]> = (0..=n).map(|i| [i as f64 * spacing, 0.0]).collect();
+        pts.extend((0..=n).map(|i| [i as f64 * spacing, 3.0]));
+        pts
+    }
+
+    #[test]
+    fn a_plan_far_denser_than_useful_is_thinned_to_its_walls_length() {
+        // Ordinary densities keep every point, as given.
+        for spacing in [0.05, 0.02, 0.005] {
+            let pts = two_walls(spacing);
+            assert_eq!(thinned(&pts), None, "{spacing} m");
+            assert_eq!(PointMap::new(pts.clone(), None).unwrap().points(), &pts[..]);
+        }
+        // 10 and 100 times denser than a point per THIN_CELL: the same plan size, one point per
+        // square along the walls (20 m / 5 mm + 1 per wall), so the same work to build and use.
+        let sizes: Vec<usize> =
+            [5e-4, 5e-5].iter().map(|&s| PointMap::new(two_walls(s), None).unwrap().len()).collect();
+        assert_eq!(sizes, vec![2 * 4001, 2 * 4001]);
+        // Copies of a point are one point; normals given are thinned with their points.
+        let mut pts = vec![[1.0, 1.0]; 1000];
+        pts.extend(two_walls(0.05));
+        let normals: Vec<[f64; 2]> =
+            (0..pts.len()).map(|i| if i < 1000 { [1.0, 0.0] } else { [0.0, 1.0] }).collect();
+        let map = PointMap::build(pts.clone(), Some(normals), None, cancel::NEVER).unwrap();
+        assert_eq!(map.len(), pts.len() - 999);
+        assert_eq!(map.points()[0], [1.0, 1.0]);
+        assert_eq!(map.normals()[0], [1.0, 0.0]);
+        assert!(map.normals()[1..].iter().all(|n| *n == [0.0, 1.0]));
+    }
+
     #[test]
     fn given_normals_are_used_and_checked() {
         let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
         let fitted = PointMap::new(pts.clone(), None).unwrap();
-        let given = PointMap::with_normals(pts.clone(), Some(fitted.normals().to_vec()), None).unwrap();
+        let given =
+            PointMap::build(pts.clone(), Some(fitted.normals().to_vec()), None, cancel::NEVER).unwrap();
         assert_eq!(given.normals(), fitted.normals());
         assert!(matches!(
-            PointMap::with_normals(pts.clone(), Some(vec![[0.0, 1.0]; 3]), None),
+            PointMap::build(pts.clone(), Some(vec![[0.0, 1.0]; 3]), None, cancel::NEVER),
             Err(IcpError::InvalidParameter { name: "normals", .. })
         ));
         assert!(matches!(
-            PointMap::with_normals(pts, Some(vec![[f64::NAN, 1.0]; 100]), None),
+            PointMap::build(pts, Some(vec![[f64::NAN, 1.0]; 100]), None, cancel::NEVER),
             Err(IcpError::NonFinite { what: "normals", row: 0 })
         ));
     }

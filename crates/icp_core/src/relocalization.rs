@@ -10,10 +10,10 @@
 //! and the result is `ambiguous` when it is at least `1 - ambiguity_margin`: in a symmetric
 //! building the scan alone cannot tell those places apart.
 
-use crate::cancel::{self, Cancel};
+use crate::cancel::Cancel;
 use crate::error::{invalid, Result};
 use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
-use crate::icp::{align_interruptible, IcpConfig, IcpResult};
+use crate::icp::{align, IcpConfig, IcpResult};
 use crate::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 
@@ -75,21 +75,12 @@ pub struct Relocalization {
 
 /// Finds the robot's pose from `scan` (robot frame, metres) with no initial guess: over the whole
 /// plan (`window` `None`) or within a window. `matcher` must have been built from `map`.
+///
+/// `cancel` is polled during the search and the alignments (see [`GlobalMatcher::search`],
+/// [`align`]); when it returns true relocalization stops with
+/// [`crate::error::IcpError::Interrupted`] (callers that cannot be cancelled pass
+/// [`crate::cancel::NEVER`]).
 pub fn relocalize(
-    map: &PointMap,
-    matcher: &GlobalMatcher,
-    scan: &[[f64; 2]],
-    window: Option<&SearchWindow>,
-    icp: &IcpConfig,
-    ranking: &RankingConfig,
-) -> Result<Relocalization> {
-    relocalize_interruptible(map, matcher, scan, window, icp, ranking, cancel::NEVER)
-}
-
-/// [`relocalize`] that polls `cancel` during the search and the alignments (see
-/// [`GlobalMatcher::search_interruptible`], [`crate::icp::align_interruptible`]) and stops with
-/// [`crate::error::IcpError::Interrupted`] when it says so.
-pub fn relocalize_interruptible(
     map: &PointMap,
     matcher: &GlobalMatcher,
     scan: &[[f64; 2]],
@@ -100,27 +91,18 @@ pub fn relocalize_interruptible(
 ) -> Result<Relocalization> {
     icp.validate()?;
     ranking.validate()?;
-    let search = matcher.search_interruptible(scan, window, cancel)?;
-    refine_interruptible(map, matcher, scan, search, icp, ranking, cancel)
+    let search = matcher.search(scan, window, cancel)?;
+    refine(map, matcher, scan, search, icp, ranking, cancel)
 }
 
 /// The candidates of a finished search (`search`, of `scan` with `matcher`; see
 /// [`crate::global_search::SearchRun`]) refined by ICP on `map` and ranked, as [`relocalize`]
 /// does after its search.
+///
+/// `cancel` is polled during the alignments (see [`align`]); when it returns true refinement stops
+/// with [`crate::error::IcpError::Interrupted`] (callers that cannot be cancelled pass
+/// [`crate::cancel::NEVER`]).
 pub fn refine(
-    map: &PointMap,
-    matcher: &GlobalMatcher,
-    scan: &[[f64; 2]],
-    search: SearchOutcome,
-    icp: &IcpConfig,
-    ranking: &RankingConfig,
-) -> Result<Relocalization> {
-    refine_interruptible(map, matcher, scan, search, icp, ranking, cancel::NEVER)
-}
-
-/// [`refine`] that polls `cancel` during the alignments and stops with
-/// [`crate::error::IcpError::Interrupted`] when it says so.
-pub fn refine_interruptible(
     map: &PointMap,
     matcher: &GlobalMatcher,
     scan: &[[f64; 2]],
@@ -133,7 +115,7 @@ pub fn refine_interruptible(
     ranking.validate()?;
     let mut refined = Vec::with_capacity(search.candidates.len());
     for c in &search.candidates {
-        let alignment = align_interruptible(map, scan, c.pose, icp, None, cancel)?;
+        let alignment = align(map, scan, c.pose, icp, None, cancel)?;
         refined.push(RankedCandidate {
             pose: alignment.pose,
             score: alignment.inlier_ratio,
@@ -166,6 +148,7 @@ pub fn refine_interruptible(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cancel;
     use crate::error::IcpError;
     use crate::global_search::tests::{asymmetric_floor, scan_from, segment};
     use crate::global_search::GlobalSearchConfig;
@@ -184,8 +167,16 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(21);
         let truth = Pose2::new(3.7, 6.1, -1.3);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
-        let out = relocalize(&map, &matcher, &scan, None, &IcpConfig::default(), &RankingConfig::default())
-            .unwrap();
+        let out = relocalize(
+            &map,
+            &matcher,
+            &scan,
+            None,
+            &IcpConfig::default(),
+            &RankingConfig::default(),
+            cancel::NEVER,
+        )
+        .unwrap();
         let best = &out.candidates[0];
         assert!((best.pose.x - truth.x).hypot(best.pose.y - truth.y) < 0.02, "{:?}", best.pose);
         assert!(wrap_angle(best.pose.yaw - truth.yaw).abs() < 0.005, "{:?}", best.pose);
@@ -210,8 +201,16 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(22);
         let truth = Pose2::new(2.6, 4.1, 2.0);
         let scan = scan_from(&map, truth, &mut rng, 0.005);
-        let out = relocalize(&map, &matcher, &scan, None, &IcpConfig::default(), &RankingConfig::default())
-            .unwrap();
+        let out = relocalize(
+            &map,
+            &matcher,
+            &scan,
+            None,
+            &IcpConfig::default(),
+            &RankingConfig::default(),
+            cancel::NEVER,
+        )
+        .unwrap();
         assert!(out.candidates.len() >= 2);
         assert!(out.ambiguous, "ambiguity {}", out.ambiguity);
         assert!(out.ambiguity > 0.95);
@@ -237,13 +236,13 @@ mod tests {
             RankingConfig { ambiguity_margin: f64::NAN, ..RankingConfig::default() },
         ] {
             assert!(matches!(
-                relocalize(&map, &matcher, &scan, None, &icp, &bad),
+                relocalize(&map, &matcher, &scan, None, &icp, &bad, cancel::NEVER),
                 Err(IcpError::InvalidParameter { .. })
             ));
         }
         let bad_icp = IcpConfig { max_iterations: 0, ..icp };
         assert!(matches!(
-            relocalize(&map, &matcher, &scan, None, &bad_icp, &RankingConfig::default()),
+            relocalize(&map, &matcher, &scan, None, &bad_icp, &RankingConfig::default(), cancel::NEVER),
             Err(IcpError::InvalidParameter { name: "max_iterations", .. })
         ));
     }

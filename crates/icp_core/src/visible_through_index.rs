@@ -69,6 +69,7 @@ impl<'a> VisibleThroughIndex<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cancel;
     use crate::correspondence::find_pairs;
     use crate::point_map::PointMap;
     use crate::pose::Pose2;
@@ -100,7 +101,7 @@ mod tests {
     #[test]
     fn gives_the_pairs_of_the_kd_tree_on_the_visible_subset() {
         let map = rooms();
-        let index = map.wall_index().unwrap();
+        let index = map.wall_index(cancel::NEVER).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let mut hidden_lookups = 0usize;
         for trial in 0..20 {
@@ -131,7 +132,7 @@ mod tests {
     #[test]
     fn only_for_subsets_within_the_reach() {
         let map = rooms();
-        let index = map.wall_index().unwrap();
+        let index = map.wall_index(cancel::NEVER).unwrap();
         assert!(VisibleThroughIndex::new(index, &TargetSet::Full(&map), 0.25).is_none());
         let target =
             TargetSet::subset(&map, map.visible_from(Pose2::new(2.0, 2.0, 0.0), 30.0).unwrap()).unwrap();

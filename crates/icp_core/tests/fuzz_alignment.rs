@@ -1,4 +1,4 @@
-//! Fuzz targets over the alignment half of the core: `PointMap::new`/`with_normals`, `nearest`,
+//! Fuzz targets over the alignment half of the core: `PointMap::new`/`build`, `nearest`,
 //! `visible_from`, `align` with random `IcpConfig`s, the covariance and normals, the
 //! correspondence search and its cache, the rigid solver and the extrapolation.
 //!
@@ -11,6 +11,7 @@ mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
 use icp_core::acceleration::{extrapolation, truncated_cost, Update};
+use icp_core::cancel;
 use icp_core::candidate_cache::CandidateCache;
 use icp_core::correspondence::{find_pairs, trim, Pair, TargetSet};
 use icp_core::covariance::{estimate_normals, pose_covariance};
@@ -71,12 +72,17 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
     let valid_points = !pts.is_empty() && in_range(&pts);
     let valid_res = res.is_none_or(|r| r.is_finite() && r > 0.0);
     let valid_normals = normals.as_ref().is_none_or(|n: &Vec<[f64; 2]>| n.len() == pts.len() && in_range(n));
-    let n_points = pts.len();
-    let result = PointMap::with_normals(pts, normals.clone(), res);
+    // A plan far denser than useful keeps the first point of each THIN_CELL square, in order.
+    let kept: Option<Vec<[f64; 2]>> = valid_points
+        .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
+        .flatten();
+    let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
+    let result = PointMap::build(pts, normals.clone(), res, cancel::NEVER);
     match result {
         Ok(map) => {
             ensure!(valid_points && valid_res && valid_normals, "accepted an invalid plan");
             ensure!(map.len() == n_points && map.normals().len() == n_points, "lengths");
+            ensure!(kept.as_ref().is_none_or(|k| map.points() == &k[..]), "thinned points");
             ensure!(map.spacing().is_finite() && map.spacing() > 0.0, "spacing {}", map.spacing());
             let r = map.raster().resolution();
             ensure!(r.is_finite() && r > 0.0, "raster resolution {r}");
@@ -292,7 +298,7 @@ fn fuzz_align() {
         let cfg = random_config(c);
         c.note(|| format!("scan {scan:?}\n  initial {initial:?}\n  config {cfg:?}"));
         let valid = align_input_valid(&cfg, &scan, &initial);
-        match align(&map, &scan, initial, &cfg) {
+        match align(&map, &scan, initial, &cfg, None, cancel::NEVER) {
             Ok(res) => {
                 ensure!(valid, "accepted invalid input");
                 check_pose(&res.pose)?;
@@ -334,7 +340,7 @@ fn fuzz_align() {
 fn fuzz_covariance_and_normals() {
     run("covariance", 3, |c| {
         let Some(map) = random_map(c, 1500)? else { return Ok(()) };
-        let normals = estimate_normals(map.points(), map.tree());
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         ensure!(normals.len() == map.len(), "normals length");
         let pose =
             Pose2 { x: c.f64_or_special(-5.0, 5.0, 0.1), y: c.uniform(-5.0, 5.0), yaw: c.uniform(-PI, PI) };

@@ -5,9 +5,7 @@ use crate::{guarded, interruptible, points_from, Alignment, IcpSettings, PyPoint
 use icp_core::global_search::{
     GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
 };
-use icp_core::relocalization::{
-    refine_interruptible as core_refine, relocalize_interruptible as core_relocalize, RankingConfig,
-};
+use icp_core::relocalization::{refine as core_refine, relocalize as core_relocalize, RankingConfig};
 use icp_core::{PointMap, Pose2};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
@@ -139,7 +137,7 @@ impl SearchRun {
     /// returns whether the search has ended.
     fn advance(&mut self, py: Python<'_>, budget: u64) -> PyResult<bool> {
         let (run, matcher) = (&mut self.run, &self.matcher);
-        interruptible(py, |cancel| run.advance_interruptible(matcher, budget, cancel))
+        interruptible(py, |cancel| run.advance(matcher, budget, cancel))
     }
 
     /// Whether the search has ended.

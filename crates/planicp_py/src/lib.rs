@@ -126,7 +126,8 @@ fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyAr
     Array2::from_shape_vec((points.len(), 2), flat).expect("length matches shape").into_pyarray(py)
 }
 
-/// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster.
+/// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster;
+/// points denser than two per 5 mm square on average are thinned to one per square.
 #[pyclass(frozen, module = "planicp._core", name = "PointMap")]
 pub(crate) struct PyPointMap {
     pub(crate) inner: Arc<PointMap>,
@@ -175,7 +176,7 @@ impl PyPointMap {
     fn wall_index_stats(&self, py: Python<'_>) -> PyResult<(f64, f64, usize, usize, usize, usize)> {
         let map = Arc::clone(&self.inner);
         interruptible(py, |cancel| {
-            map.wall_index_interruptible(cancel).map(|index| {
+            map.wall_index(cancel).map(|index| {
                 let s = index.stats();
                 (index.cell(), index.reach(), s.memory_bytes, s.stored_blocks, s.blocks, s.candidates)
             })
@@ -414,7 +415,7 @@ fn align(
     let initial = Pose2::new(initial.0, initial.1, initial.2);
     let view = view.map(|v| Arc::clone(&v.inner));
     let inner = interruptible(py, |cancel| {
-        icp_core::icp::align_interruptible(
+        icp_core::icp::align(
             &map,
             &pts,
             initial,
