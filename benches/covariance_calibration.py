@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from planicp import IcpConfig, Localizer, PlanMap, PlanRaster, synthetic
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.experiment import ExperimentConfig, run_experiment
 
 CHI2_3_95 = 7.8147

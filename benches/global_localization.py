@@ -34,7 +34,7 @@ import numpy as np
 import planicp
 from planicp import PlanMap, read_ros_map, scan_to_points, synthetic
 from planicp._core import OccupancyGrid
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 FOV = math.radians(270.0)

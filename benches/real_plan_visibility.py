@@ -46,7 +46,7 @@ def floor_from_house_expo(path: Path, resolution: float = 0.05) -> tuple[synthet
     plan is that rendering (both wall faces), so that plan and simulated building agree exactly."""
     import cv2
 
-    segments, (xmin, ymin, xmax, ymax) = planicp.vector_plan.house_expo_segments(path)
+    segments, (xmin, ymin, xmax, ymax) = planicp.plans.vector_plan.house_expo_segments(path)
     margin = 1.0
     cols = int(math.ceil((xmax - xmin + 2 * margin) / resolution))
     rows = int(math.ceil((ymax - ymin + 2 * margin) / resolution))

@@ -17,7 +17,7 @@ import carmen_excerpt as ex
 
 from planicp import PlanMap
 from planicp.cli import main as cli_main
-from planicp.default_plan import default_plan_path, load_default_plan
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.figures import plot_quality
 from planicp.io import open_log, read_tum
 from planicp.log_evaluation import OdometryDrift, evaluate_log, plan_from_scans, synthesise_odometry

@@ -25,7 +25,7 @@ from planicp import (
     RecoveryConfig,
     localize,
 )
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp import se2
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.fusion_rule import fuse_with_prediction

@@ -166,7 +166,7 @@ def test_an_occupancy_grid_shared_by_threads_integrates_every_scan() -> None:
     from concurrent.futures import ThreadPoolExecutor
 
     from planicp import EnhancedOccupancyGrid
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import ExperimentConfig, run_experiment
 
     plan = load_default_plan()

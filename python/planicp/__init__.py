@@ -14,7 +14,8 @@ Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_m
 
 from __future__ import annotations
 
-from . import se2, synthetic, vector_plan
+from . import se2, synthetic
+from .plans import vector_plan
 from ._core import PlanicpError, PlanicpInternalError, WallView
 from ._core import __version__ as __version__
 from .tracking.degeneracy_rule import Degeneracy, DegeneracyRule
@@ -30,12 +31,12 @@ from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.fusion_rule import FusionRule
 from .tracking.occlusion_rule import OcclusionRule
-from .plan_map import PlanMap
+from .plans.plan_map import PlanMap
 from .tracking.recovery import RecoveryConfig
-from .plan_raster import PlanRaster, resolution_from_pixels
+from .plans.plan_raster import PlanRaster, resolution_from_pixels
 from .tracking.continuity_rule import ContinuityRule
 from .tracking.relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
-from .ros_map import RosMap, read_ros_map
+from .plans.ros_map import RosMap, read_ros_map
 
 __all__ = [
     "AcceptanceGate",

@@ -30,8 +30,8 @@ def _demo(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .plan_figure import plot_plan_overlay
-    from .plan_loading import load_plan
+    from .plans.plan_figure import plot_plan_overlay
+    from .plans.plan_loading import load_plan
 
     source = Path(args.image)
     plan = load_plan(source, resolution=args.resolution, origin=args.origin, cache=not args.no_cache,
@@ -102,7 +102,7 @@ def _icp_config(args: argparse.Namespace) -> Any:
 def _replay(args: argparse.Namespace) -> int:
     from .enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .log_replay import track_log
-    from .plan_loading import load_plan
+    from .plans.plan_loading import load_plan
     from .progress import progress_bar
     from .replay_outputs import print_summary, write_outputs
 

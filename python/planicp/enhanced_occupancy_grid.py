@@ -52,8 +52,8 @@ from numpy.typing import NDArray
 
 from . import _core
 from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
-from .plan_map import PlanMap
-from .ros_map import write_ros_map
+from .plans.plan_map import PlanMap
+from .plans.ros_map import write_ros_map
 from .se2 import compose, transform_points
 
 

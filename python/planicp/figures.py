@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-    from .plan_map import PlanMap
+    from .plans.plan_map import PlanMap
 
 COLOURS = {"odometry": "tab:red", "planicp": "tab:green", "truth": "black"}
 

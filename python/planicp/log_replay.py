@@ -23,7 +23,7 @@ from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame
 from .tracking.acceptance_gate import AcceptanceGate
 from .tracking.localizer import Localizer
-from .plan_map import PlanMap
+from .plans.plan_map import PlanMap
 from .se2 import between, compose
 from .trajectory_metrics import error_summary
 

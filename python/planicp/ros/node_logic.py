@@ -25,7 +25,7 @@ from ..enhanced_occupancy_grid import EnhancedOccupancyGrid, OccupancyGridMessag
 from ..laser_scan import scan_to_points
 from ..tracking.localizer import Localizer
 from ..tracking.localizer import _covariance as validated_covariance
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, matrix_to_pose
 from .message_layout import covariance_from_6x6
 from .node_diagnostics import ERROR, OK, WARN, NodeDiagnostics

@@ -6,8 +6,8 @@ import numpy as np
 
 from .._validation import positive
 from ..enhanced_occupancy_grid import OccupancyGridMessage
-from ..plan_map import PlanMap
-from ..plan_raster import PlanRaster
+from ..plans.plan_map import PlanMap
+from ..plans.plan_raster import PlanRaster
 
 
 def plan_occupancy_grid(plan: PlanMap, resolution: float = 0.05) -> OccupancyGridMessage:

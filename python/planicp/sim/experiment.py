@@ -29,7 +29,7 @@ from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.localizer import Localizer
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .diff_drive import DiffDriveLimits
 from .drive import simulate_drive

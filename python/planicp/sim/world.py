@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..plan_raster import PlanRaster
+from ..plans.plan_raster import PlanRaster
 from ..synthetic import Floor
 
 
