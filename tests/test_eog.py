@@ -22,7 +22,7 @@ from planicp import (
     scan_to_points,
 )
 from planicp._core import OccupancyGrid
-from planicp.enhanced_occupancy_grid import STATE_COLOURS
+from planicp.mapping.eog_state import STATE_COLOURS
 from planicp.figures import plot_eog, plot_eog_comparison
 
 RES = 0.1

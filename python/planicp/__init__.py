@@ -19,7 +19,10 @@ from .plans import vector_plan
 from ._core import PlanicpError, PlanicpInternalError, WallView
 from ._core import __version__ as __version__
 from .tracking.degeneracy_rule import Degeneracy, DegeneracyRule
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState, OccupancyGridMessage, OccupancyModel
+from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from .mapping.eog_state import EogState
+from .mapping.occupancy_grid_message import OccupancyGridMessage
+from .mapping.occupancy_model import OccupancyModel
 from .grid_agreement import GridAgreement, compare_grids
 from .tracking.icp_config import IcpConfig
 from .tracking.icp_result import IcpResult

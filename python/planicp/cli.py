@@ -100,7 +100,7 @@ def _icp_config(args: argparse.Namespace) -> Any:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .log_replay import track_log
     from .plans.plan_loading import load_plan
     from .progress import progress_bar

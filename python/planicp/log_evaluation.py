@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validation import Pose, positive, whole_number
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from .plans.image_files import MAX_IMAGE_PIXELS
 from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validation import Pose, as_pose
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from .tracking.icp_config import IcpConfig
 from .io.scan_log import ScanFrame
 from .tracking.acceptance_gate import AcceptanceGate

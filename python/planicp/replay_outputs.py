@@ -10,7 +10,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from . import figures
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
+from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from .io.trajectory_files import write_tum
 from .log_replay import TrackedLog
 from .plans.plan_map import PlanMap

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import positive
-from ..enhanced_occupancy_grid import OccupancyGridMessage
+from ..mapping.occupancy_grid_message import OccupancyGridMessage
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
 

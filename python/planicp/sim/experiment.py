@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
-from ..enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
