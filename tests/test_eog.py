@@ -23,7 +23,7 @@ from planicp import (
 )
 from planicp._core import OccupancyGrid
 from planicp.mapping.eog_state import STATE_COLOURS
-from planicp.figures import plot_eog, plot_eog_comparison
+from planicp.evaluation.figures import plot_eog, plot_eog_comparison
 
 RES = 0.1
 FOV = math.radians(360.0)

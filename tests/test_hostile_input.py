@@ -20,7 +20,7 @@ from planicp._core import PlanicpError
 from planicp.cli import main as cli_main
 from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.io import read_carmen
-from planicp.log_evaluation import plan_from_scans
+from planicp.evaluation.log_evaluation import plan_from_scans
 from planicp._validation import brief
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
 from planicp.sweep import StudyError, load_study

@@ -23,7 +23,7 @@ from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from .mapping.eog_state import EogState
 from .mapping.occupancy_grid_message import OccupancyGridMessage
 from .mapping.occupancy_model import OccupancyModel
-from .grid_agreement import GridAgreement, compare_grids
+from .evaluation.grid_agreement import GridAgreement, compare_grids
 from .tracking.icp_config import IcpConfig
 from .tracking.icp_result import IcpResult
 from .laser_scan import scan_to_points

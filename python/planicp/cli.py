@@ -101,10 +101,10 @@ def _icp_config(args: argparse.Namespace) -> Any:
 
 def _replay(args: argparse.Namespace) -> int:
     from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
-    from .log_replay import track_log
+    from .evaluation.log_replay import track_log
     from .plans.plan_loading import load_plan
     from .progress import progress_bar
-    from .replay_outputs import print_summary, write_outputs
+    from .evaluation.replay_outputs import print_summary, write_outputs
 
     plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
     log = _read_log(args)
@@ -120,9 +120,9 @@ def _replay(args: argparse.Namespace) -> int:
 
 
 def _evaluate_log(args: argparse.Namespace) -> int:
-    from .log_evaluation import evaluate_log
+    from .evaluation.log_evaluation import evaluate_log
     from .progress import progress_bar
-    from .replay_outputs import print_summary, write_outputs
+    from .evaluation.replay_outputs import print_summary, write_outputs
 
     log = _read_log(args)
     evaluation = evaluate_log(log, resolution=args.resolution, min_hits=args.min_hits, odometry=args.odometry,

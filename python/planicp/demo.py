@@ -27,9 +27,10 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from . import __version__, figures
+from . import __version__
+from .evaluation import figures
 from .plans.default_plan import load_default_plan
-from .grid_agreement import compare_grids
+from .evaluation.grid_agreement import compare_grids
 from .tracking.icp_config import IcpConfig
 from .tracking.localize import localize
 from .plans.plan_figure import plot_plan_overlay
