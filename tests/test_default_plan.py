@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planicp import synthetic
+from planicp import sim as synthetic
 from planicp.plans.default_plan import default_plan_path, load_default_plan
 
 

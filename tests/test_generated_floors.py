@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp import synthetic
+from planicp import sim
 from planicp.sim import route_planner
 
 SEEDS = (0, 3, 11)
@@ -56,7 +56,7 @@ def _digest(*arrays: Any) -> str:
 
 @functools.cache
 def _floor(layout: str, seed: int) -> Any:
-    return synthetic.generate_floor(seed, layout)
+    return sim.generate_floor(seed, layout)
 
 
 def _blob_floor(seed: int) -> Any:
@@ -69,7 +69,7 @@ def _blob_floor(seed: int) -> Any:
     walls[40:50, 0:2] = True  # a pocket open to the border
     clutter = rng.random(walls.shape) < 0.02
     clutter[3:87, 3:65] = clutter[3:87, 66:128]  # the same clutter in both rooms
-    return synthetic.Floor(walls, clutter & ~walls, 0.05, (-1.0, 2.0))
+    return sim.Floor(walls, clutter & ~walls, 0.05, (-1.0, 2.0))
 
 
 def blob_fingerprints(seed: int) -> tuple[str, ...]:
@@ -96,8 +96,8 @@ def fingerprints(layout: str, seed: int) -> tuple[str, ...]:
     for k in range(5):
         p = tuple(float(v) for v in poses[5 + k])
         discs = np.array([[p[0] + 1.0, p[1], 0.3], [p[0], p[1] - 1.5, 0.2]])
-        r, a0, da = synthetic.simulate_ranges(f, p, rng, beams=720, range_sigma=0.01, dropout=0.05, dynamic_discs=discs)
-        pts, clutter = synthetic.simulate_scan(f, p, rng, beams=541, fov=math.radians(270), dynamic_discs=discs)
+        r, a0, da = sim.simulate_ranges(f, p, rng, beams=720, range_sigma=0.01, dropout=0.05, dynamic_discs=discs)
+        pts, clutter = sim.simulate_scan(f, p, rng, beams=541, fov=math.radians(270), dynamic_discs=discs)
         scans += [r, np.array([a0, da]), pts, clutter]
     return (
         _digest(f.walls, f.clutter, np.array(f.origin), np.array([f.resolution])),

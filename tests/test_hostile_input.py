@@ -168,7 +168,7 @@ def test_planicp_plan_replaces_a_symlink_in_its_output_folder_instead_of_followi
 
 
 def _plan_image(tmp_path: Path) -> Path:
-    from planicp import synthetic
+    from planicp import sim as synthetic
 
     path = tmp_path / "plan.png"
     cv2.imwrite(str(path), synthetic.generate_floor(3, "office", width=20.0, height=12.0, rooms=4).to_image())

@@ -12,7 +12,7 @@ import pytest
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
-from planicp import synthetic as syn
+from planicp import sim as syn
 
 DEG = math.pi / 180.0
 Pose = tuple[float, float, float]

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import planicp
-from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels, synthetic
+from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels
+from planicp import sim as synthetic
 from planicp.cli import main as cli_main
 from planicp.plans.ros_map import write_ros_map
 

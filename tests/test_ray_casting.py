@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from planicp import synthetic
+from planicp import sim as synthetic
 from planicp._core import OccupancyGrid, PlanicpError
 
 EXACT = 1e-9  # metres

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from planicp import IcpConfig, IcpResult, Localizer, PlanMap, localize
-from planicp import synthetic as syn
+from planicp import sim as syn
 
 DEG = math.pi / 180.0
 

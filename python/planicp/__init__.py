@@ -14,7 +14,8 @@ Frames follow REP-103/105: metres, radians, yaw counter-clockwise; poses are T_m
 
 from __future__ import annotations
 
-from . import se2, synthetic
+from . import se2
+from . import sim as synthetic
 from .plans import vector_plan
 from ._core import PlanicpError, PlanicpInternalError, WallView
 from ._core import __version__ as __version__

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from . import __version__, synthetic
+from . import __version__
 from .io.atomic_files import write_atomically
 
 

@@ -1,6 +1,6 @@
 """Collision-free routes on a synthetic floor: exact clearance inflation, A*, line-of-sight shortening, tours.
 
-Everything is in the map frame of the :class:`~planicp.synthetic.Floor` (metres). Walls AND clutter are
+Everything is in the map frame of the :class:`~planicp.sim.floor.Floor` (metres). Walls AND clutter are
 obstacles. A cell is *traversable* for a clearance ``c`` when EVERY point of its square is at least ``c``
 metres (Euclidean) from every point of every occupied cell square; the route is a polyline whose every point
 lies in the closure of a traversable cell, so every point of it keeps the clearance exactly (with respect to
@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import real_number, whole_number
-from ..synthetic import Floor
+from .floor import Floor
 
 __all__ = ["Point", "clearance_distance", "plan_route", "reachable", "tour", "traversable"]
 
@@ -435,7 +435,7 @@ def _dedupe(route: list[Point]) -> list[Point]:
 
 def _floor_arg(floor: Any) -> Floor:
     if not isinstance(floor, Floor):
-        raise TypeError(f"floor must be a planicp.synthetic.Floor, got {type(floor).__name__}")
+        raise TypeError(f"floor must be a planicp.sim.Floor, got {type(floor).__name__}")
     return floor
 
 

@@ -1,0 +1,321 @@
+"""A rasterised floor with two layers: the walls the architectural plan shows, and the clutter
+(furniture, bins, ...) that the plan does NOT show but a LIDAR sees.
+
+Conventions: metres and radians; frames follow ROS REP-103 (x forward, y left, yaw counter-clockwise).
+Rasters are indexed ``[row, col]`` with the row index growing with +y (row 0 is the LOWEST y, i.e. NOT
+image order); cell ``(r, c)`` covers ``x in [ox + c*res, ox + (c+1)*res)`` and
+``y in [oy + r*res, oy + (r+1)*res)`` where ``(ox, oy) = origin``. Use :meth:`Floor.to_image` to get an
+image in ROS ``map_server`` (top row = highest y) order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .argument_checks import Pose, finite_float
+
+__all__ = ["Floor"]
+
+# Cell classes of the ray-casting grid and return sources.
+FREE: Final = 0
+WALL: Final = 1
+CLUTTER: Final = 2
+DYNAMIC: Final = 3
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Floor:
+    """A rasterised floor: walls (in the plan) and clutter (furniture, NOT in the plan).
+
+    Attributes:
+        walls: ``(rows, cols)`` bool; row index grows with +y (row 0 is the LOWEST y, i.e. not image order).
+        clutter: ``(rows, cols)`` bool, same shape; furniture/people not in the plan. A cell that is both
+            wall and clutter counts as wall.
+        resolution: metres per cell (square cells).
+        origin: map-frame ``(x, y)`` in metres of the lower-left CORNER of cell ``(0, 0)``; cell ``(r, c)``
+            covers ``x in [ox + c*res, ox + (c+1)*res)``, ``y in [oy + r*res, oy + (r+1)*res)``.
+
+    The arrays are copied on construction and made read-only, so a ``Floor`` is immutable and derived data
+    (ray-casting grid, pose-sampling masks) is cached on the instance. Equality is identity; compare the
+    arrays explicitly to compare floors.
+    """
+
+    walls: NDArray[np.bool_]
+    clutter: NDArray[np.bool_]
+    resolution: float
+    origin: tuple[float, float]
+    _cache: dict[Any, Any] = field(init=False, default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        walls = _as_bool_grid(self.walls, "walls")
+        clutter = _as_bool_grid(self.clutter, "clutter")
+        if walls.shape != clutter.shape:
+            raise ValueError(f"walls {walls.shape} and clutter {clutter.shape} must have the same shape")
+        res = finite_float(self.resolution, "resolution")
+        if res <= 0.0:
+            raise ValueError(f"resolution must be > 0 metres per cell, got {res}")
+        try:
+            ox, oy = (float(v) for v in self.origin)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"origin must be a pair of floats (x, y) in metres, got {self.origin!r}"
+            ) from None
+        if not (math.isfinite(ox) and math.isfinite(oy)):
+            raise ValueError(f"origin must be finite, got {(ox, oy)}")
+        object.__setattr__(self, "walls", walls)
+        object.__setattr__(self, "clutter", clutter)
+        object.__setattr__(self, "resolution", res)
+        object.__setattr__(self, "origin", (ox, oy))
+
+    def __reduce__(self) -> tuple[type[Floor], tuple[Any, ...]]:
+        # pickle only the defining fields: the cache is rebuilt on demand and arrays come back read-only
+        return (Floor, (self.walls, self.clutter, self.resolution, self.origin))
+
+    def __repr__(self) -> str:
+        rows, cols = self.shape
+        return (
+            f"Floor(shape=({rows}, {cols}), resolution={self.resolution!r}, origin={self.origin!r}, "
+            f"wall_cells={int(self.walls.sum())}, clutter_cells={int(self.clutter.sum())})"
+        )
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, cols)`` of the rasters."""
+        rows, cols = self.walls.shape
+        return int(rows), int(cols)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, ymin, xmax, ymax)`` of the raster in metres (map frame)."""
+        rows, cols = self.shape
+        ox, oy = self.origin
+        return ox, oy, ox + cols * self.resolution, oy + rows * self.resolution
+
+    def occupied(self) -> NDArray[np.bool_]:
+        """``walls | clutter`` as a new ``(rows, cols)`` bool array."""
+        return self.walls | self.clutter
+
+    def wall_points(self) -> NDArray[np.float64]:
+        """Wall-SURFACE points, ``(N, 2)`` float64 in metres (map frame).
+
+        For each wall cell with a free 4-neighbour (free = not wall; outside the raster counts as free), one
+        point at the midpoint of each cell face shared with free space -- i.e. on the surface where simulated
+        beams stop. Only wall cells count (clutter is not in the plan). Order is deterministic: faces facing
+        +x, then -x, then +y, then -y; within each group row-major by cell.
+        """
+        w = self.walls
+        padded = np.pad(w, 1, constant_values=False)
+        rows, cols = w.shape
+        res = self.resolution
+        ox, oy = self.origin
+        out = []
+        for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+            neighbour = padded[1 + dr : rows + 1 + dr, 1 + dc : cols + 1 + dc]
+            r, c = np.nonzero(w & ~neighbour)
+            out.append(np.column_stack([ox + (c + 0.5 + 0.5 * dc) * res, oy + (r + 0.5 + 0.5 * dr) * res]))
+        return np.ascontiguousarray(np.concatenate(out), dtype=np.float64)
+
+    def to_image(self) -> NDArray[np.uint8]:
+        """``uint8`` image in ROS ``map_server`` / image convention: row 0 is the TOP (highest y).
+
+        Walls are 0 (black), everything else 255 (white). Clutter is NOT drawn (it is not in the plan).
+        With ``origin`` as the map_server ``origin`` and ``resolution`` as its resolution the image reproduces
+        the plan.
+        """
+        return np.where(self.walls[::-1], np.uint8(0), np.uint8(255)).astype(np.uint8)
+
+    def sample_pose(self, rng: np.random.Generator, clearance: float = 0.5) -> Pose:
+        """A random pose ``(x, y, yaw)`` (metres, radians in ``[-pi, pi)``) inside the building.
+
+        "Inside" is the largest 4-connected region of free cells (neither wall nor clutter) that does not
+        touch the raster border. The position is uniform over the cells of that region whose every point is at
+        least ``clearance`` metres (Euclidean) from every wall or clutter cell square, and uniform within the
+        cell, so the returned position is guaranteed to have that clearance. Yaw is uniform.
+
+        Raises:
+            ValueError: ``clearance`` negative or not finite, or no cell satisfies the conditions.
+        """
+        clearance = finite_float(clearance, "clearance")
+        if clearance < 0.0:
+            raise ValueError(f"clearance must be >= 0 metres, got {clearance}")
+        cells = self._pose_cells(clearance)
+        if cells.size == 0:
+            raise ValueError(
+                f"no free cell inside the building has {clearance} m clearance from walls and clutter"
+            )
+        k = int(rng.integers(cells.size))
+        cols = self.shape[1]
+        r, c = divmod(int(cells[k]), cols)
+        u, v = rng.random(2)
+        res = self.resolution
+        ox, oy = self.origin
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        return float(ox + (c + u) * res), float(oy + (r + v) * res), yaw
+
+    # -- cached derived data ---------------------------------------------------------------------------
+
+    def _cell_class(self) -> NDArray[np.uint8]:
+        """``uint8`` grid: 0 free, 1 wall, 2 clutter (clutter under a wall counts as wall)."""
+        grid = self._cache.get("cell_class")
+        if grid is None:
+            grid = np.zeros(self.shape, dtype=np.uint8)
+            grid[self.clutter] = CLUTTER
+            grid[self.walls] = WALL
+            grid.flags.writeable = False
+            self._cache["cell_class"] = grid
+        return grid
+
+    def _padded_class_flat(self) -> NDArray[np.uint8]:
+        """Flattened cell classes with one free cell of padding around the raster (ray-casting lookups)."""
+        flat = self._cache.get("padded_class")
+        if flat is None:
+            flat = np.pad(self._cell_class(), 1, constant_values=FREE).ravel()
+            flat.flags.writeable = False
+            self._cache["padded_class"] = flat
+        return flat
+
+    def _skip_levels(self) -> NDArray[np.uint8]:
+        """Box-clearance levels used for exact empty-space skipping in the ray caster."""
+        levels = self._cache.get("skip_levels")
+        if levels is None:
+            from .simulated_lidar import box_clearance_levels
+
+            levels = box_clearance_levels(self.occupied())
+            levels.flags.writeable = False
+            self._cache["skip_levels"] = levels
+        return levels
+
+    def _inside(self) -> NDArray[np.bool_]:
+        """Mask of the largest free 4-connected region not touching the raster border."""
+        inside = self._cache.get("inside")
+        if inside is None:
+            inside = _largest_interior_region(~self.occupied())
+            inside.flags.writeable = False
+            self._cache["inside"] = inside
+        return inside
+
+    def _pose_cells(self, clearance: float) -> NDArray[np.intp]:
+        key = ("pose_cells", clearance)
+        cells = self._cache.get(key)
+        if cells is None:
+            blocked = _dilate_by_clearance(self.occupied(), clearance / self.resolution)
+            cells = np.flatnonzero(self._inside() & ~blocked)
+            cells.flags.writeable = False
+            self._cache[key] = cells
+        return cells
+
+
+def _as_bool_grid(value: ArrayLike, name: str) -> NDArray[np.bool_]:
+    arr = np.asarray(value)
+    if arr.dtype != np.bool_:
+        raise ValueError(f"{name} must be a boolean array, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
+        raise ValueError(f"{name} must be a non-empty 2-D (rows, cols) array, got shape {arr.shape}")
+    out = np.array(arr, dtype=np.bool_, order="C", copy=True)
+    out.flags.writeable = False
+    return out
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Connected components and clearance (pure numpy)
+# ----------------------------------------------------------------------------------------------------------
+
+
+def _largest_interior_region(free: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Largest 4-connected component of ``free`` that does not touch the raster border (empty if none).
+
+    Run-length labelling: horizontal runs are nodes, vertically overlapping runs in adjacent rows are edges,
+    components are found by vectorised min-label hooking with pointer jumping. Ties in size go to the
+    component whose first run comes first in row-major order.
+    """
+    rows, cols = free.shape
+    padded = np.zeros((rows, cols + 2), dtype=np.int8)
+    padded[:, 1:-1] = free
+    d = np.diff(padded, axis=1)
+    sr, sc = np.nonzero(d == 1)  # run starts (row-major, so runs are sorted)
+    _, ec = np.nonzero(d == -1)  # run ends (exclusive column)
+    n = sr.size
+    mask = np.zeros((rows, cols), dtype=np.bool_)
+    if n == 0:
+        return mask
+    stride = cols + 1
+    key_start = sr.astype(np.int64) * stride + sc
+    key_end = sr.astype(np.int64) * stride + ec
+    # For each run b (row > 0), the runs a of the row below with a.c0 < b.c1 and a.c1 > b.c0.
+    base = (sr.astype(np.int64) - 1) * stride
+    lo = np.searchsorted(key_end, base + sc, side="right")
+    hi = np.searchsorted(key_start, base + ec, side="left")
+    counts = np.where(sr > 0, np.maximum(hi - lo, 0), 0)
+    v = np.repeat(np.arange(n), counts)
+    first = np.repeat(lo - np.cumsum(counts) + counts, counts)
+    u = first + np.arange(v.size)
+    parent = np.arange(n)
+    while True:
+        pu, pv = parent[u], parent[v]
+        differ = pu != pv
+        if not differ.any():
+            break
+        pu, pv = pu[differ], pv[differ]
+        m = np.minimum(pu, pv)
+        np.minimum.at(parent, pu, m)
+        np.minimum.at(parent, pv, m)
+        while True:  # pointer jumping until every node points at a root
+            nxt = parent[parent]
+            if np.array_equal(nxt, parent):
+                break
+            parent = nxt
+    lengths = (ec - sc).astype(np.int64)
+    sizes = np.bincount(parent, weights=lengths, minlength=n)
+    touches = (sr == 0) | (sr == rows - 1) | (sc == 0) | (ec == cols)
+    sizes[np.unique(parent[touches])] = 0.0
+    best = int(np.argmax(sizes))
+    if sizes[best] <= 0.0:
+        return mask
+    sel = parent == best
+    marks = np.zeros((rows, cols + 1), dtype=np.int32)
+    np.add.at(marks, (sr[sel], sc[sel]), 1)
+    np.add.at(marks, (sr[sel], ec[sel]), -1)
+    mask[:] = np.cumsum(marks, axis=1)[:, :cols] > 0
+    return mask
+
+
+def _dilate_by_clearance(occ: NDArray[np.bool_], q: float) -> NDArray[np.bool_]:
+    """Cells with some point closer than ``q`` cells (Euclidean) to some point of an occupied cell.
+
+    Two cells at integer offset ``(dr, dc)`` are ``hypot(max(|dr|-1, 0), max(|dc|-1, 0))`` cells apart (the
+    gap between the squares), so the result is ``occ`` dilated by the offsets with that gap ``< q``. Each row
+    offset is a horizontal box dilation done with prefix sums.
+    """
+    out = occ.copy()
+    if q <= 0.0:
+        return out
+    rows, cols = occ.shape
+    prefix = np.zeros((rows, cols + 1), dtype=np.int32)
+    np.cumsum(occ, axis=1, out=prefix[:, 1:])
+    col = np.arange(cols)
+    horizontal: dict[int, NDArray[np.bool_]] = {}
+    reach = math.ceil(q) + 1
+    for dr in range(-reach, reach + 1):
+        a = max(abs(dr) - 1, 0)
+        if a >= q:
+            continue
+        s = math.sqrt(q * q - a * a)
+        w = math.ceil(s + 1.0) - 1  # largest |dc| with max(|dc|-1, 0) < s
+        h = horizontal.get(w)
+        if h is None:
+            hi = np.minimum(col + w + 1, cols)
+            lo = np.maximum(col - w, 0)
+            h = (prefix[:, hi] - prefix[:, lo]) > 0
+            horizontal[w] = h
+        # out[r] |= h[r + dr]
+        if dr >= 0:
+            if dr < rows:
+                out[: rows - dr] |= h[dr:]
+        elif -dr < rows:
+            out[-dr:] |= h[: rows + dr]
+    return out
