@@ -12,21 +12,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .. import _core
 from .argument_checks import Pose, finite_float
 
 __all__ = ["Floor"]
-
-# Cell classes of the ray-casting grid and return sources.
-FREE: Final = 0
-WALL: Final = 1
-CLUTTER: Final = 2
-DYNAMIC: Final = 3
-
 
 @dataclass(frozen=True, eq=False, repr=False)
 class Floor:
@@ -159,36 +153,15 @@ class Floor:
 
     # -- cached derived data ---------------------------------------------------------------------------
 
-    def _cell_class(self) -> NDArray[np.uint8]:
-        """``uint8`` grid: 0 free, 1 wall, 2 clutter (clutter under a wall counts as wall)."""
-        grid = self._cache.get("cell_class")
+    def _native_grid(self, layer: str) -> _core.OccupancyGrid:
+        """The native ray-casting grid of ``"occupied"`` (walls and clutter) or ``"walls"`` cells."""
+        key = ("native_grid", layer)
+        grid = self._cache.get(key)
         if grid is None:
-            grid = np.zeros(self.shape, dtype=np.uint8)
-            grid[self.clutter] = CLUTTER
-            grid[self.walls] = WALL
-            grid.flags.writeable = False
-            self._cache["cell_class"] = grid
+            cells = self.occupied() if layer == "occupied" else np.array(self.walls)
+            grid = _core.OccupancyGrid(np.ascontiguousarray(cells), self.resolution, self.origin)
+            self._cache[key] = grid
         return grid
-
-    def _padded_class_flat(self) -> NDArray[np.uint8]:
-        """Flattened cell classes with one free cell of padding around the raster (ray-casting lookups)."""
-        flat = self._cache.get("padded_class")
-        if flat is None:
-            flat = np.pad(self._cell_class(), 1, constant_values=FREE).ravel()
-            flat.flags.writeable = False
-            self._cache["padded_class"] = flat
-        return flat
-
-    def _skip_levels(self) -> NDArray[np.uint8]:
-        """Box-clearance levels used for exact empty-space skipping in the ray caster."""
-        levels = self._cache.get("skip_levels")
-        if levels is None:
-            from .simulated_lidar import box_clearance_levels
-
-            levels = box_clearance_levels(self.occupied())
-            levels.flags.writeable = False
-            self._cache["skip_levels"] = levels
-        return levels
 
     def _inside(self) -> NDArray[np.bool_]:
         """Mask of the largest free 4-connected region not touching the raster border."""
