@@ -195,100 +195,57 @@ def _as_bool_grid(value: ArrayLike, name: str) -> NDArray[np.bool_]:
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Connected components and clearance (pure numpy)
+# Connected components and clearance (OpenCV)
 # ----------------------------------------------------------------------------------------------------------
 
 
 def _largest_interior_region(free: NDArray[np.bool_]) -> NDArray[np.bool_]:
     """Largest 4-connected component of ``free`` that does not touch the raster border (empty if none).
 
-    Run-length labelling: horizontal runs are nodes, vertically overlapping runs in adjacent rows are edges,
-    components are found by vectorised min-label hooking with pointer jumping. Ties in size go to the
-    component whose first run comes first in row-major order.
+    Ties in size go to the component whose first cell comes first in row-major order.
     """
+    import cv2
+
     rows, cols = free.shape
-    padded = np.zeros((rows, cols + 2), dtype=np.int8)
-    padded[:, 1:-1] = free
-    d = np.diff(padded, axis=1)
-    sr, sc = np.nonzero(d == 1)  # run starts (row-major, so runs are sorted)
-    _, ec = np.nonzero(d == -1)  # run ends (exclusive column)
-    n = sr.size
-    mask = np.zeros((rows, cols), dtype=np.bool_)
-    if n == 0:
-        return mask
-    stride = cols + 1
-    key_start = sr.astype(np.int64) * stride + sc
-    key_end = sr.astype(np.int64) * stride + ec
-    # For each run b (row > 0), the runs a of the row below with a.c0 < b.c1 and a.c1 > b.c0.
-    base = (sr.astype(np.int64) - 1) * stride
-    lo = np.searchsorted(key_end, base + sc, side="right")
-    hi = np.searchsorted(key_start, base + ec, side="left")
-    counts = np.where(sr > 0, np.maximum(hi - lo, 0), 0)
-    v = np.repeat(np.arange(n), counts)
-    first = np.repeat(lo - np.cumsum(counts) + counts, counts)
-    u = first + np.arange(v.size)
-    parent = np.arange(n)
-    while True:
-        pu, pv = parent[u], parent[v]
-        differ = pu != pv
-        if not differ.any():
-            break
-        pu, pv = pu[differ], pv[differ]
-        m = np.minimum(pu, pv)
-        np.minimum.at(parent, pu, m)
-        np.minimum.at(parent, pv, m)
-        while True:  # pointer jumping until every node points at a root
-            nxt = parent[parent]
-            if np.array_equal(nxt, parent):
-                break
-            parent = nxt
-    lengths = (ec - sc).astype(np.int64)
-    sizes = np.bincount(parent, weights=lengths, minlength=n)
-    touches = (sr == 0) | (sr == rows - 1) | (sc == 0) | (ec == cols)
-    sizes[np.unique(parent[touches])] = 0.0
-    best = int(np.argmax(sizes))
-    if sizes[best] <= 0.0:
-        return mask
-    sel = parent == best
-    marks = np.zeros((rows, cols + 1), dtype=np.int32)
-    np.add.at(marks, (sr[sel], sc[sel]), 1)
-    np.add.at(marks, (sr[sel], ec[sel]), -1)
-    mask[:] = np.cumsum(marks, axis=1)[:, :cols] > 0
-    return mask
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(free.astype(np.uint8), connectivity=4)
+    left, top = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP]
+    width, height = stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]
+    sizes = stats[:, cv2.CC_STAT_AREA].astype(np.int64)
+    sizes[(left == 0) | (top == 0) | (left + width == cols) | (top + height == rows)] = 0
+    sizes[0] = 0  # label 0: the cells that are not free
+    best = int(sizes.max()) if count else 0
+    if best <= 0:
+        return np.zeros((rows, cols), dtype=np.bool_)
+    winners = np.flatnonzero(sizes == best)
+    # first cell of each (row-major): the first cell of its top row that carries its label
+    firsts = [int(top[k]) * cols + int(np.argmax(labels[top[k]] == k)) for k in winners]
+    label = int(winners[int(np.argmin(firsts))])
+    out: NDArray[np.bool_] = labels == label
+    return out
 
 
 def _dilate_by_clearance(occ: NDArray[np.bool_], q: float) -> NDArray[np.bool_]:
     """Cells with some point closer than ``q`` cells (Euclidean) to some point of an occupied cell.
 
     Two cells at integer offset ``(dr, dc)`` are ``hypot(max(|dr|-1, 0), max(|dc|-1, 0))`` cells apart (the
-    gap between the squares), so the result is ``occ`` dilated by the offsets with that gap ``< q``. Each row
-    offset is a horizontal box dilation done with prefix sums.
+    gap between the squares), so the result is ``occ`` dilated by the kernel of the offsets with that gap
+    ``< q``: in kernel row ``dr`` the columns ``|dc| <= w`` with ``w`` the largest ``|dc|`` whose
+    ``max(|dc|-1, 0)`` is below ``sqrt(q^2 - max(|dr|-1, 0)^2)``. Cells outside the raster are free.
     """
-    out = occ.copy()
     if q <= 0.0:
-        return out
-    rows, cols = occ.shape
-    prefix = np.zeros((rows, cols + 1), dtype=np.int32)
-    np.cumsum(occ, axis=1, out=prefix[:, 1:])
-    col = np.arange(cols)
-    horizontal: dict[int, NDArray[np.bool_]] = {}
+        return occ.copy()
+    import cv2
+
     reach = math.ceil(q) + 1
+    widths = {}
     for dr in range(-reach, reach + 1):
         a = max(abs(dr) - 1, 0)
-        if a >= q:
-            continue
-        s = math.sqrt(q * q - a * a)
-        w = math.ceil(s + 1.0) - 1  # largest |dc| with max(|dc|-1, 0) < s
-        h = horizontal.get(w)
-        if h is None:
-            hi = np.minimum(col + w + 1, cols)
-            lo = np.maximum(col - w, 0)
-            h = (prefix[:, hi] - prefix[:, lo]) > 0
-            horizontal[w] = h
-        # out[r] |= h[r + dr]
-        if dr >= 0:
-            if dr < rows:
-                out[: rows - dr] |= h[dr:]
-        elif -dr < rows:
-            out[-dr:] |= h[: rows + dr]
+        if a < q:
+            widths[dr] = math.ceil(math.sqrt(q * q - a * a) + 1.0) - 1
+    half = max(widths.values())
+    kernel = np.zeros((2 * reach + 1, 2 * half + 1), dtype=np.uint8)
+    for dr, w in widths.items():
+        kernel[reach + dr, half - w : half + w + 1] = 1
+    grown = cv2.dilate(occ.astype(np.uint8), kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    out: NDArray[np.bool_] = grown.astype(np.bool_)
     return out
