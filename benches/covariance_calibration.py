@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from planicp import IcpConfig, Localizer, PlanMap, PlanRaster, synthetic
-from planicp.default_plan import load_default_plan
+from planicp import IcpConfig, Localizer, PlanMap, PlanRaster, sim
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.experiment import ExperimentConfig, run_experiment
 
 CHI2_3_95 = 7.8147
@@ -52,7 +52,7 @@ def main() -> None:
     scales = sorted({1.0, 3.0, 4.0, 5.0, default_scale})
     plans = {"office plan (shipped)": load_default_plan()}
     for layout in ("office", "hall", "diagonal"):
-        floor = synthetic.generate_floor(11, layout)
+        floor = sim.generate_floor(11, layout)
         raster = PlanRaster(floor.walls[::-1], floor.resolution, (floor.origin[0], floor.origin[1], 0.0))
         plans[f"generated {layout}"] = PlanMap.from_raster(raster)
     print(f"{'plan':24s} {'scale':>5s} {'estimates':>9s} {'mean NEES':>9s} {'median':>7s} {'< 7.81':>7s}")

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planicp import FusionRule, IcpConfig, Localizer
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, run_experiment
 from planicp.sim.world import Furnishing

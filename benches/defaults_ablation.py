@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Which ICP defaults, and why: each design choice switched off in turn, on generated floors.
 
-For every layout of `planicp.synthetic` (office, hall, diagonal) and several seeds, random poses
+For every layout of `planicp.sim` (office, hall, diagonal) and several seeds, random poses
 in free space are scanned (1080 beams, 1.5 cm noise, furniture not in the plan), the pose is
 perturbed by --offset m and --offset-deg degrees, and `planicp.localize` recovers it under each
 variant. Success = error < 5 cm and < 0.5 deg. Timings are medians from this run only: compare
@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 import planicp
-from planicp import synthetic
+from planicp import sim
 
 VARIANTS: dict[str, dict[str, object]] = {
     "default": {},
@@ -46,16 +46,16 @@ def main() -> None:
     base = planicp.IcpConfig(max_correspondence_distance=args.max_correspondence_distance)
     configs = {name: base.replace(**changes) for name, changes in VARIANTS.items()}
     rows = []
-    for layout in synthetic.LAYOUTS:
+    for layout in sim.LAYOUTS:
         stats = {name: ([], [], []) for name in configs}  # ok, iterations, seconds
         for seed in range(args.seeds):
-            floor = synthetic.generate_floor(seed, layout)
+            floor = sim.generate_floor(seed, layout)
             plan = planicp.PlanMap.from_points(floor.wall_points())
             rng = np.random.default_rng(1000 + seed)
             for _ in range(args.poses):
                 truth = floor.sample_pose(rng, clearance=0.6)
-                scan, _ = synthetic.simulate_scan(floor, truth, rng)
-                guess = synthetic.perturb_pose(truth, rng, args.offset, math.radians(args.offset_deg))
+                scan, _ = sim.simulate_scan(floor, truth, rng)
+                guess = sim.perturb_pose(truth, rng, args.offset, math.radians(args.offset_deg))
                 # Untimed: the first alignment at a new pose reads the plan's index cold, and
                 # would charge that to whichever variant comes first (0.48 against 0.33 ms).
                 planicp.localize(scan, plan, guess, base)

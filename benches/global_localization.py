@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 import planicp
-from planicp import PlanMap, read_ros_map, scan_to_points, synthetic
+from planicp import PlanMap, read_ros_map, scan_to_points, sim
 from planicp._core import OccupancyGrid
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 FOV = math.radians(270.0)
@@ -42,22 +42,22 @@ BEAMS = 1081
 RANGE_MAX = 30.0
 
 
-def floor_from_plan(plan: PlanMap) -> synthetic.Floor:
+def floor_from_plan(plan: PlanMap) -> sim.Floor:
     """The plan's own raster as a floor (rows growing with +y), closed by a frame (not in the plan)."""
     assert plan.raster is not None
     walls = np.pad(plan.raster.walls[::-1], 3, constant_values=False)
     frame = np.pad(np.zeros_like(plan.raster.walls), 3, constant_values=True)
     res = plan.raster.resolution
     ox, oy, _ = plan.raster.origin
-    return synthetic.Floor(walls, frame, res, (ox - 3 * res, oy - 3 * res))
+    return sim.Floor(walls, frame, res, (ox - 3 * res, oy - 3 * res))
 
 
-def floor_from_ros_map(yaml_path: Path) -> tuple[synthetic.Floor, PlanMap]:
+def floor_from_ros_map(yaml_path: Path) -> tuple[sim.Floor, PlanMap]:
     """Occupied cells are walls (in the plan); unknown cells block beams but are not in the plan."""
     ros = read_ros_map(yaml_path)
     up = np.pad(ros.occupancy[::-1], 3, constant_values=-1)
     corner = (ros.origin[0] - 3 * ros.resolution, ros.origin[1] - 3 * ros.resolution)
-    return synthetic.Floor(up == 100, up == -1, ros.resolution, corner), PlanMap.from_ros_map(yaml_path, cache=False)
+    return sim.Floor(up == 100, up == -1, ros.resolution, corner), PlanMap.from_ros_map(yaml_path, cache=False)
 
 
 def simulate(grid: OccupancyGrid, pose: tuple[float, float, float], seed: int) -> np.ndarray:
@@ -67,7 +67,7 @@ def simulate(grid: OccupancyGrid, pose: tuple[float, float, float], seed: int) -
     return scan_to_points(ranges, -FOV / 2, inc, 0.05, RANGE_MAX)
 
 
-def draw_pose(floor: synthetic.Floor, grid: OccupancyGrid, plan: PlanMap, rng: np.random.Generator,
+def draw_pose(floor: sim.Floor, grid: OccupancyGrid, plan: PlanMap, rng: np.random.Generator,
               seed: int) -> tuple[tuple[float, float, float], np.ndarray, int]:
     """A random free pose (0.4 m clearance) inside the mapped building, its scan, and how many draws
     were rejected: a draw whose scan the plan explains poorly even at the true pose (ICP from the
@@ -81,7 +81,7 @@ def draw_pose(floor: synthetic.Floor, grid: OccupancyGrid, plan: PlanMap, rng: n
     raise RuntimeError("no pose inside the mapped building")
 
 
-def evaluate(floor: synthetic.Floor, plan: PlanMap, poses: int, seed: int, tol_m: float, tol_rad: float,
+def evaluate(floor: sim.Floor, plan: PlanMap, poses: int, seed: int, tol_m: float, tol_rad: float,
              config: planicp.RelocalizationConfig) -> dict[str, float]:
     grid = OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
     rng = np.random.default_rng(seed)
@@ -136,7 +136,7 @@ def main() -> None:
     parser.add_argument("--no-willow", action="store_true", help="skip the 54 x 59 m Willow Garage floor")
     args = parser.parse_args()
     default = load_default_plan()
-    plans: dict[str, tuple[synthetic.Floor, PlanMap]] = {
+    plans: dict[str, tuple[sim.Floor, PlanMap]] = {
         "default office 30 x 20 m (0.05 m)": (floor_from_plan(default), default),
         "nav2 depot (0.05 m)": floor_from_ros_map(DATA / "depot.yaml"),
     }

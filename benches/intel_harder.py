@@ -7,7 +7,7 @@
 small_gicp, Open3D and KISS-ICP, after the running interpreter's own packages, so the planicp
 under test is the one installed in the running venv. `--no-mrpt` skips pf-localization.)
 
-Inputs, exactly as `planicp.log_evaluation.evaluate_log` builds them (seed 0): the plan drawn at
+Inputs, exactly as `planicp.evaluation.log_evaluation.evaluate_log` builds them (seed 0): the plan drawn at
 5 cm from the even-numbered scans of `intel-corrected.log.gz` at their reference poses, the
 odd-numbered scans tracked from the first odd scan's reference pose with odometry synthesised by
 `synthesise_odometry(times, reference, OdometryDrift(), default_rng(seed))`. Then four variants:
@@ -86,7 +86,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def evaluation_inputs(log_path: Path, seed: int) -> tuple[Any, list[Any]]:
     """(plan, odd frames with synthetic odometry) as `evaluate_log` builds them."""
     from planicp.io import open_log
-    from planicp.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+    from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
 
     usable = [f for f in open_log(log_path) if f.reference is not None]
     even, odd = usable[0::2], usable[1::2]
@@ -172,7 +172,7 @@ def make_variants(frames: list[Any], windows: list[dict[str, Any]], errors: list
 
 
 def score(estimate: NDArray[np.float64], frames: list[Any], seconds: float | None) -> dict[str, Any]:
-    from planicp.trajectory_metrics import error_summary, pose_errors
+    from planicp.evaluation.trajectory_metrics import error_summary, pose_errors
 
     reference = np.array([f.reference for f in frames], dtype=np.float64)
     out: dict[str, Any] = dict(error_summary(estimate, reference))
@@ -190,7 +190,7 @@ def odometry_alone(frames: list[Any]) -> NDArray[np.float64]:
 
 
 def run_planicp(frames: list[Any], plan: Any) -> tuple[NDArray[np.float64], float, dict[str, Any]]:
-    from planicp.log_replay import track_log
+    from planicp.evaluation.log_replay import track_log
 
     tracked = track_log(frames, plan)
     extra = {"accepted_share": float(tracked.accepted.mean())}

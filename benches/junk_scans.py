@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planicp import IcpConfig
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.experiment import ExperimentConfig, Recording, replay, run_experiment
 
 

@@ -25,7 +25,7 @@ import numpy as np
 
 import planicp
 from planicp import IcpConfig, Localizer, scan_to_points
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.experiment import ExperimentConfig, run_experiment
 
 

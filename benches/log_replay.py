@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from planicp.default_plan import default_plan_path, load_default_plan
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.se2 import compose
 from planicp.sim.experiment import ExperimentConfig, LidarModel, run_experiment
 

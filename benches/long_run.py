@@ -26,7 +26,7 @@ import numpy as np
 
 import planicp
 from planicp import Localizer, _core, se2
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 
 BEAMS = 360
 

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planicp.io import ScanFrame
-from planicp.plan_map import PlanMap
+from planicp.plans.plan_map import PlanMap
 from planicp.se2 import compose
 
 TOOLS = ("pf-localization", "carmen2rawlog", "ros-map-yaml2mrpt")

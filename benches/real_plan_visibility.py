@@ -21,32 +21,32 @@ from pathlib import Path
 import numpy as np
 
 import planicp
-from planicp import PlanMap, read_ros_map, synthetic
+from planicp import PlanMap, read_ros_map, sim
 
 DATA = Path(__file__).resolve().parents[1] / "tests" / "data"
 
 
-def floor_from_map(yaml_path: Path) -> tuple[synthetic.Floor, PlanMap]:
+def floor_from_map(yaml_path: Path) -> tuple[sim.Floor, PlanMap]:
     ros = read_ros_map(yaml_path)
     up = np.pad(ros.occupancy[::-1], 3, constant_values=-1)
     corner = (ros.origin[0] - 3 * ros.resolution, ros.origin[1] - 3 * ros.resolution)
-    return synthetic.Floor(up == 100, up == -1, ros.resolution, corner), PlanMap.from_ros_map(yaml_path, cache=False)
+    return sim.Floor(up == 100, up == -1, ros.resolution, corner), PlanMap.from_ros_map(yaml_path, cache=False)
 
 
-def floor_from_image(path: Path, resolution: float) -> tuple[synthetic.Floor, PlanMap]:
+def floor_from_image(path: Path, resolution: float) -> tuple[sim.Floor, PlanMap]:
     plan = PlanMap.from_image(path, resolution, cache=False)
     assert plan.raster is not None
     up = np.pad(plan.raster.walls[::-1], 3, constant_values=False)
     frame = np.pad(np.zeros_like(plan.raster.walls), 3, constant_values=True)  # closes the image's edges
-    return synthetic.Floor(up, frame, resolution, (-3 * resolution, -3 * resolution)), plan
+    return sim.Floor(up, frame, resolution, (-3 * resolution, -3 * resolution)), plan
 
 
-def floor_from_house_expo(path: Path, resolution: float = 0.05) -> tuple[synthetic.Floor, PlanMap]:
+def floor_from_house_expo(path: Path, resolution: float = 0.05) -> tuple[sim.Floor, PlanMap]:
     """The HouseExpo outline (free space) rendered at `resolution` with 0.15 m walls around it; the
     plan is that rendering (both wall faces), so that plan and simulated building agree exactly."""
     import cv2
 
-    segments, (xmin, ymin, xmax, ymax) = planicp.vector_plan.house_expo_segments(path)
+    segments, (xmin, ymin, xmax, ymax) = planicp.plans.vector_plan.house_expo_segments(path)
     margin = 1.0
     cols = int(math.ceil((xmax - xmin + 2 * margin) / resolution))
     rows = int(math.ceil((ymax - ymin + 2 * margin) / resolution))
@@ -59,10 +59,10 @@ def floor_from_house_expo(path: Path, resolution: float = 0.05) -> tuple[synthet
     frame = np.ones_like(walls)
     frame[3:-3, 3:-3] = False
     plan = PlanMap.from_raster(planicp.PlanRaster(walls[::-1], resolution, (corner[0], corner[1], 0.0)))
-    return synthetic.Floor(walls, frame, resolution, corner), plan
+    return sim.Floor(walls, frame, resolution, corner), plan
 
 
-def people(floor: synthetic.Floor, rng: np.random.Generator, count: int, robot: tuple[float, ...]) -> np.ndarray:
+def people(floor: sim.Floor, rng: np.random.Generator, count: int, robot: tuple[float, ...]) -> np.ndarray:
     """`count` discs in free space, none within 1 m of the robot."""
     discs: list[tuple[float, float, float]] = []
     while len(discs) < count:
@@ -105,8 +105,8 @@ def main() -> None:
         ms = {k: [] for k in configs}
         for _ in range(args.poses):
             truth = floor.sample_pose(rng, clearance=0.6)
-            scan, _ = synthetic.simulate_scan(floor, truth, rng, dynamic_discs=people(floor, rng, args.people, truth))
-            guess = synthetic.perturb_pose(truth, rng, 0.2, math.radians(3.0))
+            scan, _ = sim.simulate_scan(floor, truth, rng, dynamic_discs=people(floor, rng, args.people, truth))
+            guess = sim.perturb_pose(truth, rng, 0.2, math.radians(3.0))
             for key, config in configs.items():
                 t0 = time.perf_counter()
                 result = planicp.localize(scan, plan, guess, config)

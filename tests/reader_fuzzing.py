@@ -97,11 +97,11 @@ Reading time grows with the size (a CARMEN log takes about 1.5 s a MB here): a l
 measure the machine, not the reader."""
 
 SCALED_BUDGETS: dict[tuple[str, str], int] = {
-    ("planicp.image_files", "MAX_IMAGE_PIXELS"): 2_000_000,
-    ("planicp.plan_raster", "MAX_IMAGE_PIXELS"): 2_000_000,
-    ("planicp.vector_plan", "_MAX_SAMPLES"): 200_000,
-    ("planicp.vector_plan", "MAX_ARC_POINTS"): 20_000,
-    ("planicp.plan_map", "VISIBILITY_RASTER_CELLS"): 4_000_000,
+    ("planicp.plans.image_files", "MAX_IMAGE_PIXELS"): 2_000_000,
+    ("planicp.plans.plan_raster", "MAX_IMAGE_PIXELS"): 2_000_000,
+    ("planicp.plans.vector_plan", "_MAX_SAMPLES"): 200_000,
+    ("planicp.plans.vector_plan", "MAX_ARC_POINTS"): 20_000,
+    ("planicp.plans.plan_map", "VISIBILITY_RASTER_CELLS"): 4_000_000,
     ("planicp.io.text_source", "MAX_EXPANSION"): 1,
     ("planicp.io.text_source", "EXPANSION_FLOOR"): 1 << 20,
 }

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from planicp import synthetic
-from planicp.default_plan import default_plan_path, load_default_plan
+from planicp import sim as synthetic
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 
 
 def test_default_plan_is_installed_and_loads() -> None:

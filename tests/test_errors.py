@@ -744,7 +744,7 @@ def test_a_search_region_larger_than_the_plan_is_clipped_to_it() -> None:
         import numpy as np
         import planicp
         from planicp import SearchRegion
-        from planicp.default_plan import load_default_plan
+        from planicp.plans.default_plan import load_default_plan
         from planicp.sim.experiment import ExperimentConfig, run_experiment
         plan = load_default_plan()
         recording, _ = run_experiment(plan, ExperimentConfig(duration_s=1.0, seed=2))
@@ -762,7 +762,7 @@ def test_a_recovery_with_a_huge_local_radius_does_not_abort() -> None:
         import numpy as np
         import planicp
         from planicp import Localizer, RecoveryConfig
-        from planicp.default_plan import load_default_plan
+        from planicp.plans.default_plan import load_default_plan
         from planicp.se2 import compose
         from planicp.sim.experiment import ExperimentConfig, run_experiment
         plan = load_default_plan()
@@ -783,7 +783,7 @@ def test_an_occupancy_grid_too_large_for_memory_is_an_error() -> None:
     done = run_isolated("""
         import planicp
         from planicp import EnhancedOccupancyGrid
-        from planicp.default_plan import load_default_plan
+        from planicp.plans.default_plan import load_default_plan
         grid = EnhancedOccupancyGrid(load_default_plan(), max_cells=2**40, max_range=1e4)
         try:
             grid.integrate([[3000.0, 3000.0]], (5.0, 10.0, 0.0))

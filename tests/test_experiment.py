@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planicp import EnhancedOccupancyGrid, PlanMap, PlanRaster, compare_grids, synthetic
+from planicp import EnhancedOccupancyGrid, PlanMap, PlanRaster, compare_grids
+from planicp import sim as synthetic
 from planicp.cli import main as cli_main
-from planicp.default_plan import load_default_plan
-from planicp.plan_loading import load_plan
+from planicp.plans.default_plan import load_default_plan
+from planicp.plans.plan_loading import load_plan
 from planicp.sim.experiment import ExperimentConfig, LidarModel, replay, run_experiment
 from planicp.tracking.icp_config import IcpConfig
 

@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from planicp import PlanMap, figures
+from planicp import PlanMap
+
+from planicp.evaluation import figures
 
 
 @pytest.fixture(scope="module")

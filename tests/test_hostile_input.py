@@ -18,9 +18,9 @@ import carmen_excerpt
 from planicp import EnhancedOccupancyGrid, PlanMap
 from planicp._core import PlanicpError
 from planicp.cli import main as cli_main
-from planicp.default_plan import default_plan_path, load_default_plan
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.io import read_carmen
-from planicp.log_evaluation import plan_from_scans
+from planicp.evaluation.log_evaluation import plan_from_scans
 from planicp._validation import brief
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
 from planicp.sweep import StudyError, load_study
@@ -116,7 +116,7 @@ def test_a_start_covariance_of_a_million_kilometres_keeps_the_covariance_positiv
     """`initial_covariance=diag(1e12, 1e12, 10)`: the short Kalman form (I - K) P cancelled to an x/y
     variance of exactly 0 and a negative eigenvalue on the first accepted estimate."""
     from planicp import Localizer
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import ExperimentConfig, run_experiment
 
     plan = load_default_plan()
@@ -168,7 +168,7 @@ def test_planicp_plan_replaces_a_symlink_in_its_output_folder_instead_of_followi
 
 
 def _plan_image(tmp_path: Path) -> Path:
-    from planicp import synthetic
+    from planicp import sim as synthetic
 
     path = tmp_path / "plan.png"
     cv2.imwrite(str(path), synthetic.generate_floor(3, "office", width=20.0, height=12.0, rooms=4).to_image())
@@ -228,7 +228,7 @@ def test_a_cache_folder_that_cannot_be_made_is_skipped_with_a_warning(tmp_path: 
 
 @pytest.mark.parametrize("suffix", [".png", ".jpg", ".bmp", ".pgm", ".ppm", ".tif"])
 def test_image_dimensions_come_from_the_header(tmp_path: Path, suffix: str) -> None:
-    from planicp.image_files import image_dimensions
+    from planicp.plans.image_files import image_dimensions
 
     path = tmp_path / f"a{suffix}"
     channels = (37, 53, 3) if suffix == ".ppm" else (37, 53)
@@ -265,7 +265,7 @@ def test_a_sparse_file_claiming_gigabytes_is_refused_before_it_is_read(tmp_path:
 
 
 def test_colour_images_convert_to_grey_as_the_mean_of_their_channels(tmp_path: Path) -> None:
-    from planicp.plan_raster import load_gray
+    from planicp.plans.plan_raster import load_gray
 
     rng = np.random.default_rng(1)
     rgba = rng.integers(0, 256, (300, 200, 4), dtype=np.uint8)
@@ -307,7 +307,7 @@ def test_a_scan_of_identical_points_is_refused_the_same_way_on_every_update() ->
     raised from a search ("1 usable points") and flipped `lost`. Now such a scan is never aligned:
     the prediction stands, on every update, and no stage raises."""
     from planicp import Localizer
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import ExperimentConfig, run_experiment
 
     plan = load_default_plan()
@@ -331,7 +331,7 @@ def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anythi
     """EnhancedOccupancyGrid(office, resolution=0.001) took 3 GB and 20 s before its error (the
     walls' samples, 2500 per wall pixel), and 0.0005 raised MemoryError."""
     from planicp import EnhancedOccupancyGrid
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
 
     plan = load_default_plan()
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -345,7 +345,7 @@ def test_dxf_arcs_of_cad_float_noise_and_of_absurd_radius_give_a_plan_or_one_cle
     """A bulge of 1e-15 (ordinary CAD float noise) and a CIRCLE of radius 1e17 gave
     ZeroDivisionError from the CLI; a CIRCLE of radius 1e14 took 4.9 GB."""
     ezdxf = pytest.importorskip("ezdxf")
-    from planicp.vector_plan import dxf_segments
+    from planicp.plans.vector_plan import dxf_segments
 
     doc = ezdxf.new()
     msp = doc.modelspace()
@@ -728,7 +728,7 @@ def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_na
                                          r"raster of 2\.91e\+09 cells at 0\.03 m \(limit 268435456\)"):
         PlanMap.from_house_expo(tmp_path / "h.json")
     assert _peak_growth_kib(before) < 50_000
-    from planicp import vector_plan
+    from planicp.plans import vector_plan
 
     monkeypatch.setattr(vector_plan, "_MAX_SAMPLES", 1000)
     (tmp_path / "h.json").write_text(json.dumps({"verts": [[0, 0], [30, 0], [30, 20]], "bbox": {"min": [0, 0], "max": [30, 20]}}))

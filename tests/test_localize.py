@@ -11,7 +11,7 @@ import pytest
 
 import planicp
 from planicp import IcpConfig, IcpResult, PlanMap, localize, scan_to_points, se2
-from planicp import synthetic as syn
+from planicp import sim as syn
 from geometry_checks import nearest_distance
 
 DEG = math.pi / 180.0

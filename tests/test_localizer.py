@@ -12,7 +12,7 @@ import pytest
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
-from planicp import synthetic as syn
+from planicp import sim as syn
 
 DEG = math.pi / 180.0
 Pose = tuple[float, float, float]
@@ -315,7 +315,7 @@ def test_a_scan_turned_by_a_right_angle_does_not_move_the_pose() -> None:
     next, sound scan does not confirm the place and the pose stays with the clean run's."""
     import dataclasses
 
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import ExperimentConfig, replay, run_experiment
 
     plan = load_default_plan()
@@ -379,7 +379,7 @@ def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> No
     the truth) and was adopted; the search now refuses places outside the prediction's covariance
     (the fusion's 99.9 % chi-square bound). The scan is scan 346 of the sample sweep's run
     ea5715a8fb28ab6c (docs/sweep.md, "Studies at scale")."""
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import run_experiment
     from planicp.sweep.runs import expand_runs
     from planicp.sweep.study import Study

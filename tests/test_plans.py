@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 
 import planicp
-from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels, synthetic
+from planicp import PlanMap, PlanRaster, read_ros_map, resolution_from_pixels
+from planicp import sim as synthetic
 from planicp.cli import main as cli_main
-from planicp.plan_raster import wall_mask
-from planicp.ros_map import write_ros_map
+from planicp.plans.plan_raster import wall_mask
+from planicp.plans.ros_map import write_ros_map
 
 DATA = Path(__file__).parent / "data"
 
@@ -353,7 +354,7 @@ def test_free_polygon_raster_walls_the_outline_and_fills_notches() -> None:
     plan = PlanMap.from_raster(raster)
     outline = np.array(verts, float)
     segments = np.stack([outline, np.roll(outline, -1, axis=0)], axis=1)
-    sampled = planicp.vector_plan.sample_segments(segments, 0.01)
+    sampled = planicp.plans.vector_plan.sample_segments(segments, 0.01)
     from scipy.spatial import cKDTree
 
     # every inner wall surface point lies on the outline (within a pixel), and the outline is covered
@@ -385,7 +386,7 @@ def test_free_polygon_raster_walls_the_outline_and_fills_notches() -> None:
 def test_house_expo_raster_route_and_folder(tmp_path: Path) -> None:
     """`load_plan(house.json, resolution=r)` gives a plan with a raster (what the simulation needs)
     whose wall surfaces follow the outline; a folder lists its HouseExpo files."""
-    from planicp.plan_loading import house_expo_files, load_plan
+    from planicp.plans.plan_loading import house_expo_files, load_plan
 
     source = DATA / "house_expo_room_0000.json"
     points_only = load_plan(source)
@@ -427,7 +428,7 @@ def test_other_image_formats(floor: synthetic.Floor, tmp_path: Path, suffix: str
 def test_overlay_figure(floor: synthetic.Floor) -> None:
     from matplotlib.figure import Figure
 
-    from planicp.plan_figure import plot_plan_overlay
+    from planicp.plans.plan_figure import plot_plan_overlay
 
     plan = PlanMap.from_image(floor.to_image(), floor.resolution, cache=False)
     fig = plot_plan_overlay(plan, title="office")
@@ -453,7 +454,7 @@ def test_pixel_centres_for_maps_whose_pixels_are_the_surfaces() -> None:
 
 
 def test_auto_reads_walls_one_or_two_cells_thick_as_surfaces() -> None:
-    from planicp.plan_raster import thin_wall_pixels
+    from planicp.plans.plan_raster import thin_wall_pixels
 
     walls = np.zeros((12, 12), dtype=bool)
     walls[1, 1:11] = True  # one pixel thick

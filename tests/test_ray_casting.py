@@ -1,5 +1,5 @@
-"""Tests of the native simulated LIDAR, planicp._core.OccupancyGrid: agreement with the Python reference
-caster planicp.synthetic.simulate_ranges, noise and dropouts, seeds, and the errors of bad input."""
+"""Tests of the native simulated LIDAR, planicp._core.OccupancyGrid: agreement with the numpy reference
+caster of numpy_ray_caster.py, noise and dropouts, seeds, and the errors of bad input."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from planicp import synthetic
+import numpy_ray_caster
+from planicp import sim as synthetic
 from planicp._core import OccupancyGrid, PlanicpError
 
 EXACT = 1e-9  # metres
@@ -51,7 +52,7 @@ def _agreement(ref: NDArray[np.float64], nat: NDArray[np.float64]) -> tuple[int,
 
 @pytest.mark.parametrize("layout", synthetic.LAYOUTS)
 def test_matches_synthetic_reference(layout: str) -> None:
-    """Noise-free native ranges equal synthetic.simulate_ranges on generated floors: random poses (some
+    """Noise-free native ranges equal numpy_ray_caster.simulate_ranges on generated floors: random poses (some
     snapped to cell corners, some with yaw 0, so beams run along grid lines and through corners), 270 and
     360 degree scans, with and without people (discs)."""
     floor = _floor(layout)
@@ -76,7 +77,7 @@ def test_matches_synthetic_reference(layout: str) -> None:
         kwargs: dict[str, Any] = dict(
             beams=beams, fov=fov, max_range=30.0, min_range=0.1, range_sigma=0.0, dynamic_discs=discs
         )
-        ref, angle_min, angle_increment = synthetic.simulate_ranges(floor, (x, y, yaw), rng, **kwargs)
+        ref, angle_min, angle_increment = numpy_ray_caster.simulate_ranges(floor, (x, y, yaw), rng, **kwargs)
         nat = grid.cast((x, y, yaw), angle_min, angle_increment, beams, 0.1, 30.0, discs=discs)
         assert nat.shape == (beams,) and nat.dtype == np.float64
         a, n, w = _agreement(ref, nat)
@@ -87,6 +88,31 @@ def test_matches_synthetic_reference(layout: str) -> None:
     # agree on every beam (the margin above is for a numpy whose sin/cos differ in the last bit).
     assert agree == total
 
+
+
+@pytest.mark.parametrize("layout", synthetic.LAYOUTS)
+def test_package_scans_match_the_numpy_reference(layout: str) -> None:
+    """planicp.sim.simulate_scan and simulate_ranges (the native caster, noise drawn in Python) give the
+    numpy reference's ranges, points and clutter flags bit for bit, with noise, dropouts and people,
+    from random poses, poses on cell corners and yaw 0."""
+    floor = _floor(layout)
+    rng = np.random.default_rng(23)
+    ox, oy = floor.origin
+    res = floor.resolution
+    for k in range(20):
+        x, y, yaw = floor.sample_pose(rng, clearance=0.0 if k % 3 else 0.3)
+        if k % 4 == 0:
+            x, y, yaw = ox + round((x - ox) / res) * res, oy + round((y - oy) / res) * res, 0.0
+        discs = np.column_stack([np.array([x, y]) + rng.uniform(-3.0, 3.0, (4, 2)), rng.uniform(0.1, 0.4, 4)])
+        kwargs: dict[str, Any] = dict(beams=1081, fov=FOV, max_range=12.0, range_sigma=0.01, dropout=0.05,
+                                      dynamic_discs=discs)
+        got = synthetic.simulate_ranges(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
+        want = numpy_ray_caster.simulate_ranges(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
+        assert np.array_equal(got[0], want[0]) and got[1:] == want[1:]
+        points, clutter = synthetic.simulate_scan(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
+        ref_points, ref_clutter = numpy_ray_caster.simulate_scan(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
+        assert np.array_equal(points, ref_points) and np.array_equal(clutter, ref_clutter)
+        assert 0 < clutter.sum() < clutter.size
 
 def test_rows_grow_with_y_and_origin_is_the_lower_left_corner() -> None:
     cells = np.zeros((40, 30), dtype=bool)

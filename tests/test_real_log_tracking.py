@@ -19,8 +19,8 @@ import pytest
 
 import planicp
 from planicp.io import ScanFrame, read_g2o
-from planicp.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
-from planicp.ros_map import write_ros_map
+from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+from planicp.plans.ros_map import write_ros_map
 from planicp.se2 import compose
 
 KILLIAN = Path(__file__).parent / "data" / "killian-excerpt.g2o"

@@ -40,7 +40,7 @@ from planicp import (
     synthetic,
 )
 from planicp._core import OccupancyGrid
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.se2 import between
 from planicp.sim.experiment import ExperimentConfig, run_experiment
 

@@ -25,7 +25,7 @@ from planicp import (
     RecoveryConfig,
     localize,
 )
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp import se2
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.fusion_rule import fuse_with_prediction
@@ -479,7 +479,7 @@ def test_clutter_is_not_mistaken_for_a_kidnap() -> None:
     """On a generated floor with diagonal walls the robot crosses places where the plan explains
     only a fifth of the scans. Before the continuity check the localizer declared itself lost there
     and adopted a wrong place 2-6 m away that explained more of the clutter."""
-    from planicp import synthetic
+    from planicp import sim as synthetic
 
     floor = synthetic.generate_floor(11, "diagonal")
     plan = PlanMap.from_raster(PlanRaster(floor.walls[::-1], floor.resolution, (floor.origin[0], floor.origin[1], 0.0)))

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from planicp import _core
-from planicp.default_plan import load_default_plan
-from planicp.plan_map import PlanMap
+from planicp.plans.default_plan import load_default_plan
+from planicp.plans.plan_map import PlanMap
 from planicp.ros import odometry_buffer
 from planicp.ros import (
     NodeSettings,

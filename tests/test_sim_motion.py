@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from planicp import se2, synthetic
+from planicp import se2
+from planicp import sim as synthetic
 from planicp.sim import (
     DiffDriveLimits,
     DiffDriveState,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from planicp import PlanRaster
-from planicp.default_plan import load_default_plan
+from planicp.plans.default_plan import load_default_plan
 from planicp.sim.world import Furnishing, World
 
 

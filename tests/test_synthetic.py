@@ -1,40 +1,21 @@
-"""Tests of planicp.synthetic: floor generation, wall points, pose sampling and the exact LIDAR ray caster."""
+"""Tests of the synthetic floors and LIDAR of planicp.sim: floor generation, wall points, pose sampling and ray casting."""
 
 from __future__ import annotations
 
 import functools
-import importlib.util
 import math
 import pickle
 import statistics
-import sys
 import time
-from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 import pytest
 
+from planicp import sim as syn
 
-def _load_synthetic() -> ModuleType:
-    try:
-        from planicp import synthetic as module  # installed package
-
-        return module
-    except ImportError:
-        path = Path(__file__).resolve().parents[1] / "python" / "planicp" / "synthetic.py"
-        spec = importlib.util.spec_from_file_location("planicp_synthetic_standalone", path)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[spec.name] = module  # dataclasses resolve annotations through sys.modules
-        spec.loader.exec_module(module)
-        return module
-
-
-syn = _load_synthetic()
 Floor = syn.Floor
-FloorT = Any  # synthetic.Floor (the module is loaded dynamically)
+FloorT = Any  # planicp.sim.Floor
 
 LAYOUTS = ("office", "hall", "diagonal")
 EXACT = 1e-9  # metres

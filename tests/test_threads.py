@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from planicp import IcpConfig, IcpResult, Localizer, PlanMap, localize
-from planicp import synthetic as syn
+from planicp import sim as syn
 
 DEG = math.pi / 180.0
 
@@ -166,7 +166,7 @@ def test_an_occupancy_grid_shared_by_threads_integrates_every_scan() -> None:
     from concurrent.futures import ThreadPoolExecutor
 
     from planicp import EnhancedOccupancyGrid
-    from planicp.default_plan import load_default_plan
+    from planicp.plans.default_plan import load_default_plan
     from planicp.sim.experiment import ExperimentConfig, run_experiment
 
     plan = load_default_plan()

@@ -1,4 +1,4 @@
-"""Vector floor plans (`planicp.vector_plan`): sampling segments into wall points, the HouseExpo
+"""Vector floor plans (`planicp.plans.vector_plan`): sampling segments into wall points, the HouseExpo
 outline reader and the DXF reader, checked against geometry known in closed form, down to a scan
 localized against a plan read from a DXF file."""
 
@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from numpy.typing import NDArray
 
 import planicp
-from planicp.vector_plan import dxf_segments, house_expo_segments, sample_segments
+from planicp.plans.vector_plan import dxf_segments, house_expo_segments, sample_segments
 from geometry_checks import nearest_distance
 
 DATA = Path(__file__).parent / "data"

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from . import __version__, synthetic
+from . import __version__
 from .io.atomic_files import write_atomically
 
 
@@ -30,8 +30,8 @@ def _demo(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .plan_figure import plot_plan_overlay
-    from .plan_loading import load_plan
+    from .plans.plan_figure import plot_plan_overlay
+    from .plans.plan_loading import load_plan
 
     source = Path(args.image)
     plan = load_plan(source, resolution=args.resolution, origin=args.origin, cache=not args.no_cache,
@@ -100,11 +100,11 @@ def _icp_config(args: argparse.Namespace) -> Any:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-    from .log_replay import track_log
-    from .plan_loading import load_plan
+    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+    from .evaluation.log_replay import track_log
+    from .plans.plan_loading import load_plan
     from .progress import progress_bar
-    from .replay_outputs import print_summary, write_outputs
+    from .evaluation.replay_outputs import print_summary, write_outputs
 
     plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
     log = _read_log(args)
@@ -120,9 +120,9 @@ def _replay(args: argparse.Namespace) -> int:
 
 
 def _evaluate_log(args: argparse.Namespace) -> int:
-    from .log_evaluation import evaluate_log
+    from .evaluation.log_evaluation import evaluate_log
     from .progress import progress_bar
-    from .replay_outputs import print_summary, write_outputs
+    from .evaluation.replay_outputs import print_summary, write_outputs
 
     log = _read_log(args)
     evaluation = evaluate_log(log, resolution=args.resolution, min_hits=args.min_hits, odometry=args.odometry,

@@ -27,14 +27,15 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from . import __version__, figures
-from .default_plan import load_default_plan
-from .grid_agreement import compare_grids
+from . import __version__
+from .evaluation import figures
+from .plans.default_plan import load_default_plan
+from .evaluation.grid_agreement import compare_grids
 from .tracking.icp_config import IcpConfig
 from .tracking.localize import localize
-from .plan_figure import plot_plan_overlay
-from .plan_loading import load_plan
-from .plan_map import PlanMap
+from .plans.plan_figure import plot_plan_overlay
+from .plans.plan_loading import load_plan
+from .plans.plan_map import PlanMap
 from .progress import progress_bar
 from .sim.experiment import ExperimentConfig, Recording, replay, run_experiment
 

@@ -21,11 +21,12 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose
-from ..enhanced_occupancy_grid import EnhancedOccupancyGrid, OccupancyGridMessage
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..mapping.occupancy_grid_message import OccupancyGridMessage
 from ..laser_scan import scan_to_points
 from ..tracking.localizer import Localizer
 from ..tracking.localizer import _covariance as validated_covariance
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, matrix_to_pose
 from .message_layout import covariance_from_6x6
 from .node_diagnostics import ERROR, OK, WARN, NodeDiagnostics

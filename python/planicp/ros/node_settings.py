@@ -10,11 +10,11 @@ from typing import Any
 from .._validation import Pose, as_pose, positive, real_number, unknown_fields
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.icp_config import IcpConfig
-from ..plan_loading import load_plan
-from ..plan_map import PlanMap
+from ..plans.plan_loading import load_plan
+from ..plans.plan_map import PlanMap
 
 DEFAULT_PLAN = "default"
-"""The `plan` value that selects the office plan shipped with planicp (`planicp.default_plan`)."""
+"""The `plan` value that selects the office plan shipped with planicp (`planicp.plans.default_plan`)."""
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,7 @@ class NodeSettings:
     Attributes:
         plan: the plan: a map_server YAML (its own resolution and origin), a plan image (needs
             `resolution`, takes `origin`), a HouseExpo JSON or a DXF drawing (see
-            `planicp.plan_loading.load_plan`), or "default" for the plan shipped with planicp.
+            `planicp.plans.plan_loading.load_plan`), or "default" for the plan shipped with planicp.
         resolution: metres per pixel of a plan image (None for the other kinds).
         origin: (x, y, yaw) of a plan image's lower-left corner in the map frame.
         scan_topic, odom_topic: the inputs (`sensor_msgs/LaserScan`, `nav_msgs/Odometry`).
@@ -158,7 +158,7 @@ class NodeSettings:
     def load_plan(self) -> PlanMap:
         """The plan named by `plan` (FileNotFoundError, ValueError: it cannot be read)."""
         if self.plan == DEFAULT_PLAN:
-            from ..default_plan import load_default_plan
+            from ..plans.default_plan import load_default_plan
 
             return load_default_plan()
         return load_plan(self.plan, resolution=self.resolution, origin=self.origin)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import positive
-from ..enhanced_occupancy_grid import OccupancyGridMessage
-from ..plan_map import PlanMap
-from ..plan_raster import PlanRaster
+from ..mapping.occupancy_grid_message import OccupancyGridMessage
+from ..plans.plan_map import PlanMap
+from ..plans.plan_raster import PlanRaster
 
 
 def plan_occupancy_grid(plan: PlanMap, resolution: float = 0.05) -> OccupancyGridMessage:

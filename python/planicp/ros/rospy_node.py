@@ -35,7 +35,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from .._validation import Pose
-from ..enhanced_occupancy_grid import OccupancyGridMessage
+from ..mapping.occupancy_grid_message import OccupancyGridMessage
 from .message_layout import planar_mount, quaternion_to_yaw, yaw_to_quaternion
 from .node_diagnostics import NodeDiagnostics
 from .node_io import PoseOutput

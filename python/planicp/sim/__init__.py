@@ -1,14 +1,26 @@
-"""Robot simulation for experiments: a differential-drive robot touring a synthetic floor, and its odometry.
+"""Simulation: synthetic floors, a simulated LIDAR, and a robot driving through a furnished plan.
 
 Reproduces the thesis set-up: an EtaBot-class differential-drive robot with 100 Hz wheel odometry drives
-through a furnished floor (:mod:`planicp.synthetic`); an error generator adds +5e-5 m and +5e-5 rad to every
-odometry message, so odometry drifts while plan-based localization does not.
+through a furnished floor; an error generator adds +5e-5 m and +5e-5 rad to every odometry message, so
+odometry drifts while plan-based localization does not. Which file holds what:
 
+* :mod:`.floor` -- :class:`Floor`, a raster of walls (the plan) and clutter (what the plan does not show);
+* :mod:`.floor_generation` -- :func:`generate_floor`: seeded furnished floors in the :data:`LAYOUTS`
+  ``"office"``, ``"hall"`` and ``"diagonal"``, drawn on the rasteriser of :mod:`.floor_canvas`;
+* :mod:`.simulated_lidar` -- :func:`simulate_ranges` / :func:`simulate_scan`: LaserScan ranges in a floor
+  (the native ray caster, ``planicp._core.OccupancyGrid``) and :func:`ranges_to_points`;
+* :mod:`.pose_perturbation` -- :func:`perturb_pose`, a guess a given distance and angle off;
+* :mod:`.world` -- :class:`World`: a plan raster furnished with seeded furniture and walking people;
+* :mod:`.crowd` -- people standing around the robot, placed anew for every scan;
 * :mod:`.diff_drive` -- :class:`DiffDriveLimits`, :class:`DiffDriveState`, exact arc integration :func:`step`;
 * :mod:`.route_planner` -- clearance-inflated A* routes (:func:`plan_route`) and random tours (:func:`tour`);
 * :mod:`.waypoint_follower` -- the pure-pursuit :class:`WaypointFollower`;
 * :mod:`.odometry` -- :class:`Odometry` with :class:`OdometryNoise` and the thesis' :class:`ErrorGenerator`;
-* :mod:`.drive` -- :func:`simulate_drive` returning a ground-truth :class:`Trajectory`.
+* :mod:`.drive` -- :func:`simulate_drive` returning a ground-truth :class:`Trajectory`;
+* :mod:`.experiment` -- :func:`run_experiment`: the drive, its scans and odometry fed to a ``Localizer``;
+  :func:`replay` runs the recorded scans through other settings.
+
+``planicp.synthetic`` is this package under the name the floors and the LIDAR had before they moved here.
 
 Frames and units follow REP-103/105: metres, seconds, radians; x forward, y left, yaw counter-clockwise;
 truth poses are T_map_base, odometry poses T_odom_base with the odom frame at the robot's start pose.
@@ -18,23 +30,34 @@ from __future__ import annotations
 
 from .diff_drive import DiffDriveLimits, DiffDriveState, arc_increment, step
 from .drive import Trajectory, simulate_drive
+from .floor import Floor
+from .floor_generation import LAYOUTS, generate_floor
 from .odometry import ErrorGenerator, Odometry, OdometryNoise
+from .pose_perturbation import perturb_pose
 from .route_planner import clearance_distance, plan_route, reachable, tour, traversable
+from .simulated_lidar import ranges_to_points, simulate_ranges, simulate_scan
 from .waypoint_follower import WaypointFollower
 
 __all__ = [
+    "LAYOUTS",
     "DiffDriveLimits",
     "DiffDriveState",
     "ErrorGenerator",
+    "Floor",
     "Odometry",
     "OdometryNoise",
     "Trajectory",
     "WaypointFollower",
     "arc_increment",
     "clearance_distance",
+    "generate_floor",
+    "perturb_pose",
     "plan_route",
+    "ranges_to_points",
     "reachable",
     "simulate_drive",
+    "simulate_ranges",
+    "simulate_scan",
     "step",
     "tour",
     "traversable",

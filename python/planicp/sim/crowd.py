@@ -18,7 +18,7 @@ from .. import _core
 from .._validation import positive, whole_number
 from ..laser_scan import scan_to_points
 from ..se2 import compose
-from ..synthetic import Floor
+from .floor import Floor
 from .experiment import LidarModel, Recording
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import positive, real_number
-from ..synthetic import Floor
+from .floor import Floor
 from .diff_drive import DiffDriveLimits, DiffDriveState, step
 from .route_planner import reachable, tour
 from .waypoint_follower import WaypointFollower
@@ -115,7 +115,7 @@ def simulate_drive(
             or no free position with the clearance on the floor.
     """
     if not isinstance(floor, Floor):
-        raise TypeError(f"floor must be a planicp.synthetic.Floor, got {type(floor).__name__}")
+        raise TypeError(f"floor must be a planicp.sim.Floor, got {type(floor).__name__}")
     if not isinstance(rng, np.random.Generator):
         raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
     duration_s = positive(duration_s, "duration_s", "seconds")

@@ -23,13 +23,13 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
-from ..enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.localizer import Localizer
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .diff_drive import DiffDriveLimits
 from .drive import simulate_drive

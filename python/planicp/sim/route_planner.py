@@ -1,12 +1,12 @@
 """Collision-free routes on a synthetic floor: exact clearance inflation, A*, line-of-sight shortening, tours.
 
-Everything is in the map frame of the :class:`~planicp.synthetic.Floor` (metres). Walls AND clutter are
+Everything is in the map frame of the :class:`~planicp.sim.floor.Floor` (metres). Walls AND clutter are
 obstacles. A cell is *traversable* for a clearance ``c`` when EVERY point of its square is at least ``c``
 metres (Euclidean) from every point of every occupied cell square; the route is a polyline whose every point
 lies in the closure of a traversable cell, so every point of it keeps the clearance exactly (with respect to
 the floor's grid). Cells outside the raster count as free.
 
-Pure numpy plus :mod:`heapq`; no scipy.
+numpy, :mod:`heapq` and OpenCV (distance transform, connected components); no scipy.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import real_number, whole_number
-from ..synthetic import Floor
+from .floor import Floor
 
 __all__ = ["Point", "clearance_distance", "plan_route", "reachable", "tour", "traversable"]
 
@@ -44,33 +44,31 @@ def clearance_distance(occupied: NDArray[np.bool_], resolution: float, max_dista
     cell square, capped at (at least) ``max_distance``.
 
     Cells at integer offset ``(dr, dc)`` are ``resolution * hypot(max(|dr|-1, 0), max(|dc|-1, 0))`` apart, so
-    an occupied cell and its 8 neighbours have gap 0. The transform is exact and separable: a vectorised
-    pass down each column finds the nearest occupied row, then a pass along the rows minimises over the
-    columns within ``ceil(max_distance / resolution) + 1`` cells. Values up to ``max_distance`` are exact;
-    a value above ``max_distance`` only says that the true gap is above ``max_distance`` too.
+    an occupied cell and its 8 neighbours have gap 0: the gap is the distance between cell centres to the
+    occupied cells grown by one cell, which OpenCV's exact Euclidean distance transform gives. Values up to
+    ``max_distance`` are exact; a larger one is the cap ``(ceil(max_distance / resolution) + 2) * resolution``
+    when the true gap is larger still, and only says that the true gap is above ``max_distance``.
 
     Args:
         occupied: ``(rows, cols)`` bool grid (row index growing with +y, as in :class:`Floor`).
         resolution: metres per cell, > 0.
         max_distance: metres, >= 0.
     """
+    import cv2
+
     occ = np.asarray(occupied, dtype=np.bool_)
     if occ.ndim != 2:
         raise ValueError(f"occupied must be a 2-D grid, got shape {occ.shape}")
-    rows, cols = occ.shape
-    k = math.ceil(max_distance / resolution) + 1  # columns to look at on each side
-    idx = np.arange(rows, dtype=np.int64)[:, None]
-    far = rows + k + 2
-    above = np.maximum.accumulate(np.where(occ, idx, -far), axis=0)  # nearest occupied row <= r
-    below = np.minimum.accumulate(np.where(occ, idx, rows + far)[::-1], axis=0)[::-1]  # nearest >= r
-    gap_rows = np.maximum(np.minimum(idx - above, below - idx) - 1, 0).astype(np.float64)
-    gap_rows = np.minimum(gap_rows, float(k + 1))
-    col2 = gap_rows * gap_rows
-    best = col2.copy()
-    for dc in range(1, min(k, cols - 1) + 1):
-        extra = float((dc - 1) * (dc - 1))
-        np.minimum(best[:, dc:], col2[:, :-dc] + extra, out=best[:, dc:])
-        np.minimum(best[:, :-dc], col2[:, dc:] + extra, out=best[:, :-dc])
+    k = math.ceil(max_distance / resolution) + 1
+    cap = float((k + 1) * (k + 1))
+    if not occ.any():
+        best = np.full(occ.shape, cap)
+    else:
+        grown = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT,
+                           borderValue=0)
+        centres = cv2.distanceTransform((grown == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        # The transform's float32 distances are square roots of whole numbers: recover those exactly.
+        best = np.minimum(np.rint(centres.astype(np.float64) ** 2), cap)
     out: NDArray[np.float64] = np.sqrt(best) * resolution
     return out
 
@@ -109,9 +107,10 @@ def reachable(floor: Floor, start_xy: Any, clearance: float) -> NDArray[np.bool_
     free = traversable(floor, clearance)
     cell = _cell_of(floor, _point_arg(start_xy, "start_xy"), "start_xy")
     _require_traversable(free, cell, start_xy, "start_xy", clearance)
-    hops = _bfs_hops(_pad(free), free.shape[1] + 2, _padded_index(cell, free.shape[1]))
-    rows, cols = free.shape
-    out: NDArray[np.bool_] = (hops.reshape(rows + 2, cols + 2)[1:-1, 1:-1] >= 0).copy()
+    import cv2
+
+    _, labels = cv2.connectedComponents(free.astype(np.uint8), connectivity=8)
+    out: NDArray[np.bool_] = labels == labels[cell]
     return out
 
 
@@ -273,23 +272,6 @@ def _padded_index(cell: tuple[int, int], cols: int) -> int:
     return (cell[0] + 1) * (cols + 2) + cell[1] + 1
 
 
-def _bfs_hops(free: NDArray[np.bool_], stride: int, source: int) -> NDArray[np.int64]:
-    """8-connected breadth-first hop counts from ``source`` over the padded flat mask (-1: not reached)."""
-    offsets, _ = _moves(stride)
-    hops = np.full(free.size, -1, dtype=np.int64)
-    hops[source] = 0
-    frontier = np.array([source], dtype=np.int64)
-    depth = 0
-    while frontier.size:
-        depth += 1
-        nb = (frontier[:, None] + offsets[None, :]).ravel()
-        nb = nb[free[nb]]
-        nb = np.unique(nb[hops[nb] < 0])
-        hops[nb] = depth
-        frontier = nb
-    return hops
-
-
 def _cost_to_go(free: NDArray[np.bool_], stride: int, goal: int, start: int) -> NDArray[np.float64]:
     """8-connected path cost (cells; moves cost 1 and sqrt(2)) to ``goal`` over the padded flat mask: exact
     (to 1e-9 cells) for every cell whose cost is at most the start's, ``inf`` or an upper bound above the
@@ -435,7 +417,7 @@ def _dedupe(route: list[Point]) -> list[Point]:
 
 def _floor_arg(floor: Any) -> Floor:
     if not isinstance(floor, Floor):
-        raise TypeError(f"floor must be a planicp.synthetic.Floor, got {type(floor).__name__}")
+        raise TypeError(f"floor must be a planicp.sim.Floor, got {type(floor).__name__}")
     return floor
 
 

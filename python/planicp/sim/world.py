@@ -5,7 +5,7 @@ single-leg tables (a LIDAR at leg height sees only the leg), and people walking 
 discs). Furniture never closes a doorway: an item is placed only if the building's free space stays
 one connected region around it. Everything is drawn from a seeded generator.
 
-Frames: map frame, metres. The world's grid is a `synthetic.Floor` (rows grow with +y).
+Frames: map frame, metres. The world's grid is a `planicp.sim.floor.Floor` (rows grow with +y).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ..plan_raster import PlanRaster
-from ..synthetic import Floor
+from ..plans.plan_raster import PlanRaster
+from .floor import Floor
 
 
 @dataclass(frozen=True)

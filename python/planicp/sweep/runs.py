@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from ..plan_loading import house_expo_files, load_plan
-from ..plan_map import PlanMap
+from ..plans.plan_loading import house_expo_files, load_plan
+from ..plans.plan_map import PlanMap
 from ..sim.experiment import ExperimentConfig
 from ..sim.world import Furnishing
 from ..tracking.icp_config import IcpConfig
@@ -169,7 +169,7 @@ def expand_runs(study: Study, base_dir: str | Path = ".") -> list[RunSpec]:
 def _plan(file: str, resolution: float | None, origin: tuple[float, float, float]) -> PlanMap:
     """A plan, loaded once per worker process (runs on the same plan share it; PlanMap is read-only)."""
     if not file:
-        from ..default_plan import load_default_plan
+        from ..plans.default_plan import load_default_plan
 
         return load_default_plan()
     return load_plan(file, resolution=resolution, origin=origin)

@@ -61,7 +61,7 @@ __all__ = [
 ]
 
 DEFAULT_PLAN = "default"
-"""The plan name that means the office plan shipped with planicp (`planicp.default_plan`)."""
+"""The plan name that means the office plan shipped with planicp (`planicp.plans.default_plan`)."""
 
 FURNITURE_UNIT = Furnishing(people=0.0)
 """Furniture density 1: the demo's cabinets, blocks and tables per 100 m^2 of free floor."""

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, positive, real_number
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import between
 from .icp_config import IcpConfig
 from .localize import localize

@@ -7,7 +7,7 @@ from typing import Any
 
 from .. import _core
 from .._validation import as_pose, as_points
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, as_pose, as_points
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule

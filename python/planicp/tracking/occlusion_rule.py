@@ -22,8 +22,8 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, positive, whole_number
-from ..plan_map import PlanMap
-from ..plan_raster import PlanRaster
+from ..plans.plan_map import PlanMap
+from ..plans.plan_raster import PlanRaster
 from .icp_config import IcpConfig
 
 

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, real_number, whole_number
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .icp_config import IcpConfig
 from .icp_result import IcpResult

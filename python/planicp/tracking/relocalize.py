@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, as_points, positive, real_number, whole_number
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose
-from ..plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 from ..se2 import between, compose
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule

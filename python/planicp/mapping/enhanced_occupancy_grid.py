@@ -40,111 +40,26 @@ plan's own resolution lines up with the plan's pixels.
 
 from __future__ import annotations
 
-import enum
 import math
 import threading
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
-from ._validation import Pose, as_pose, as_points, positive, real_number, whole_number
-from .plan_map import PlanMap
-from .ros_map import write_ros_map
-from .se2 import compose, transform_points
-
-
-class EogState(enum.IntEnum):
-    """Cell states of the enhanced occupancy grid (the codes `states()` returns)."""
-
-    UNKNOWN = 0
-    FREE = 1
-    OCCUPIED = 2
-    ARCHITECTURAL = 3
-
-
-STATE_COLOURS: dict[EogState, tuple[int, int, int]] = {
-    EogState.UNKNOWN: (160, 160, 160),
-    EogState.FREE: (255, 255, 255),
-    EogState.OCCUPIED: (0, 0, 0),
-    EogState.ARCHITECTURAL: (30, 90, 230),
-}
-"""RGB colour of each state (the thesis's table 5.1: grey, white, black, blue)."""
+from .. import _core
+from .._validation import as_pose, as_points, positive, real_number, whole_number
+from ..plans.plan_map import PlanMap
+from ..plans.ros_map import write_ros_map
+from ..se2 import compose, transform_points
+from .eog_state import STATE_COLOURS, EogState
+from .occupancy_grid_message import OccupancyGridMessage
+from .occupancy_model import OccupancyModel
 
 
 def _logit(p: float) -> float:
     return math.log(p / (1.0 - p))
-
-
-def _probability(name: str, value: Any) -> float:
-    v = real_number(value, name)
-    if not 0.0 < v < 1.0:
-        raise ValueError(f"{name} must be a probability strictly between 0 and 1, got {value!r}")
-    return v
-
-
-@dataclass(frozen=True)
-class OccupancyModel:
-    """How scans update a cell and how a cell's probability becomes a state.
-
-    Attributes:
-        p_hit: probability of occupancy after one return ends in a cell (> 0.5).
-        p_miss: probability after one beam passes through a cell (< 0.5).
-        p_min, p_max: clamping bounds, so that a cell can change state after the world changes.
-        free_threshold: a cell is FREE at or below this probability (default: one net miss).
-        occupied_threshold: a cell is OCCUPIED at or above it (default: one net hit).
-        Defaults are OctoMap's sensor model (0.7, 0.4, clamped to [0.12, 0.97]).
-    """
-
-    p_hit: float = 0.7
-    p_miss: float = 0.4
-    p_min: float = 0.12
-    p_max: float = 0.97
-    free_threshold: float = 0.45
-    occupied_threshold: float = 0.55
-
-    def __post_init__(self) -> None:
-        for name in ("p_hit", "p_miss", "p_min", "p_max", "free_threshold", "occupied_threshold"):
-            _probability(name, getattr(self, name))
-        if not self.p_miss < 0.5 < self.p_hit:
-            raise ValueError(f"need p_miss < 0.5 < p_hit, got p_miss={self.p_miss}, p_hit={self.p_hit}")
-        if not self.p_min < 0.5 < self.p_max:
-            raise ValueError(f"need p_min < 0.5 < p_max, got p_min={self.p_min}, p_max={self.p_max}")
-        if not self.free_threshold < self.occupied_threshold:
-            raise ValueError(
-                f"need free_threshold < occupied_threshold, got {self.free_threshold}, {self.occupied_threshold}"
-            )
-
-
-@dataclass(frozen=True)
-class OccupancyGridMessage:
-    """An occupancy grid laid out as `nav_msgs/OccupancyGrid`.
-
-    Attributes:
-        data: (height, width) int8, row 0 at the origin (lowest y): -1 unknown, 0 free, 100
-            occupied (trinary, as map_saver writes and nav2's static layer reads). Flatten it
-            row-major (`data.ravel()`) for the message's `data` field.
-        resolution: metres per cell (`info.resolution`).
-        origin: (x, y, yaw) of the lower-left corner of cell (0, 0) in the map frame
-            (`info.origin`; yaw is always 0 here).
-    """
-
-    data: NDArray[np.int8]
-    resolution: float
-    origin: Pose
-
-    @property
-    def width(self) -> int:
-        """Cells along x (`info.width`)."""
-        return int(self.data.shape[1])
-
-    @property
-    def height(self) -> int:
-        """Cells along y (`info.height`)."""
-        return int(self.data.shape[0])
 
 
 def _finest_resolution(width: float, height: float, max_cells: int) -> float:

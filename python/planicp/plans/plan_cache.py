@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
+from .. import _core
 
 FORMAT = 6
 """Bumped whenever what an entry holds, or how a plan is prepared, changes (5: points thinned when far

@@ -5,8 +5,8 @@ wall segments, an (M, 2, 2) float64 array of [[x0, y0], [x1, y1]] in metres in t
 (REP-103: x right/forward, y up/left), and `sample_segments` turns segments into the wall points
 the localizer aligns scans to::
 
-    segments = planicp.vector_plan.dxf_segments("floor2.dxf", layers=["WALLS"])
-    plan = planicp.PlanMap.from_points(planicp.vector_plan.sample_segments(segments, spacing=0.02))
+    segments = planicp.plans.vector_plan.dxf_segments("floor2.dxf", layers=["WALLS"])
+    plan = planicp.PlanMap.from_points(planicp.plans.vector_plan.sample_segments(segments, spacing=0.02))
 
 Only numpy is needed at import; reading DXF needs ezdxf (``pip install 'planicp[cad]'``).
 """
@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import brief, one_line, positive
+from .._validation import brief, one_line, positive
 
 if TYPE_CHECKING:
     # ezdxf is optional: without it (no 'cad' extra) mypy sees Any here, with it the real types.

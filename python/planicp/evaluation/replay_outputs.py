@@ -10,10 +10,10 @@ from typing import Any, TextIO
 import numpy as np
 
 from . import figures
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-from .io.trajectory_files import write_tum
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..io.trajectory_files import write_tum
 from .log_replay import TrackedLog
-from .plan_map import PlanMap
+from ..plans.plan_map import PlanMap
 
 
 def write_outputs(tracked: TrackedLog, plan: PlanMap, grid: EnhancedOccupancyGrid | None, out: Path,

@@ -13,14 +13,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .se2 import transform_points
+from ..se2 import transform_points
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-    from .plan_map import PlanMap
+    from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+    from ..plans.plan_map import PlanMap
 
 COLOURS = {"odometry": "tab:red", "planicp": "tab:green", "truth": "black"}
 
@@ -137,7 +137,7 @@ def plot_paths(plan: PlanMap, paths: Mapping[str, Any], *, title: str | None = N
 def _draw_eog(ax: Axes, grid: EnhancedOccupancyGrid, title: str | None) -> None:
     from matplotlib.patches import Patch
 
-    from .enhanced_occupancy_grid import STATE_COLOURS, EogState
+    from ..mapping.eog_state import STATE_COLOURS, EogState
 
     xmin, ymin, xmax, ymax = grid.extent
     ax.imshow(grid.to_image(), extent=(xmin, xmax, ymin, ymax), interpolation="nearest")

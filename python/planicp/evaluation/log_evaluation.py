@@ -28,16 +28,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, positive, whole_number
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-from .image_files import MAX_IMAGE_PIXELS
-from .tracking.icp_config import IcpConfig
-from .io.scan_log import ScanFrame
+from .._validation import Pose, positive, whole_number
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..plans.image_files import MAX_IMAGE_PIXELS
+from ..tracking.icp_config import IcpConfig
+from ..io.scan_log import ScanFrame
 from .log_replay import TrackedLog, track_log
-from .plan_map import PlanMap
-from .plan_raster import PlanRaster
-from .se2 import between, compose, transform_points, wrap_angle
-from .sim.odometry import ErrorGenerator
+from ..plans.plan_map import PlanMap
+from ..plans.plan_raster import PlanRaster
+from ..se2 import between, compose, transform_points, wrap_angle
+from ..sim.odometry import ErrorGenerator
 
 ODOMETRY_SOURCES = ("synthetic", "log")
 

@@ -17,14 +17,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._validation import Pose, as_pose
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid
-from .tracking.icp_config import IcpConfig
-from .io.scan_log import ScanFrame
-from .tracking.acceptance_gate import AcceptanceGate
-from .tracking.localizer import Localizer
-from .plan_map import PlanMap
-from .se2 import between, compose
+from .._validation import Pose, as_pose
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..tracking.icp_config import IcpConfig
+from ..io.scan_log import ScanFrame
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.localizer import Localizer
+from ..plans.plan_map import PlanMap
+from ..se2 import between, compose
 from .trajectory_metrics import error_summary
 
 

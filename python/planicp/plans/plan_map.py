@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from . import _core
-from ._validation import as_pose, as_points, positive, whole_number
+from .. import _core
+from .._validation import as_pose, as_points, positive, whole_number
 from .plan_cache import cache_key, cached, default_cache_dir
 from .image_files import check_image_file, require_regular_file
 from .plan_raster import PlanRaster, load_gray, wall_mask
@@ -144,7 +144,7 @@ class PlanMap:
             open_px, close_px: morphological opening (removes specks up to that size) and closing
                 (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
             edge_detector: "auto", "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
-            cache: True (default folder, see `planicp.plan_cache`), False, or a folder.
+            cache: True (default folder, see `planicp.plans.plan_cache`), False, or a folder.
 
         Raises:
             FileNotFoundError: the file does not exist.

@@ -15,7 +15,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .enhanced_occupancy_grid import EnhancedOccupancyGrid, EogState
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..mapping.eog_state import EogState
 
 
 @dataclass(frozen=True)
