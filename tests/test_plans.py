@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,19 @@ def cache_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     folder = tmp_path / "cache"
     monkeypatch.setenv("PLANICP_CACHE_DIR", str(folder))
     return folder
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the XDG layout is Linux's")
+def test_the_cache_folder_is_the_environments_then_the_users_cache(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`$PLANICP_CACHE_DIR` wins; without it the user cache folder (`$XDG_CACHE_HOME/planicp`)."""
+    from planicp.plans.plan_cache import default_cache_dir
+
+    assert default_cache_dir() == tmp_path / "cache"
+    monkeypatch.delenv("PLANICP_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert default_cache_dir() == tmp_path / "xdg" / "planicp"
 
 
 @pytest.fixture(scope="module")

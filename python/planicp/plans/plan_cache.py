@@ -8,7 +8,8 @@ swapped file), is deleted and rebuilt, never trusted. Entries are written to a t
 renamed into place, so an interrupted write leaves nothing behind. A folder that cannot be written
 (read-only, full) is skipped with a warning: the plan is prepared without the cache.
 
-The folder is `$PLANICP_CACHE_DIR`, else `$XDG_CACHE_HOME/planicp`, else `~/.cache/planicp`.
+The folder is `$PLANICP_CACHE_DIR`, else the platform's user cache folder for planicp (platformdirs:
+`$XDG_CACHE_HOME/planicp` or `~/.cache/planicp` on Linux, `~/Library/Caches/planicp` on macOS).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import platformdirs
 from numpy.typing import NDArray
 
 from .. import _core
@@ -40,8 +42,7 @@ def default_cache_dir() -> Path:
     explicit = os.environ.get("PLANICP_CACHE_DIR")
     if explicit:
         return Path(explicit)
-    base = os.environ.get("XDG_CACHE_HOME")
-    return (Path(base) if base else Path.home() / ".cache") / "planicp"
+    return platformdirs.user_cache_path("planicp")
 
 
 def cache_key(kind: str, params: dict[str, Any], contents: Iterable[bytes]) -> str:
