@@ -84,6 +84,19 @@ def test_scans_outside_the_odometry_span(tmp_path: Path) -> None:
     assert len(no_odom) == 6 and not no_odom.has_odometry
 
 
+def test_an_odometry_message_whose_orientation_is_no_rotation_is_skipped_and_counted(tmp_path: Path) -> None:
+    """A NaN quaternion in one odometry message is left out (and counted); the others still serve."""
+    scan = frames(3)
+    odo_t = [scan[0].time - 0.05, scan[1].time, scan[2].time + 0.05]
+    path = tmp_path / "bad-orientation.bag"
+    write_bag(path, scan, version=1, odometry=(odo_t, [(0.0, 0.0, 0.0), (5.0, 5.0, math.nan), (1.0, 0.0, 0.0)]))
+    log = read_bag(path)
+    assert log.skipped == {"Odometry (orientation not a rotation)": 1}
+    assert len(log) == 3 and all(f.odometry is not None for f in log)
+    middle = log[1].odometry
+    assert middle is not None and middle[1] == 0.0 and middle[2] == 0.0  # interpolated, not the bad one
+
+
 def test_missing_topic_names_bag_and_topics(tmp_path: Path) -> None:
     path = tmp_path / "run.bag"
     write_bag(path, frames(2), version=1)

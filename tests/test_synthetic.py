@@ -544,9 +544,9 @@ def test_ranges_to_points() -> None:
     assert pts[0] == pytest.approx([1.0, 0.0])
     assert pts[1] == pytest.approx([1.5 * math.cos(3 * math.pi), 1.5 * math.sin(3 * math.pi)])
     assert syn.ranges_to_points(np.full(4, np.inf), 0.0, 0.1).shape == (0, 2)
-    with pytest.raises(ValueError, match="1-D"):
+    with pytest.raises(ValueError, match="one-dimensional"):
         syn.ranges_to_points(np.ones((2, 2)), 0.0, 0.1)
-    with pytest.raises(ValueError, match="range_min <= range_max"):
+    with pytest.raises(ValueError, match="range_min < range_max"):
         syn.ranges_to_points(np.ones(3), 0.0, 0.1, range_min=2.0, range_max=1.0)
 
 

@@ -19,6 +19,32 @@ def wrap_angle(angle: float) -> float:
     return -((math.pi - angle) % (2.0 * math.pi) - math.pi)
 
 
+def wrap_angles(angles: NDArray[np.float64]) -> NDArray[np.float64]:
+    """[`wrap_angle`][planicp.se2.wrap_angle] of every element: radians wrapped to (-pi, pi]."""
+    wrapped: NDArray[np.float64] = -((math.pi - np.asarray(angles, dtype=np.float64)) % (2.0 * math.pi) - math.pi)
+    return wrapped
+
+
+def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of a rotation by `yaw` radians about +z."""
+    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
+
+
+def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
+    """Yaw (radians, about +z, in (-pi, pi]) of a quaternion; its roll and pitch are ignored.
+
+    Raises:
+        ValueError: a non-finite or zero-length quaternion.
+    """
+    values = (float(x), float(y), float(z), float(w))
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"orientation must be a finite quaternion, got {values}")
+    if math.fsum(v * v for v in values) < 1e-12:
+        raise ValueError("orientation is a zero quaternion (all four components 0)")
+    x, y, z, w = values
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
 def pose_to_matrix(pose: Pose) -> NDArray[np.float64]:
     """3x3 homogeneous matrix of (x, y, yaw)."""
     x, y, yaw = pose

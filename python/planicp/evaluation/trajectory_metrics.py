@@ -13,14 +13,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from ..se2 import wrap_angles
+
 LOST_THRESHOLD_M = 0.3
 """A pose farther than this from the reference counts as lost (metres)."""
-
-
-def wrap_angles(angles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Angles wrapped to [-pi, pi), radians."""
-    wrapped: NDArray[np.float64] = (np.asarray(angles, dtype=np.float64) + math.pi) % (2 * math.pi) - math.pi
-    return wrapped
 
 
 def pose_errors(poses: NDArray[np.float64], reference: NDArray[np.float64]) -> tuple[

@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 
 from .._validation import Pose, as_pose
-from ..se2 import compose, inverse
+from ..se2 import compose, inverse, quaternion_to_yaw, yaw_to_quaternion
 from .pose_interpolation import interpolate_poses
 from .scan_log import ScanFrame, ScanLog
 
@@ -55,8 +55,16 @@ def _stamp(header: Any) -> float:
     return int(header.stamp.sec) + int(header.stamp.nanosec) * 1e-9
 
 
-def _yaw(q: Any) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+def _yaw(q: Any) -> float | None:
+    """Yaw of a message's quaternion; None when it is not a rotation (NaN, inf, all zero)."""
+    try:
+        return quaternion_to_yaw(q.x, q.y, q.z, q.w)
+    except ValueError:
+        return None
+
+
+_BAD_ODOMETRY = "Odometry (orientation not a rotation)"
+_BAD_TRANSFORM = "TransformStamped in /tf_static (rotation not a rotation)"
 
 
 def _frame(name: str) -> str:
@@ -114,6 +122,7 @@ def read_bag(
     odom: list[tuple[float, float, float, float]] = []
     child_frame: str | None = None
     tree: dict[str, tuple[str, Pose]] = {}
+    skipped: dict[str, int] = {}
     with AnyReader([source], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         scan_conns = _connections(reader, source, scan_topic, LASER_SCAN)
         odom_conns = _connections(reader, source, odom_topic, ODOMETRY) if odom_topic is not None else []
@@ -125,12 +134,19 @@ def read_bag(
                 scans.append((_stamp(msg.header), msg))
             elif conn.msgtype == ODOMETRY:
                 p = msg.pose.pose
-                odom.append((_stamp(msg.header), float(p.position.x), float(p.position.y), _yaw(p.orientation)))
+                yaw = _yaw(p.orientation)
+                if yaw is None:
+                    skipped[_BAD_ODOMETRY] = skipped.get(_BAD_ODOMETRY, 0) + 1
+                    continue
+                odom.append((_stamp(msg.header), float(p.position.x), float(p.position.y), yaw))
                 child_frame = child_frame or _frame(msg.child_frame_id)
             else:
                 for tf in msg.transforms:
-                    t, q = tf.transform.translation, tf.transform.rotation
-                    tree[_frame(tf.child_frame_id)] = (_frame(tf.header.frame_id), (float(t.x), float(t.y), _yaw(q)))
+                    t, tf_yaw = tf.transform.translation, _yaw(tf.transform.rotation)
+                    if tf_yaw is None:
+                        skipped[_BAD_TRANSFORM] = skipped.get(_BAD_TRANSFORM, 0) + 1
+                        continue
+                    tree[_frame(tf.child_frame_id)] = (_frame(tf.header.frame_id), (float(t.x), float(t.y), tf_yaw))
         storage = "rosbag2" if reader.is2 else "rosbag1"
     if not scans:
         raise ValueError(f"bag {source}: topic {scan_topic!r} has no messages")
@@ -147,7 +163,6 @@ def read_bag(
     times = np.array([t for t, _ in scans])
     at_scans, inside = interpolate_poses(odo[:, 0], odo[:, 1:], times)
     frames: list[ScanFrame] = []
-    skipped: dict[str, int] = {}
     for k, (t, msg) in enumerate(scans):
         if odom_topic is not None and not inside[k] and outside_odometry == "drop":
             skipped["LaserScan (outside the odometry time span)"] = skipped.get(
@@ -259,7 +274,8 @@ def write_bag(
                                                                                          frame_id=frame_id)
 
     def quaternion(yaw: float) -> Any:
-        return types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+        x, y, z, w = yaw_to_quaternion(yaw)
+        return types["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w)
 
     vector3, point = types["geometry_msgs/msg/Vector3"], types["geometry_msgs/msg/Point"]
     messages: list[tuple[int, str, Any]] = []

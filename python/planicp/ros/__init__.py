@@ -21,7 +21,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .message_layout import covariance_from_6x6, covariance_to_6x6, quaternion_to_yaw, yaw_to_quaternion
+from ..se2 import quaternion_to_yaw, yaw_to_quaternion
+from .message_layout import covariance_from_6x6, covariance_to_6x6
 from .node_diagnostics import NodeDiagnostics
 from .node_io import PoseOutput, ScanInput
 from .node_logic import PlanicpNodeCore

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..se2 import quaternion_to_yaw, yaw_to_quaternion
+
 PLANAR_INDICES = (0, 1, 5)
 """Rows/columns of x, y and yaw in the 6x6 covariance of geometry_msgs."""
 
@@ -56,25 +58,6 @@ def covariance_from_6x6(values: Any) -> NDArray[np.float64]:
     if not np.isfinite(flat).all():
         raise ValueError("covariance has a non-finite value (NaN or inf)")
     return flat.reshape(6, 6)[np.ix_(PLANAR_INDICES, PLANAR_INDICES)].copy()
-
-
-def yaw_to_quaternion(yaw: float) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of a rotation by `yaw` radians about +z."""
-    return (0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0))
-
-
-def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
-    """Yaw (radians, about +z, in (-pi, pi]) of a quaternion; its roll and pitch are ignored.
-
-    Raises:
-        ValueError: a non-finite or zero-length quaternion.
-    """
-    values = (float(x), float(y), float(z), float(w))
-    if not all(math.isfinite(v) for v in values):
-        raise ValueError(f"orientation must be a finite quaternion, got {values}")
-    if math.fsum(v * v for v in values) < 1e-12:
-        raise ValueError("orientation is a zero quaternion (all four components 0)")
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def planar_mount(translation: Any, quaternion: Any) -> tuple[tuple[float, float, float], bool]:

@@ -36,7 +36,8 @@ from typing import Any
 
 from .._validation import Pose
 from ..mapping.occupancy_grid_message import OccupancyGridMessage
-from .message_layout import planar_mount, quaternion_to_yaw, yaw_to_quaternion
+from ..se2 import quaternion_to_yaw, yaw_to_quaternion
+from .message_layout import planar_mount
 from .node_diagnostics import NodeDiagnostics
 from .node_io import PoseOutput
 from .node_logic import PlanicpNodeCore

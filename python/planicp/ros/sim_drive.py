@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from ..se2 import between
+from ..se2 import between, yaw_to_quaternion
 from ..sim.experiment import ExperimentConfig, Recording, run_experiment
-from .message_layout import covariance_to_6x6, yaw_to_quaternion
+from .message_layout import covariance_to_6x6
 from .node_settings import NodeSettings
 from .ros_imports import import_ros, start_node
 

@@ -7,17 +7,10 @@ import math
 
 import numpy as np
 
+from ..se2 import wrap_angle
 from .argument_checks import finite_float, pose_arg
 
 __all__ = ["perturb_pose"]
-
-_TWO_PI = 2.0 * math.pi
-
-
-def _wrap_angle(a: float) -> float:
-    """Wrap to ``[-pi, pi)``."""
-    return (a + math.pi) % _TWO_PI - math.pi
-
 
 def perturb_pose(
     pose: tuple[float, float, float], rng: np.random.Generator, translation: float, rotation: float
@@ -34,5 +27,5 @@ def perturb_pose(
     return (
         x + translation * math.cos(phi),
         y + translation * math.sin(phi),
-        _wrap_angle(yaw + sign * rotation),
+        wrap_angle(yaw + sign * rotation),
     )

@@ -17,6 +17,7 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..laser_scan import scan_to_points
 from .argument_checks import finite_float, int_arg, pose_arg
 from .floor import Floor
 
@@ -175,21 +176,10 @@ def ranges_to_points(
     """``(M, 2)`` float64 points (metres, sensor frame) of finite ranges within ``[range_min, range_max]``.
 
     Beam ``i`` points along ``angle_min + i * angle_increment`` (radians, CCW from the sensor's +x axis).
+    The same conversion as :func:`planicp.scan_to_points` (which it calls), with the simulator's
+    defaults: every finite non-negative range is kept.
     """
-    r = np.asarray(ranges, dtype=np.float64)
-    if r.ndim != 1:
-        raise ValueError(f"ranges must be a 1-D array, got shape {r.shape}")
-    angle_min = finite_float(angle_min, "angle_min")
-    angle_increment = finite_float(angle_increment, "angle_increment")
-    range_min = float(range_min)
-    range_max = float(range_max)
-    if math.isnan(range_min) or math.isnan(range_max) or range_min > range_max:
-        raise ValueError(f"need range_min <= range_max, got {range_min} and {range_max}")
-    keep = np.isfinite(r) & (r >= range_min) & (r <= range_max)
-    idx = np.flatnonzero(keep)
-    a = angle_min + angle_increment * idx
-    rk = r[idx]
-    return np.column_stack([rk * np.cos(a), rk * np.sin(a)]).astype(np.float64, copy=False)
+    return scan_to_points(np.asarray(ranges, dtype=np.float64), angle_min, angle_increment, range_min, range_max)
 
 
 def simulate_scan(
