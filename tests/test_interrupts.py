@@ -19,6 +19,7 @@ import pytest
 
 _SCRIPT = textwrap.dedent(
     """
+    import signal
     import sys
     import numpy as np
     import planicp
@@ -34,6 +35,9 @@ _SCRIPT = textwrap.dedent(
     # Zero tolerances: every one of the 2**31 - 1 iterations runs (hours).
     endless = IcpConfig(max_iterations=2**31 - 1, translation_tolerance=0.0, rotation_tolerance=0.0)
     case = sys.argv[1]
+    # A suite started in the background (`pytest ... &`) hands its children SIGINT ignored, and
+    # Python then installs no KeyboardInterrupt handler: give the child Python's own.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     print("calling", flush=True)
     if case == "localize":
         planicp.localize(scan, plan, truth, endless)
