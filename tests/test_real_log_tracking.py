@@ -47,36 +47,45 @@ def track(plan: planicp.PlanMap, scans: list[np.ndarray], reference: np.ndarray,
     return np.array(errors)
 
 
+DRAWS = range(6)
+"""Draws of the synthetic odometry each test tracks: on 30 scans one draw decides centimetres (a
+draw's ATE moves by 1 cm with a tilt of a few wall normals), the mean over six does not."""
+
+
 @pytest.fixture(scope="module")
-def killian(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[np.ndarray], np.ndarray, np.ndarray]:
+def killian(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]]:
     log = read_g2o(KILLIAN)
     scans = [frame.points() for frame in log]
     poses = log.odometry_at_scans()
     frames = [replace(frame, reference=frame.odometry) for frame in log]
     yaml_path = write_scan_map(frames[0::2], tmp_path_factory.mktemp("killian"))
     reference = poses[1::2]
-    odometry = synthesise_odometry(log.times()[1::2], reference, OdometryDrift(), np.random.default_rng(3))
-    return yaml_path, scans[1::2], reference, odometry
+    odometries = [synthesise_odometry(log.times()[1::2], reference, OdometryDrift(), np.random.default_rng(seed))
+                  for seed in DRAWS]
+    return yaml_path, scans[1::2], reference, odometries
 
 
 def test_a_real_recording_tracked_from_a_map_loaded_from_its_yaml(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray]) -> None:
-    yaml_path, scans, reference, odometry = killian
-    errors = track(planicp.PlanMap.from_ros_map(yaml_path, cache=False), scans, reference, odometry)
-    dead_reckoned = np.array([compose(tuple(reference[0]), tuple(o)) for o in odometry])
-    odometry_only = np.hypot(*(dead_reckoned[:, :2] - reference[:, :2]).T)
-    assert odometry_only.max() > 5.0  # the synthetic odometry drifts metres away
-    ate = float(np.sqrt(np.mean(errors ** 2)))
-    assert ate < 0.05 and errors.max() < 0.2, (ate, errors.max())  # measured: 4.2 cm, 14 cm
+        killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]]) -> None:
+    yaml_path, scans, reference, odometries = killian
+    plan = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
+    errors = [track(plan, scans, reference, odometry) for odometry in odometries]
+    for odometry in odometries:
+        dead_reckoned = np.array([compose(tuple(reference[0]), tuple(o)) for o in odometry])
+        assert np.hypot(*(dead_reckoned[:, :2] - reference[:, :2]).T).max() > 5.0  # drifts metres away
+    ates = [float(np.sqrt(np.mean(e ** 2))) for e in errors]
+    worst = max(float(e.max()) for e in errors)
+    assert np.mean(ates) < 0.055 and worst < 0.25, (ates, worst)  # measured: mean 4.8 cm, worst 20 cm
 
 
 def test_an_occupancy_grid_is_read_as_surfaces_not_as_wall_material(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray]) -> None:
+        killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]]) -> None:
     """The default reading of a map_server map (every occupied cell's centre) tracks the same
     scans closer than the faces of the occupied cells, which put every surface half a cell to a
     cell in front of where the beams ended."""
-    yaml_path, scans, reference, odometry = killian
-    by_default = track(planicp.PlanMap.from_ros_map(yaml_path, cache=False), scans, reference, odometry)
-    by_faces = track(planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False), scans,
-                     reference, odometry)
-    assert np.sqrt(np.mean(by_default ** 2)) < 0.85 * np.sqrt(np.mean(by_faces ** 2))  # measured: 4.2 and 6.8 cm
+    yaml_path, scans, reference, odometries = killian
+    centres = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
+    faces = planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False)
+    by_default = np.mean([np.sqrt(np.mean(track(centres, scans, reference, o) ** 2)) for o in odometries])
+    by_faces = np.mean([np.sqrt(np.mean(track(faces, scans, reference, o) ** 2)) for o in odometries])
+    assert by_default < 0.95 * by_faces, (by_default, by_faces)  # measured: 4.8 and 5.25 cm
