@@ -90,17 +90,19 @@ def late_copies(times: NDArray[np.float64], poses: NDArray[np.float64]) -> NDArr
     def detour(a: int, k: int, b: int | None) -> float:
         return jump(a, k) if b is None else jump(a, k) + jump(k, b) - jump(a, b)
 
-    in_order = np.flatnonzero(t >= earlier_max)
+    in_order = np.flatnonzero(t >= earlier_max)  # their stamps never decrease
+    in_order_times = t[in_order]
     for k in candidates:
         after = int(k) + 1 if k + 1 < t.shape[0] else None
         here = detour(int(k) - 1, int(k), after)
-        # Its stamp's place: between the last in-order record stamped at or before it and the next.
-        slot = int(np.searchsorted(t[in_order], t[k], side="right"))
-        before_k = in_order[in_order < k]
-        if slot >= before_k.shape[0]:
+        # Its stamp's place: between the last in-order record stamped at or before it and the next,
+        # among the in-order records written before it (a prefix of `in_order`).
+        slot = int(np.searchsorted(in_order_times, t[k], side="right"))
+        written_before = int(np.searchsorted(in_order, k))
+        if slot >= written_before:
             continue
-        nxt = int(before_k[slot])
-        there = jump(int(k), nxt) if slot == 0 else detour(int(before_k[slot - 1]), int(k), nxt)
+        nxt = int(in_order[slot])
+        there = jump(int(k), nxt) if slot == 0 else detour(int(in_order[slot - 1]), int(k), nxt)
         late[k] = there < here
     return late
 
