@@ -109,7 +109,6 @@ def pose_error(truth: tuple[float, float, float], est: tuple[float, float, float
     return math.hypot(dx, dy), abs(dyaw)
 
 
-
 @pytest.fixture(scope="module")
 def rooms_plan() -> PlanMap:
     return PlanMap.from_points(sample_segments(ROOM_FACES, 0.05))
@@ -163,9 +162,7 @@ def test_known_transform_recovered_from_noiseless_wall_scan(
     guess = (truth[0] + guess_offset[0], truth[1] + guess_offset[1], truth[2] + guess_offset[2])
     res = localize(scan, rooms_plan, guess)
     dt, dyaw = pose_error(truth, res.pose)
-    assert dt < 0.005 and dyaw < 0.1 * DEG, (
-        f"error {dt * 1000:.1f} mm, {math.degrees(dyaw):.3f} deg; {res}"
-    )
+    assert dt < 0.005 and dyaw < 0.1 * DEG, f"error {dt * 1000:.1f} mm, {math.degrees(dyaw):.3f} deg; {res}"
     assert res.converged
     assert res.inlier_ratio == 1.0
     assert res.num_inliers == len(scan)
@@ -263,8 +260,7 @@ def test_accuracy_on_synthetic_floors(layout: str, accuracy_trials: dict[Any, An
         if not _success(t, r)
     ]
     assert total >= 0.9 * n, (
-        f"{layout}: {total}/{n} successes, per seed {per_seed}; "
-        f"failures (seed, m, deg, converged): {failures}"
+        f"{layout}: {total}/{n} successes, per seed {per_seed}; failures (seed, m, deg, converged): {failures}"
     )
 
 

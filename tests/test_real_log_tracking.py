@@ -60,23 +60,26 @@ def killian(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[np.nda
 
 
 def test_a_real_recording_tracked_from_a_map_loaded_from_its_yaml(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray]) -> None:
+    killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray],
+) -> None:
     yaml_path, scans, reference, odometry = killian
     errors = track(planicp.PlanMap.from_ros_map(yaml_path, cache=False), scans, reference, odometry)
     dead_reckoned = np.array([compose(tuple(reference[0]), tuple(o)) for o in odometry])
     odometry_only = np.hypot(*(dead_reckoned[:, :2] - reference[:, :2]).T)
     assert odometry_only.max() > 5.0  # the synthetic odometry drifts metres away
-    ate = float(np.sqrt(np.mean(errors ** 2)))
+    ate = float(np.sqrt(np.mean(errors**2)))
     assert ate < 0.05 and errors.max() < 0.2, (ate, errors.max())  # measured: 4.2 cm, 14 cm
 
 
 def test_an_occupancy_grid_is_read_as_surfaces_not_as_wall_material(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray]) -> None:
+    killian: tuple[Path, list[np.ndarray], np.ndarray, np.ndarray],
+) -> None:
     """The default reading of a map_server map (every occupied cell's centre) tracks the same
     scans closer than the faces of the occupied cells, which put every surface half a cell to a
     cell in front of where the beams ended."""
     yaml_path, scans, reference, odometry = killian
     by_default = track(planicp.PlanMap.from_ros_map(yaml_path, cache=False), scans, reference, odometry)
-    by_faces = track(planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False), scans,
-                     reference, odometry)
-    assert np.sqrt(np.mean(by_default ** 2)) < 0.85 * np.sqrt(np.mean(by_faces ** 2))  # measured: 4.2 and 6.8 cm
+    by_faces = track(
+        planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False), scans, reference, odometry
+    )
+    assert np.sqrt(np.mean(by_default**2)) < 0.85 * np.sqrt(np.mean(by_faces**2))  # measured: 4.2 and 6.8 cm

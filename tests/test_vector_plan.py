@@ -50,7 +50,6 @@ def distance_to_segments(points: Array, segments: Array) -> Array:
     return np.asarray(np.min([segment_distance(points, s[0], s[1]) for s in segments], axis=0))
 
 
-
 def check_sampling(points: Array, segments: Array, spacing: float) -> None:
     """Per segment: its points include both endpoints and are at most `spacing` apart along it."""
     for a, b in segments:

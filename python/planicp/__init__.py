@@ -45,7 +45,14 @@ from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.occlusion_rule import OcclusionRule
 from .tracking.recovery import RecoveryConfig
-from .tracking.relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
+from .tracking.relocalize import (
+    Candidate,
+    Relocalization,
+    RelocalizationConfig,
+    SearchInSteps,
+    SearchRegion,
+    relocalize,
+)
 
 # mapping: the enhanced occupancy grid
 from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid

@@ -59,7 +59,8 @@ class TrackedLog:
         out: dict[str, Any] = {
             "scans": len(self.times),
             "accepted_share": float(self.accepted.mean()) if len(self.times) else math.nan,
-            "median_inlier_ratio": float(np.nanmedian(self.inlier_ratio)) if np.isfinite(self.inlier_ratio).any()
+            "median_inlier_ratio": float(np.nanmedian(self.inlier_ratio))
+            if np.isfinite(self.inlier_ratio).any()
             else math.nan,
             "scans_per_second": len(self.times) / self.seconds if self.seconds > 0 else math.nan,
         }
@@ -98,8 +99,10 @@ def track_log(
     first = frames[0]
     if initial_pose is None:
         if first.reference is None:
-            raise ValueError("the log's first scan has no reference pose: give the start pose "
-                             "(initial_pose, or --initial-pose X Y YAW)")
+            raise ValueError(
+                "the log's first scan has no reference pose: give the start pose "
+                "(initial_pose, or --initial-pose X Y YAW)"
+            )
         start: Pose = first.reference
     else:
         start = as_pose(initial_pose, "initial_pose")
@@ -132,14 +135,22 @@ def track_log(
             ratio[k] = est.result.inlier_ratio
             rmse[k] = est.result.rmse
         if grid is not None:
-            grid.integrate_ranges(frame.ranges, frame.angle_min, frame.angle_increment, est.pose,
-                                  range_min=frame.range_min, range_max=frame.range_max, laser_pose=frame.laser_pose)
+            grid.integrate_ranges(
+                frame.ranges,
+                frame.angle_min,
+                frame.angle_increment,
+                est.pose,
+                range_min=frame.range_min,
+                range_max=frame.range_max,
+                laser_pose=frame.laser_pose,
+            )
         if progress is not None:
             progress(k + 1)
     has_reference = any(f.reference is not None for f in frames)
     reference = None
     if has_reference:
-        reference = np.array([f.reference if f.reference is not None else (np.nan,) * 3 for f in frames],
-                             dtype=np.float64)
+        reference = np.array(
+            [f.reference if f.reference is not None else (np.nan,) * 3 for f in frames], dtype=np.float64
+        )
     times = np.array([f.time for f in frames], dtype=np.float64)
     return TrackedLog(times, estimate, accepted, ratio, rmse, reasons, odometry, reference, spent)

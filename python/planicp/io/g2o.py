@@ -103,10 +103,18 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
                     ranges[ranges >= (rec.max_range or math.inf)] = np.inf
                     ranges[ranges <= 0.0] = np.nan
                 try:
-                    frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
-                                            rec.max_range or math.inf, laser_pose=between(rec.robot_world,
-                                                                                          rec.laser_world),
-                                            odometry=poses[-1]))
+                    frames.append(
+                        ScanFrame(
+                            rec.time,
+                            ranges,
+                            rec.angle_min,
+                            rec.angle_increment,
+                            0.0,
+                            rec.max_range or math.inf,
+                            laser_pose=between(rec.robot_world, rec.laser_world),
+                            odometry=poses[-1],
+                        )
+                    )
                 except ValueError as exc:  # e.g. a laser mount beyond the coordinate limit
                     raise _BadLine(str(exc)) from None
                 scanned.add(ids[-1])
@@ -120,9 +128,13 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
     info_m = np.zeros((len(info), 3, 3))
     for k, (i11, i12, i13, i22, i23, i33) in enumerate(info):
         info_m[k] = [[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]]
-    graph = G2oGraph(np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 3),
-                     np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(meas, dtype=np.float64).reshape(-1, 3),
-                     info_m)
+    graph = G2oGraph(
+        np.array(ids, dtype=np.int64),
+        np.array(poses, dtype=np.float64).reshape(-1, 3),
+        np.array(edges, dtype=np.int64).reshape(-1, 2),
+        np.array(meas, dtype=np.float64).reshape(-1, 3),
+        info_m,
+    )
     times, repair = repair_times(np.array([f.time for f in frames], dtype=np.float64))
     if repair.message:
         warnings.warn(f"{source}: {repair.message}", stacklevel=3)

@@ -93,8 +93,11 @@ class OdometryBuffer:
         """T_odom_base at `stamp`, interpolated; None outside the kept samples."""
         if not self.covers(stamp):
             return None
-        poses, inside = interpolate_poses(np.fromiter(self._times, dtype=np.float64, count=len(self._times)),
-                                          np.array(self._poses, dtype=np.float64), np.array([stamp]))
+        poses, inside = interpolate_poses(
+            np.fromiter(self._times, dtype=np.float64, count=len(self._times)),
+            np.array(self._poses, dtype=np.float64),
+            np.array([stamp]),
+        )
         if not inside[0]:
             return None
         row = poses[0]

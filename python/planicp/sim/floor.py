@@ -22,6 +22,7 @@ from .argument_checks import Pose, finite_float
 
 __all__ = ["Floor"]
 
+
 @dataclass(frozen=True, eq=False, repr=False)
 class Floor:
     """A rasterised floor: walls (in the plan) and clutter (furniture, NOT in the plan).
@@ -56,9 +57,7 @@ class Floor:
         try:
             ox, oy = (float(v) for v in self.origin)
         except (TypeError, ValueError):
-            raise ValueError(
-                f"origin must be a pair of floats (x, y) in metres, got {self.origin!r}"
-            ) from None
+            raise ValueError(f"origin must be a pair of floats (x, y) in metres, got {self.origin!r}") from None
         if not (math.isfinite(ox) and math.isfinite(oy)):
             raise ValueError(f"origin must be finite, got {(ox, oy)}")
         object.__setattr__(self, "walls", walls)
@@ -139,9 +138,7 @@ class Floor:
             raise ValueError(f"clearance must be >= 0 metres, got {clearance}")
         cells = self._pose_cells(clearance)
         if cells.size == 0:
-            raise ValueError(
-                f"no free cell inside the building has {clearance} m clearance from walls and clutter"
-            )
+            raise ValueError(f"no free cell inside the building has {clearance} m clearance from walls and clutter")
         k = int(rng.integers(cells.size))
         cols = self.shape[1]
         r, c = divmod(int(cells[k]), cols)

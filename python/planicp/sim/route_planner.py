@@ -64,8 +64,9 @@ def clearance_distance(occupied: NDArray[np.bool_], resolution: float, max_dista
     if not occ.any():
         best = np.full(occ.shape, cap)
     else:
-        grown = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT,
-                           borderValue=0)
+        grown = cv2.dilate(
+            occ.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0
+        )
         centres = cv2.distanceTransform((grown == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         # The transform's float32 distances are square roots of whole numbers: recover those exactly.
         best = np.minimum(np.rint(centres.astype(np.float64) ** 2), cap)

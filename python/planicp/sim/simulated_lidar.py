@@ -80,8 +80,15 @@ def _simulate(
     # Noise-free ranges from the native caster (range_min 0: a sensor inside an occupied cell reads 0);
     # the noise, dropouts and REP-117 limits below are applied here, with the caller's generator.
     pose3 = (x, y, yaw)
-    dist = floor._native_grid("occupied").cast(pose3, angle_min, angle_increment, beams, 0.0, max_range,
-                                               discs=discs if discs is not None and discs.shape[0] else None)
+    dist = floor._native_grid("occupied").cast(
+        pose3,
+        angle_min,
+        angle_increment,
+        beams,
+        0.0,
+        max_range,
+        discs=discs if discs is not None and discs.shape[0] else None,
+    )
     from_wall: NDArray[np.bool_] | None = None
     if want_sources:
         from_wall = _from_wall(floor, pose3, angle_min, angle_increment, beams, max_range, dist)
@@ -94,8 +101,15 @@ def _simulate(
     return ranges, angle_min, angle_increment, from_wall
 
 
-def _from_wall(floor: Floor, pose: tuple[float, float, float], angle_min: float, angle_increment: float,
-               beams: int, max_range: float, dist: NDArray[np.float64]) -> NDArray[np.bool_]:
+def _from_wall(
+    floor: Floor,
+    pose: tuple[float, float, float],
+    angle_min: float,
+    angle_increment: float,
+    beams: int,
+    max_range: float,
+    dist: NDArray[np.float64],
+) -> NDArray[np.bool_]:
     """Per beam, whether its return (at ``dist``) ends on a plan wall rather than on clutter or a disc.
 
     A beam stops at the first occupied cell it enters; cast through the walls alone, it stops at the same

@@ -46,16 +46,18 @@ def run_local(
     count = workers if workers is not None else (os.cpu_count() or 1)
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=min(count, len(runs)),
-                                                  mp_context=multiprocessing.get_context("spawn"))
+    pool = concurrent.futures.ProcessPoolExecutor(
+        max_workers=min(count, len(runs)), mp_context=multiprocessing.get_context("spawn")
+    )
     try:
         futures = [pool.submit(run, spec) for spec in runs]
         for future in concurrent.futures.as_completed(futures):
             try:
                 record = future.result()
             except BrokenProcessPool as exc:
-                raise RuntimeError(f"a worker process died ({exc}); finished runs are kept, rerun the study "
-                                   "to do the others") from None
+                raise RuntimeError(
+                    f"a worker process died ({exc}); finished runs are kept, rerun the study to do the others"
+                ) from None
             on_result(record)
     except BaseException:
         pool.shutdown(wait=False, cancel_futures=True)

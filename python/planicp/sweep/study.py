@@ -94,8 +94,9 @@ class PlanSource:
         if self.resolution is not None:
             value = _number(self.resolution, "resolution")
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"resolution must be a positive number of metres per pixel, got "
-                                 f"{brief(self.resolution)}")
+                raise ValueError(
+                    f"resolution must be a positive number of metres per pixel, got {brief(self.resolution)}"
+                )
             object.__setattr__(self, "resolution", value)
         origin = self.origin
         if isinstance(origin, (str, bytes)) or not isinstance(origin, (list, tuple)) or len(origin) != 3:
@@ -154,9 +155,16 @@ class SensorSetting:
 
     def lidar(self) -> LidarModel:
         """The simulation's LIDAR model."""
-        return LidarModel(fov=math.radians(self.fov_deg), beams=self.beams, range_min=self.range_min,
-                          range_max=self.range_max, range_sigma=self.range_sigma, dropout=self.dropout,
-                          rate_hz=self.rate_hz, mount=self.mount)
+        return LidarModel(
+            fov=math.radians(self.fov_deg),
+            beams=self.beams,
+            range_min=self.range_min,
+            range_max=self.range_max,
+            range_sigma=self.range_sigma,
+            dropout=self.dropout,
+            rate_hz=self.rate_hz,
+            mount=self.mount,
+        )
 
 
 @dataclass(frozen=True)
@@ -306,9 +314,11 @@ class Study:
         for name, sensor in self.sensors.items():
             for oname, odom in self.odometry.items():
                 if odom.rate_hz < sensor.rate_hz:
-                    raise StudyError(f"key {brief(f'odometry.{oname}.rate_hz')} ({odom.rate_hz}) is below the scan "
-                                     f"rate of {brief(f'sensors.{name}')} ({sensor.rate_hz}): odometry must be at "
-                                     f"least as fast")
+                    raise StudyError(
+                        f"key {brief(f'odometry.{oname}.rate_hz')} ({odom.rate_hz}) is below the scan "
+                        f"rate of {brief(f'sensors.{name}')} ({sensor.rate_hz}): odometry must be at "
+                        f"least as fast"
+                    )
 
     def icp_config(self, name: str) -> IcpConfig:
         """The ICP settings named `name`."""

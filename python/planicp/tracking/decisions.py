@@ -186,8 +186,11 @@ class SearchDecision:
         if self.cause is None:
             return "the place a pending jump led to was confirmed" if self.searched else "no search"
         if self.cause == "uncertain":
-            return ("uncertain prediction: the search found a place, taken" if self.found is not None
-                    else "uncertain prediction: the search found no place that passes")
+            return (
+                "uncertain prediction: the search found a place, taken"
+                if self.found is not None
+                else "uncertain prediction: the search found no place that passes"
+            )
         return f"jump rejected: {self.reason}"
 
 
@@ -311,14 +314,18 @@ class RecoveryDecision:
     def why(self) -> str:
         """One sentence on this decision."""
         if self.adopted is not None:
-            trial = (", on trial while the search of the whole plan goes on" if self.on_trial else "")
+            trial = ", on trial while the search of the whole plan goes on" if self.on_trial else ""
             if self.action == "verify":
-                return (f"a place the search of the whole plan found explained {self.adopted.streak} scans "
-                        f"better than the one on trial: adopted")
+                return (
+                    f"a place the search of the whole plan found explained {self.adopted.streak} scans "
+                    f"better than the one on trial: adopted"
+                )
             return f"the recovery confirmed a place over {self.adopted.streak} scans: adopted{trial}"
         if self.action == "verify":
-            return (f"the pose is on trial: the search of the whole plan goes on, "
-                    f"{len(self.hypotheses)} rival place(s) followed")
+            return (
+                f"the pose is on trial: the search of the whole plan goes on, "
+                f"{len(self.hypotheses)} rival place(s) followed"
+            )
         if self.action == "clear":
             return "not lost: the recovery is idle"
         if self.action == "coast":
@@ -355,6 +362,15 @@ class Bookkeeping:
         return "; ".join(parts)
 
 
-Decision = (Prediction | FitDecision | PendingDecision | SearchDecision | ScoreDecision | Correction | LostDecision
-            | RecoveryDecision | Bookkeeping)
+Decision = (
+    Prediction
+    | FitDecision
+    | PendingDecision
+    | SearchDecision
+    | ScoreDecision
+    | Correction
+    | LostDecision
+    | RecoveryDecision
+    | Bookkeeping
+)
 """Any stage's decision (the items of `Estimate.decisions`)."""

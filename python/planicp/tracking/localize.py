@@ -12,8 +12,14 @@ from .icp_config import IcpConfig
 from .icp_result import IcpResult
 
 
-def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig | None = None, *,
-             view: _core.WallView | None = None) -> IcpResult:
+def localize(
+    scan_xy: Any,
+    plan: PlanMap,
+    initial_pose: Any,
+    config: IcpConfig | None = None,
+    *,
+    view: _core.WallView | None = None,
+) -> IcpResult:
     """Aligns a scan to the plan by trimmed, coarse-to-fine point-to-point ICP.
 
     Args:
