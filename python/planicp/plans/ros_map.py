@@ -169,11 +169,11 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
         image_path,
         occupancy,
         resolution,
-        origin_pose,
+        origin_pose,  # type: ignore[arg-type]
         mode,
         bool(negate),
         occ,
-        free,  # type: ignore[arg-type]
+        free,
         edge_detector,
     )
 
