@@ -87,8 +87,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def evaluation_inputs(log_path: Path, seed: int) -> tuple[Any, list[Any]]:
     """(plan, odd frames with synthetic odometry) as `evaluate_log` builds them."""
-    from planicp.io import open_log
     from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+    from planicp.io import open_log
 
     usable = [f for f in open_log(log_path) if f.reference is not None]
     even, odd = usable[0::2], usable[1::2]
@@ -269,9 +269,8 @@ def main(argv: list[str] | None = None) -> None:
     site = next(iter(sorted(args.peers_venv.glob("lib/python3*/site-packages"))), None)
     if site is not None and str(site) not in sys.path:
         sys.path.append(str(site))
-    import planicp
-
     import mrpt_pf  # noqa: E402  (benches/ is the script's folder, on sys.path)
+    import planicp
 
     peers_mod = load_peers_module(args.peers_file)
     cfg = argparse.Namespace(

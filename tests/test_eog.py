@@ -22,8 +22,8 @@ from planicp import (
     scan_to_points,
 )
 from planicp._core import OccupancyGrid
-from planicp.mapping.eog_state import STATE_COLOURS
 from planicp.evaluation.figures import plot_eog, plot_eog_comparison
+from planicp.mapping.eog_state import STATE_COLOURS
 
 RES = 0.1
 FOV = math.radians(360.0)

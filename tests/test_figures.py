@@ -10,7 +10,6 @@ import pytest
 from matplotlib.figure import Figure
 
 from planicp import PlanMap
-
 from planicp.evaluation import figures
 
 

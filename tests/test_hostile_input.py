@@ -17,12 +17,12 @@ import pytest
 import carmen_excerpt
 from planicp import EnhancedOccupancyGrid, PlanMap
 from planicp._core import PlanicpError
-from planicp.cli import main as cli_main
-from planicp.plans.default_plan import default_plan_path, load_default_plan
-from planicp.io import read_carmen
-from planicp.evaluation.log_evaluation import plan_from_scans
 from planicp._validation import brief
+from planicp.cli import main as cli_main
+from planicp.evaluation.log_evaluation import plan_from_scans
+from planicp.io import read_carmen
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.sweep import StudyError, load_study
 
 MAP_KEYS = "resolution: 0.05\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import planicp
+from geometry_checks import nearest_distance
 from planicp import IcpConfig, IcpResult, PlanMap, localize, scan_to_points, se2
 from planicp import sim as syn
-from geometry_checks import nearest_distance
 
 DEG = math.pi / 180.0
 LAYOUTS = ("office", "hall", "diagonal")

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
+from planicp import sim as syn
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
-from planicp import sim as syn
 
 DEG = math.pi / 180.0
 Pose = tuple[float, float, float]

@@ -14,19 +14,18 @@ import numpy as np
 import pytest
 
 import carmen_excerpt as ex
-
 from planicp import PlanMap
 from planicp.cli import main as cli_main
-from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.evaluation.figures import plot_quality
-from planicp.io import open_log, read_tum
 from planicp.evaluation.log_evaluation import OdometryDrift, evaluate_log, plan_from_scans, synthesise_odometry
 from planicp.evaluation.log_replay import track_log
+from planicp.evaluation.trajectory_metrics import error_summary, pose_errors
+from planicp.io import open_log, read_tum
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.progress import progress_bar
 from planicp.se2 import between
 from planicp.sim.experiment import ExperimentConfig, Recording, run_experiment
 from planicp.sim.odometry import ErrorGenerator
-from planicp.evaluation.trajectory_metrics import error_summary, pose_errors
 
 RES = 0.05
 

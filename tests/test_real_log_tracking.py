@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 import planicp
-from planicp.io import ScanFrame, read_g2o
 from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+from planicp.io import ScanFrame, read_g2o
 from planicp.plans.ros_map import write_ros_map
 from planicp.se2 import compose
 

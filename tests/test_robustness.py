@@ -11,7 +11,6 @@ import pytest
 from numpy.typing import NDArray
 
 import planicp
-
 from planicp import (
     AcceptanceGate,
     DegeneracyRule,
@@ -24,15 +23,15 @@ from planicp import (
     PlanRaster,
     RecoveryConfig,
     localize,
+    se2,
 )
 from planicp.plans.default_plan import load_default_plan
-from planicp import se2
-from planicp.tracking.lost_rule import LostDetector
-from planicp.tracking.fusion_rule import fuse_with_prediction
 from planicp.se2 import between, compose
 from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, LidarModel, Recording, run_experiment
 from planicp.sim.world import Furnishing
+from planicp.tracking.fusion_rule import fuse_with_prediction
+from planicp.tracking.lost_rule import LostDetector
 
 CHI2_3_95 = 7.8147
 

@@ -17,7 +17,6 @@ import pytest
 from planicp import _core
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
-from planicp.ros import odometry_buffer
 from planicp.ros import (
     NodeSettings,
     OdometryBuffer,
@@ -26,6 +25,7 @@ from planicp.ros import (
     ScanInput,
     covariance_from_6x6,
     covariance_to_6x6,
+    odometry_buffer,
     plan_occupancy_grid,
     quaternion_to_yaw,
     ros_package_path,

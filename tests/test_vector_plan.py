@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 from numpy.typing import NDArray
 
 import planicp
-from planicp.plans.vector_plan import dxf_segments, house_expo_segments, sample_segments
 from geometry_checks import nearest_distance
+from planicp.plans.vector_plan import dxf_segments, house_expo_segments, sample_segments
 
 DATA = Path(__file__).parent / "data"
 HOUSE_EXPO = DATA / "house_expo_room_0000.json"

@@ -112,11 +112,11 @@ def _icp_config(args: argparse.Namespace) -> Any:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .evaluation.log_replay import track_log
+    from .evaluation.replay_outputs import print_summary, write_outputs
+    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .plans.plan_loading import load_plan
     from .progress import progress_bar
-    from .evaluation.replay_outputs import print_summary, write_outputs
 
     plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
     log = _read_log(args)
@@ -138,8 +138,8 @@ def _replay(args: argparse.Namespace) -> int:
 
 def _evaluate_log(args: argparse.Namespace) -> int:
     from .evaluation.log_evaluation import evaluate_log
-    from .progress import progress_bar
     from .evaluation.replay_outputs import print_summary, write_outputs
+    from .progress import progress_bar
 
     log = _read_log(args)
     evaluation = evaluate_log(

@@ -29,15 +29,15 @@ import numpy as np
 
 from . import __version__
 from .evaluation import figures
-from .plans.default_plan import load_default_plan
 from .evaluation.grid_agreement import compare_grids
-from .tracking.icp_config import IcpConfig
-from .tracking.localize import localize
+from .plans.default_plan import load_default_plan
 from .plans.plan_figure import plot_plan_overlay
 from .plans.plan_loading import load_plan
 from .plans.plan_map import PlanMap
 from .progress import progress_bar
 from .sim.experiment import ExperimentConfig, Recording, replay, run_experiment
+from .tracking.icp_config import IcpConfig
+from .tracking.localize import localize
 
 EOG_RESOLUTION = 0.05
 """Cell size of the demo's enhanced occupancy grids, metres."""

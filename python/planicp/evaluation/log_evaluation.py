@@ -29,15 +29,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, positive, whole_number
+from ..io.scan_log import ScanFrame
 from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.image_files import MAX_IMAGE_PIXELS
-from ..tracking.icp_config import IcpConfig
-from ..io.scan_log import ScanFrame
-from .log_replay import TrackedLog, track_log
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
 from ..se2 import between, compose, transform_points, wrap_angle
 from ..sim.odometry import ErrorGenerator
+from ..tracking.icp_config import IcpConfig
+from .log_replay import TrackedLog, track_log
 
 ODOMETRY_SOURCES = ("synthetic", "log")
 

@@ -18,13 +18,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, as_pose
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
-from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.localizer import Localizer
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
+from ..tracking.localizer import Localizer
 from .trajectory_metrics import error_summary
 
 

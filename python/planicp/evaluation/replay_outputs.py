@@ -9,11 +9,11 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from . import figures
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..io.trajectory_files import write_tum
-from .log_replay import TrackedLog
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
+from . import figures
+from .log_replay import TrackedLog
 
 
 def write_outputs(

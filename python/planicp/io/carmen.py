@@ -52,10 +52,10 @@ from numpy.typing import NDArray
 
 from .._validation import MAX_COORDINATE, Pose, as_pose, brief
 from ..se2 import between, compose, inverse
-from .pose_interpolation import interpolate_poses
-from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records, skipped_summary
 from .log_times import late_copies, repair_times
+from .pose_interpolation import interpolate_poses
+from .scan_log import ScanFrame, ScanLog
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")

@@ -30,9 +30,9 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from ..se2 import between
 from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser, _poses
-from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records, skipped_summary
 from .log_times import repair_times
+from .scan_log import ScanFrame, ScanLog
 
 
 @dataclass(eq=False)

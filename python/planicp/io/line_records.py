@@ -11,7 +11,6 @@ from pathlib import Path
 from .scan_log import BadLine
 from .text_source import TruncatedStream, read_lines
 
-
 _RECORD_NAME = re.compile(r"[A-Z][A-Z0-9_]{1,39}(?: \(.{1,80}\))?")
 """A record kind (FLASER, ODOM, ROBOTLASER1, ...), optionally with a note in brackets."""
 

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import as_pose, as_points, positive, real_number, whole_number
+from .._validation import as_points, as_pose, positive, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from ..plans.ros_map import write_ros_map
 from ..se2 import compose, transform_points

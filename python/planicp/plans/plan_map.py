@@ -9,9 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import as_pose, as_points, positive, whole_number
-from .plan_cache import cache_key, cached, default_cache_dir
+from .._validation import as_points, as_pose, positive, whole_number
 from .image_files import check_image_file, require_regular_file
+from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments

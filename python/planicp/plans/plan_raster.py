@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
 from .._validation import Pose, as_points, as_pose, brief, positive, whole_number
+from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
 
 
 def _cv2() -> Any:

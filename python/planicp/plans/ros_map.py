@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import MAX_COORDINATE, Pose, brief, one_line
-from .image_files import require_regular_file
 from ..io.atomic_files import write_atomically
 from ..io.yaml_documents import read_yaml_file
+from .image_files import require_regular_file
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")

@@ -21,13 +21,13 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose
+from ..laser_scan import scan_to_points
 from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..mapping.occupancy_grid_message import OccupancyGridMessage
-from ..laser_scan import scan_to_points
-from ..tracking.localizer import Localizer
-from ..tracking.localizer import _covariance as validated_covariance
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, matrix_to_pose
+from ..tracking.localizer import Localizer
+from ..tracking.localizer import _covariance as validated_covariance
 from .message_layout import covariance_from_6x6
 from .node_diagnostics import ERROR, OK, WARN, NodeDiagnostics
 from .node_io import PoseOutput, ScanInput, as_stamp

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .._validation import Pose, as_pose, positive, real_number, unknown_fields
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.icp_config import IcpConfig
 from ..plans.plan_loading import load_plan
 from ..plans.plan_map import PlanMap
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
 
 DEFAULT_PLAN = "default"
 """The `plan` value that selects the office plan shipped with planicp (`planicp.plans.default_plan`)."""

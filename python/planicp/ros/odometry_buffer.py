@@ -11,7 +11,6 @@ import numpy as np
 from .._validation import Pose, as_pose, real_number
 from ..io.pose_interpolation import interpolate_poses
 
-
 MAX_SAMPLES = 20_000
 """Most samples kept whatever their stamps (5 s of odometry at 4 kHz); the oldest go first."""
 

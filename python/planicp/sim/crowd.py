@@ -18,8 +18,8 @@ from .. import _core
 from .._validation import positive, whole_number
 from ..laser_scan import scan_to_points
 from ..se2 import compose
-from .floor import Floor
 from .experiment import LidarModel, Recording
+from .floor import Floor
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import positive, real_number
-from .floor import Floor
 from .diff_drive import DiffDriveLimits, DiffDriveState, step
+from .floor import Floor
 from .route_planner import reachable, tour
 from .waypoint_follower import WaypointFollower
 

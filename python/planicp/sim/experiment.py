@@ -23,14 +23,14 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
-from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.localizer import Localizer
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
+from ..tracking.localizer import Localizer
 from .diff_drive import DiffDriveLimits
 from .drive import simulate_drive
 from .odometry import ErrorGenerator, Odometry, OdometryNoise

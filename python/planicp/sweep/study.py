@@ -43,10 +43,10 @@ from typing import Any
 
 from .._validation import brief, one_line, unknown_fields
 from ..io.yaml_documents import read_yaml_file
-from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
 from ..sim.world import Furnishing
+from ..tracking.icp_config import IcpConfig
 
 __all__ = [
     "DEFAULT_PLAN",

@@ -19,8 +19,8 @@ from numpy.typing import NDArray
 
 from .._validation import Pose, real_number
 from ..se2 import wrap_angle
-from .icp_result import IcpResult
 from .fusion_rule import finite_covariance
+from .icp_result import IcpResult
 
 
 @dataclass(frozen=True)

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-
 from .. import _core
-from .._validation import as_pose, as_points
+from .._validation import as_points, as_pose
 from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult

@@ -10,7 +10,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import Pose, as_pose, as_points
+from .._validation import Pose, as_points, as_pose
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate

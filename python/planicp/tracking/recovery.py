@@ -38,9 +38,9 @@ Poses are T_map_base; scans are base-frame points (metres).
 from __future__ import annotations
 
 import math
-from statistics import NormalDist
 from collections import deque
 from dataclasses import dataclass, field
+from statistics import NormalDist
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,13 +48,13 @@ from numpy.typing import NDArray
 from .._validation import Pose, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
+from .acceptance_gate import AcceptanceGate
+from .fusion_rule import CHI2_3_999
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
-from .occlusion_rule import OcclusionFilter
-from .acceptance_gate import AcceptanceGate
 from .motion_noise import MotionNoise, largest_position_std
-from .fusion_rule import CHI2_3_999
+from .occlusion_rule import OcclusionFilter
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import Pose, as_pose, as_points, positive, real_number, whole_number
+from .._validation import Pose, as_points, as_pose, positive, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,13 +35,13 @@ from ..se2 import between, compose
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule
 from .decisions import (
-    RecoveryAction,
     Bookkeeping,
     Correction,
     FitDecision,
     LostDecision,
     PendingDecision,
     Prediction,
+    RecoveryAction,
     RecoveryDecision,
     ScoreDecision,
     SearchCause,
