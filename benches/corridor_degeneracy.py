@@ -36,7 +36,8 @@ def rms_errors(poses: NDArray[np.float64], truth: NDArray[np.float64]) -> str:
     d = poses - truth
     yaw = (d[:, 2] + np.pi) % (2 * np.pi) - np.pi
     along, across = np.sqrt(np.mean(d[:, 0] ** 2)), np.sqrt(np.mean(d[:, 1] ** 2))
-    return f"along {100 * along:6.2f} cm, across {100 * across:5.2f} cm, heading {np.degrees(np.sqrt(np.mean(yaw**2))):.3f} deg"
+    heading = np.degrees(np.sqrt(np.mean(yaw**2)))
+    return f"along {100 * along:6.2f} cm, across {100 * across:5.2f} cm, heading {heading:.3f} deg"
 
 
 def main() -> None:

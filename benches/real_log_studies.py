@@ -136,7 +136,8 @@ def nees_study(harness: Any, logs: list[str], out: str) -> None:
                     into.append(float(d @ np.linalg.solve(cov, d)))
         a, b = np.median(estimate_nees), np.median(fit_nees)
         print(
-            f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} | {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
+            f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} "
+            f"| {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
             flush=True,
         )
 

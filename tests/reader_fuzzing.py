@@ -1503,7 +1503,7 @@ def carmen_seeds() -> list[Seed]:
 def g2o_seeds() -> list[Seed]:
     lines = (DATA / "killian-excerpt.g2o").read_bytes().split(b"\n")
     vertices = lines[:6]  # three vertices, each with its scan
-    edges = [line for line in lines if line.startswith(b"EDGE_SE2 0 1") or line.startswith(b"EDGE_SE2 1 2")]
+    edges = [line for line in lines if line.startswith((b"EDGE_SE2 0 1", b"EDGE_SE2 1 2"))]
     excerpt = b"\n".join(vertices + [b"#SEQUENTIAL EDGES"] + edges) + b"\n"
     tiny = (
         "\n".join(
@@ -2131,7 +2131,7 @@ def run_target(
                 if line is None:
                     break
                 running = line.startswith("S ")
-                if line.startswith("G ") or line.startswith("S "):
+                if line.startswith(("G ", "S ")):
                     current = int(line[2:])
                 elif line.startswith("D "):
                     event = json.loads(line[2:])

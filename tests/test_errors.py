@@ -692,7 +692,8 @@ _HANG_SCRIPT = textwrap.dedent(
     import numpy as np
     import planicp
     xs = np.arange(0.0, 4.0, 0.05)
-    box = np.vstack([np.c_[xs, 0 * xs], np.c_[xs, 0 * xs + 3.0], np.c_[0 * xs, xs * 0.75], np.c_[0 * xs + 4.0, xs * 0.75]])
+    box = np.vstack([np.c_[xs, 0 * xs], np.c_[xs, 0 * xs + 3.0],
+                     np.c_[0 * xs, xs * 0.75], np.c_[0 * xs + 4.0, xs * 0.75]])
     plan = planicp.PlanMap.from_points(box)
     case = sys.argv[1]
     try:

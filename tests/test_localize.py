@@ -351,8 +351,8 @@ def test_result_fields_and_covariance(office_plan: PlanMap, office_scan: Any) ->
     sx, sy, syaw = res.std
     assert 0 < sx < 0.02 and 0 < sy < 0.02, res.std
     assert 0 < syaw < 0.5 * DEG, res.std
-    with pytest.raises(Exception):
-        res.inlier_mask[0] = not res.inlier_mask[0]  # read-only
+    with pytest.raises(ValueError, match="read-only"):
+        res.inlier_mask[0] = not res.inlier_mask[0]
 
 
 def test_no_visibility_targets_the_whole_plan(office_plan: PlanMap, office_scan: Any) -> None:

@@ -1,4 +1,5 @@
-"""Tests of the synthetic floors and LIDAR of planicp.sim: floor generation, wall points, pose sampling and ray casting."""
+"""Tests of the synthetic floors and LIDAR of planicp.sim: floor generation, wall points, pose sampling and
+ray casting."""
 
 from __future__ import annotations
 

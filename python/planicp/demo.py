@@ -149,7 +149,7 @@ once at planicp's, each scored against the grid from the ground-truth poses:
 | grid from | occupied cells within one cell of a reference occupied cell | free cells free in the reference |
 |---|---|---|
 | odometry | {o["occupied_near_reference"]:.3f} ({o["occupied_cells"]:.0f} cells) | {o["free_in_reference"]:.3f} ({o["free_cells"]:.0f} cells) |
-| planicp | {p["occupied_near_reference"]:.3f} ({p["occupied_cells"]:.0f} cells) | {p["free_in_reference"]:.3f} ({p["free_cells"]:.0f} cells) |"""
+| planicp | {p["occupied_near_reference"]:.3f} ({p["occupied_cells"]:.0f} cells) | {p["free_in_reference"]:.3f} ({p["free_cells"]:.0f} cells) |"""  # noqa: E501 (Markdown table rows, one line each)
 
 
 def run_demo(

@@ -4,10 +4,11 @@ Keys (map_server / nav2_map_server): `image` (path, relative to the YAML), `reso
 pixel), `origin` ([x, y, yaw] of the lower-left pixel corner), `negate` (0/1), `occupied_thresh`,
 `free_thresh`, optional `mode` (trinary (default), scale, raw), and planicp's optional
 `planicp_edge_detector`: how `PlanMap.from_ros_map` reads the occupied cells by default (a plan
-drawn as walls of material and saved as a map says "boundary"; see `PlanRaster.surface_points`). A pixel value v in 0..255 becomes
-p = (255 - v) / 255 (v / 255 when negate); trinary: p > occupied_thresh -> 100, p < free_thresh
--> 0, else -1 (unknown); scale: as trinary but between the thresholds 99 * (p - free) / (occ -
-free); raw: the value v itself (0..100, anything else unknown). Image row 0 is the top of the map.
+drawn as walls of material and saved as a map says "boundary"; see `PlanRaster.surface_points`).
+A pixel value v in 0..255 becomes p = (255 - v) / 255 (v / 255 when negate); trinary:
+p > occupied_thresh -> 100, p < free_thresh -> 0, else -1 (unknown); scale: as trinary but between
+the thresholds 99 * (p - free) / (occ - free); raw: the value v itself (0..100, anything else
+unknown). Image row 0 is the top of the map.
 """
 
 from __future__ import annotations

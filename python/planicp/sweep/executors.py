@@ -89,8 +89,8 @@ def run_ray(
     (then that instance is used and left running). None is Ray's default: the cluster in
     `RAY_ADDRESS`, else one started on this machine with `ray start`, else a new local instance;
     "local" always starts a new local instance, "auto" joins the cluster this machine belongs to,
-    "ray://host:10001" a remote one through Ray Client. Every node needs planicp installed and the plan files at the same paths (a shared
-    folder), or only the shipped `default` plan.
+    "ray://host:10001" a remote one through Ray Client. Every node needs planicp installed and the
+    plan files at the same paths (a shared folder), or only the shipped `default` plan.
 
     A task that fails in Ray itself (its worker died after Ray's retries) is recorded as a failed
     run with Ray's error. On an interruption, the tasks not finished are cancelled.

@@ -60,8 +60,9 @@ def _label(value: Any) -> str:
 
 
 def summary_by_setting(rows: Sequence[dict[str, Any]], column: str, order: Order | None = None) -> list[dict[str, Any]]:
-    """Per value of `column` (in the study's `order`): runs, failed runs, success rate, and the median and 95th percentile of
-    planicp's largest position error (metres) and the median of odometry's, over finished runs."""
+    """Per value of `column` (in the study's `order`): runs, failed runs, success rate, and the median
+    and 95th percentile of planicp's largest position error (metres) and the median of odometry's,
+    over finished runs."""
     out = []
     for value in _values(rows, column, order):
         group = [r for r in rows if r[column] == value]

@@ -121,7 +121,10 @@ class FitDecision:
             return f"not aligned: {self.reason}"
         how = " (KD-tree retry)" if self.retried else (" (every return, again)" if self.realigned else "")
         verdict = "passed the gate" if self.reason == "" else f"rejected: {self.reason}"
-        return f"fit from the prediction{how} explains {100 * self.result.inlier_ratio:.0f} % of the aligned points, {verdict}"
+        return (
+            f"fit from the prediction{how} explains {100 * self.result.inlier_ratio:.0f} % of the aligned points, "
+            f"{verdict}"
+        )
 
 
 @dataclass(frozen=True)
@@ -222,7 +225,10 @@ class ScoreDecision:
         """One sentence on this decision."""
         text = f"the plan explains {100 * self.score:.0f} % of the scan"
         if self.continues is True:
-            text += ", poorly, but the scan is clutter (it continues the last well explained scan or a crowd hides the walls)"
+            text += (
+                ", poorly, but the scan is clutter (it continues the last well explained scan or a crowd hides "
+                "the walls)"
+            )
         elif self.continues is False:
             text += ", poorly, and the scan does not continue the last well explained one"
         elif self.poor:
