@@ -1,6 +1,6 @@
 """planicp: localize a 2D-LIDAR robot against the architectural floor plan of its building.
 
-Quick start::
+Quick start:
 
     import planicp
     plan = planicp.PlanMap.from_points(wall_xy)                  # (N, 2) metres, map frame

@@ -87,7 +87,8 @@ def track_log(
         frames: the scans in time order.
         plan: the plan to localize in.
         initial_pose: T_map_base (x, y, yaw) at the first scan; None takes the first scan's reference.
-        config, gate: the localizer's settings (defaults when None).
+        config: the localizer's ICP settings (defaults when None).
+        gate: the localizer's acceptance gate (defaults when None).
         grid: when given, every scan is integrated into it at its estimated pose.
         progress: called with the number of scans done after each one.
 

@@ -228,10 +228,13 @@ def write_bag(
         frames: the scans, in time order; they must share one `laser_pose`. A `ScanLog` also gives its
             odometry stream when `odometry` is None.
         version: 1 (ROS 1 Noetic message definitions) or 2 (ROS 2 Humble, sqlite3 storage).
-        scan_topic, odom_topic: topic names.
+        scan_topic: topic name of the scans.
+        odom_topic: topic name of the odometry.
         odometry: ((K,) times, (K, 3) T_odom_base) written on `odom_topic`; by default the `ScanLog`'s
             stream, or each frame's `odometry` at its scan time.
-        base_frame, laser_frame, odom_frame: the frame ids written into the headers.
+        base_frame: the robot's frame id written into the headers.
+        laser_frame: the laser's frame id written into the headers.
+        odom_frame: the odometry frame id written into the headers.
 
     Returns:
         The bag's path.

@@ -1,6 +1,6 @@
 """CARMEN logs (plain text, optionally gzip-compressed): `ODOM`, `FLASER`/`RLASER`, `ROBOTLASER1`, `PARAM`.
 
-Line formats (fields separated by white space, `#` starts a comment line)::
+Line formats (fields separated by white space, `#` starts a comment line):
 
     PARAM name value [host ts]
     ODOM x y theta tv rv accel ts host logger_ts

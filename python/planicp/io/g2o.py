@@ -1,6 +1,6 @@
 """g2o 2D pose graphs with laser scans (`VERTEX_SE2`, `EDGE_SE2`, `ROBOTLASER1`), e.g. MIT Killian Court.
 
-Line formats::
+Line formats:
 
     VERTEX_SE2 id x y theta
     EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33      (measurement T_i_j, upper-triangular information)

@@ -233,9 +233,11 @@ class EnhancedOccupancyGrid:
 
         Args:
             ranges: (B,) metres.
-            angle_min, angle_increment: radians.
+            angle_min: angle of the first beam, radians.
+            angle_increment: angle between beams, radians.
             pose: T_map_base (x, y, yaw) at the scan's time.
-            range_min, range_max: the laser's valid interval, metres.
+            range_min: lower end of the laser's valid interval, metres.
+            range_max: upper end of the laser's valid interval, metres.
             laser_pose: (x, y, yaw) of the laser in the base frame.
         """
         r = np.asarray(ranges)

@@ -147,8 +147,10 @@ class PlanMap:
             origin: (x, y, yaw) of the image's lower-left corner in the map frame, exactly as a
                 ROS map YAML's `origin`, so that a plan and a ROS map of it give the same points.
             threshold: grey level (1..255) below which a pixel is wall; None: Otsu's threshold.
-            open_px, close_px: morphological opening (removes specks up to that size) and closing
-                (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
+            open_px: morphological opening of the wall mask (removes specks up to that size), in
+                pixels; 0 = none.
+            close_px: morphological closing of the wall mask (bridges gaps up to that size), in
+                pixels; 0 = none.
             edge_detector: "auto", "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
             cache: True (default folder, see `planicp.plans.plan_cache`), False, or a folder.
 

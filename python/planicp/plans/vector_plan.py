@@ -3,7 +3,7 @@
 A plan arrives as line work: a HouseExpo outline polygon (JSON) or a CAD drawing (DXF). Both become
 wall segments, an (M, 2, 2) float64 array of [[x0, y0], [x1, y1]] in metres in the map frame
 (REP-103: x right/forward, y up/left), and `sample_segments` turns segments into the wall points
-the localizer aligns scans to::
+the localizer aligns scans to:
 
     segments = planicp.plans.vector_plan.dxf_segments("floor2.dxf", layers=["WALLS"])
     plan = planicp.PlanMap.from_points(planicp.plans.vector_plan.sample_segments(segments, spacing=0.02))

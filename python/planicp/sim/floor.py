@@ -4,7 +4,7 @@
 Conventions: metres and radians; frames follow ROS REP-103 (x forward, y left, yaw counter-clockwise).
 Rasters are indexed ``[row, col]`` with the row index growing with +y (row 0 is the LOWEST y, i.e. NOT
 image order); cell ``(r, c)`` covers ``x in [ox + c*res, ox + (c+1)*res)`` and
-``y in [oy + r*res, oy + (r+1)*res)`` where ``(ox, oy) = origin``. Use :meth:`Floor.to_image` to get an
+``y in [oy + r*res, oy + (r+1)*res)`` where ``(ox, oy) = origin``. Use `Floor.to_image` to get an
 image in ROS ``map_server`` (top row = highest y) order.
 """
 

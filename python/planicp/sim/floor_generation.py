@@ -1,5 +1,5 @@
 """Seeded, furnished synthetic floors in three layouts (``"office"``, ``"hall"``, ``"diagonal"``):
-:func:`generate_floor` returns a :class:`~planicp.sim.floor.Floor` whose walls are the plan and whose
+`generate_floor` returns a `Floor` whose walls are the plan and whose
 clutter is furniture the plan does not show. All randomness comes from ``np.random.default_rng(seed)``.
 """
 
@@ -18,7 +18,7 @@ from .floor_canvas import Canvas, Placement
 
 __all__ = ["LAYOUTS", "generate_floor"]
 
-#: Layout names accepted by :func:`generate_floor`.
+#: Layout names accepted by `generate_floor`.
 LAYOUTS: Final[tuple[str, ...]] = ("office", "hall", "diagonal")
 
 # Generator constants (metres).
@@ -356,8 +356,9 @@ def generate_floor(
 
     Args:
         seed: non-negative integer seed.
-        layout: one of :data:`LAYOUTS`.
-        width, height: size in metres of the map-frame box the building occupies.
+        layout: one of `LAYOUTS`.
+        width: width (x) in metres of the map-frame box the building occupies.
+        height: height (y) in metres of that box.
         resolution: metres per cell, in ``(0, 0.25]``.
         rooms: number of rooms (office/diagonal) or furniture zones (hall), >= 1.
         furniture_per_room: furniture items per room, >= 0.

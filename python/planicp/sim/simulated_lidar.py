@@ -1,6 +1,6 @@
-"""A simulated 2D LIDAR in a :class:`~planicp.sim.floor.Floor`: ROS ``LaserScan``-style ranges
-(:func:`simulate_ranges`), sensor-frame points with their source (:func:`simulate_scan`), and ranges
-back to points (:func:`ranges_to_points`).
+"""A simulated 2D LIDAR in a `Floor`: ROS ``LaserScan``-style ranges
+(`simulate_ranges`), sensor-frame points with their source (`simulate_scan`), and ranges
+back to points (`ranges_to_points`).
 
 Walls and clutter occlude, and so do optional moving discs (people). The beams are cast by the native
 ray caster (``planicp._core.OccupancyGrid.cast``, the one the simulator's drives use); noise and dropouts
@@ -154,7 +154,8 @@ def simulate_ranges(
             ``angle_min + i * angle_increment`` in the sensor frame with ``angle_min = -fov/2``; for a full
             circle ``angle_increment = fov/beams`` (the last beam does not duplicate the first), otherwise
             ``fov/(beams-1)`` (the last beam is at ``+fov/2``).
-        max_range, min_range: metres, ``0 <= min_range < max_range``.
+        max_range: metres, ``> min_range``.
+        min_range: metres, ``0 <= min_range < max_range``.
         range_sigma: standard deviation (metres) of the additive Gaussian range noise, >= 0.
         dropout: probability in ``[0, 1]`` that a beam returns nothing (``+inf``).
         dynamic_discs: optional ``(K, 3)`` array of ``(x, y, radius)`` (map frame, metres) moving obstacles
@@ -209,7 +210,7 @@ def ranges_to_points(
 def simulate_scan(
     floor: Floor, pose: tuple[float, float, float], rng: np.random.Generator, **kwargs: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Convenience wrapper of :func:`simulate_ranges` (same keyword arguments and random draws).
+    """Convenience wrapper of `simulate_ranges` (same keyword arguments and random draws).
 
     Returns:
         ``(points, is_clutter)``: ``points`` ``(M, 2)`` float64 in metres in the sensor frame (valid returns

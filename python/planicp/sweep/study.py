@@ -1,7 +1,7 @@
 """A study: the settings a sweep varies, as typed frozen dataclasses that round-trip through YAML.
 
 A study file (YAML) names the plans, seeds and settings; `planicp.sweep.runs.expand_runs` turns it
-into one run of the simulation loop (`planicp.sim.run_experiment`) per combination::
+into one run of the simulation loop (`planicp.sim.run_experiment`) per combination:
 
     name: clutter-and-drift
     duration_s: 40              # simulated seconds per run
