@@ -36,18 +36,30 @@ def rms_errors(poses: NDArray[np.float64], truth: NDArray[np.float64]) -> str:
     d = poses - truth
     yaw = (d[:, 2] + np.pi) % (2 * np.pi) - np.pi
     along, across = np.sqrt(np.mean(d[:, 0] ** 2)), np.sqrt(np.mean(d[:, 1] ** 2))
-    return f"along {100 * along:6.2f} cm, across {100 * across:5.2f} cm, heading {np.degrees(np.sqrt(np.mean(yaw ** 2))):.3f} deg"
+    heading = np.degrees(np.sqrt(np.mean(yaw**2)))
+    return f"along {100 * along:6.2f} cm, across {100 * across:5.2f} cm, heading {heading:.3f} deg"
 
 
 def main() -> None:
     plan = corridor()
     for seed in range(3):
-        config = ExperimentConfig(duration_s=120.0, seed=seed, lidar=LidarModel(range_max=10.0),
-                                  furnishing=Furnishing(0, 0, 0, 0), error_generator=None)
+        config = ExperimentConfig(
+            duration_s=120.0,
+            seed=seed,
+            lidar=LidarModel(range_max=10.0),
+            furnishing=Furnishing(0, 0, 0, 0),
+            error_generator=None,
+        )
         recording, _ = run_experiment(plan, config)
-        sliding = Localizer(plan, tuple(recording.truth[0]), degeneracy=DegeneracyRule(min_constraint=0.0),
-                            fusion=FusionRule(max_innovation=0.0))
-        poses = np.array([sliding.update(s, tuple(o)).pose for s, o in zip(recording.scans, recording.odometry_in_odom)])
+        sliding = Localizer(
+            plan,
+            tuple(recording.truth[0]),
+            degeneracy=DegeneracyRule(min_constraint=0.0),
+            fusion=FusionRule(max_innovation=0.0),
+        )
+        poses = np.array(
+            [sliding.update(s, tuple(o)).pose for s, o in zip(recording.scans, recording.odometry_in_odom)]
+        )
         print(f"seed {seed}  odometry:            {rms_errors(recording.odometry, recording.truth)}")
         print(f"        planicp:             {rms_errors(recording.estimate, recording.truth)}")
         print(f"        the fit alone:       {rms_errors(poses, recording.truth)}")

@@ -65,12 +65,16 @@ def main() -> None:
         for scale in scales:
             v = np.array(per_scale[scale])
             totals[scale] += per_scale[scale]
-            print(f"{name:24s} {scale:5.1f} {len(v):9d} {v.mean():9.2f} {np.median(v):7.2f} "
-                  f"{100 * np.mean(v < CHI2_3_95):6.1f}%")
+            print(
+                f"{name:24s} {scale:5.1f} {len(v):9d} {v.mean():9.2f} {np.median(v):7.2f} "
+                f"{100 * np.mean(v < CHI2_3_95):6.1f}%"
+            )
     for scale in scales:
         v = np.array(totals[scale])
-        print(f"{'all':24s} {scale:5.1f} {len(v):9d} {v.mean():9.2f} {np.median(v):7.2f} "
-              f"{100 * np.mean(v < CHI2_3_95):6.1f}%")
+        print(
+            f"{'all':24s} {scale:5.1f} {len(v):9d} {v.mean():9.2f} {np.median(v):7.2f} "
+            f"{100 * np.mean(v < CHI2_3_95):6.1f}%"
+        )
     print("consistent: mean 3.00, median 2.37, 95.0 % below 7.81")
 
 

@@ -31,8 +31,11 @@ from planicp.sim.experiment import ExperimentConfig, run_experiment
 from planicp.sim.world import Furnishing
 
 VARIANTS: dict[str, dict[str, Any]] = {
-    "plain ICP": {"config": IcpConfig(correspondence_search="kd_tree"), "occlusion": False,
-                  "fusion": FusionRule(max_innovation=0.0)},
+    "plain ICP": {
+        "config": IcpConfig(correspondence_search="kd_tree"),
+        "occlusion": False,
+        "fusion": FusionRule(max_innovation=0.0),
+    },
     "auto trim only": {"config": IcpConfig.for_tracking(), "occlusion": False},
     "defaults": {},
 }
@@ -68,7 +71,7 @@ def main() -> None:
         cells = []
         for name in VARIANTS:
             err = np.concatenate([results[(seed, people)][1][name] for seed in args.seeds])
-            cells.append(f"{100 * np.sqrt(np.mean(err ** 2)):8.3f} / {100 * err.max():6.1f} cm")
+            cells.append(f"{100 * np.sqrt(np.mean(err**2)):8.3f} / {100 * err.max():6.1f} cm")
         for seed in args.seeds:
             rms[(seed, people)] = float(np.sqrt(np.mean(results[(seed, people)][1]["defaults"] ** 2)))
         print(f"{people:6d} {100 * blocked:7.0f}%  " + "  ".join(f"{c:>22s}" for c in cells))
@@ -78,8 +81,9 @@ def main() -> None:
             if people == 0:
                 continue
             ratios = [rms[(seed, people)] / rms[(seed, 0)] for seed in args.seeds]
-            pooled = (np.sqrt(np.mean([rms[(s, people)] ** 2 for s in args.seeds]))
-                      / np.sqrt(np.mean([rms[(s, 0)] ** 2 for s in args.seeds])))
+            pooled = np.sqrt(np.mean([rms[(s, people)] ** 2 for s in args.seeds])) / np.sqrt(
+                np.mean([rms[(s, 0)] ** 2 for s in args.seeds])
+            )
             print(f"{people:6d}  " + " ".join(f"{r:5.2f}" for r in ratios) + f";  {pooled:5.2f}")
 
 

@@ -69,10 +69,13 @@ def main() -> None:
                     stats[name][1].append(result.iterations)
                     stats[name][2].append(seconds)
         for name, (ok, iterations, seconds) in stats.items():
-            rows.append((layout, name, 100 * statistics.mean(ok), statistics.mean(iterations),
-                         1e3 * statistics.median(seconds)))
-    print(f"max_correspondence_distance {args.max_correspondence_distance} m, {args.seeds} seeds x "
-          f"{args.poses} poses per layout, guess {args.offset} m / {args.offset_deg} deg off\n")
+            rows.append(
+                (layout, name, 100 * statistics.mean(ok), statistics.mean(iterations), 1e3 * statistics.median(seconds))
+            )
+    print(
+        f"max_correspondence_distance {args.max_correspondence_distance} m, {args.seeds} seeds x "
+        f"{args.poses} poses per layout, guess {args.offset} m / {args.offset_deg} deg off\n"
+    )
     print("| layout | variant | success | mean iterations | median ms |")
     print("|---|---|---|---|---|")
     for layout, name, success, iterations, ms in rows:

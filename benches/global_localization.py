@@ -67,8 +67,9 @@ def simulate(grid: OccupancyGrid, pose: tuple[float, float, float], seed: int) -
     return scan_to_points(ranges, -FOV / 2, inc, 0.05, RANGE_MAX)
 
 
-def draw_pose(floor: sim.Floor, grid: OccupancyGrid, plan: PlanMap, rng: np.random.Generator,
-              seed: int) -> tuple[tuple[float, float, float], np.ndarray, int]:
+def draw_pose(
+    floor: sim.Floor, grid: OccupancyGrid, plan: PlanMap, rng: np.random.Generator, seed: int
+) -> tuple[tuple[float, float, float], np.ndarray, int]:
     """A random free pose (0.4 m clearance) inside the mapped building, its scan, and how many draws
     were rejected: a draw whose scan the plan explains poorly even at the true pose (ICP from the
     truth has < 80 % inliers) stands outside the mapped building (e.g. on a stray free streak of a
@@ -81,8 +82,15 @@ def draw_pose(floor: sim.Floor, grid: OccupancyGrid, plan: PlanMap, rng: np.rand
     raise RuntimeError("no pose inside the mapped building")
 
 
-def evaluate(floor: sim.Floor, plan: PlanMap, poses: int, seed: int, tol_m: float, tol_rad: float,
-             config: planicp.RelocalizationConfig) -> dict[str, float]:
+def evaluate(
+    floor: sim.Floor,
+    plan: PlanMap,
+    poses: int,
+    seed: int,
+    tol_m: float,
+    tol_rad: float,
+    config: planicp.RelocalizationConfig,
+) -> dict[str, float]:
     grid = OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
     rng = np.random.default_rng(seed)
     scan0 = simulate(grid, floor.sample_pose(rng, clearance=0.4), 1)
@@ -146,16 +154,23 @@ def main() -> None:
     for extra in args.map:
         plans[Path(extra).name] = floor_from_ros_map(Path(extra))
     config = planicp.RelocalizationConfig()
-    print(f"{args.poses} random poses per plan, seed {args.seed}, 270 deg / {BEAMS} beams / {RANGE_MAX:.0f} m / "
-          f"1 cm noise; correct = < {args.tol_cm:g} cm and < {args.tol_deg:g} deg; whole plan, no guess\n")
-    print("| plan | wall points | correct | wrong | ambiguous scans (excluded) | flagged ambiguous | "
-          "incomplete | redrawn poses | success (unambiguous) | median ms | p95 ms | max ms |")
+    print(
+        f"{args.poses} random poses per plan, seed {args.seed}, 270 deg / {BEAMS} beams / {RANGE_MAX:.0f} m / "
+        f"1 cm noise; correct = < {args.tol_cm:g} cm and < {args.tol_deg:g} deg; whole plan, no guess\n"
+    )
+    print(
+        "| plan | wall points | correct | wrong | ambiguous scans (excluded) | flagged ambiguous | "
+        "incomplete | redrawn poses | success (unambiguous) | median ms | p95 ms | max ms |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, (floor, plan) in plans.items():
         r = evaluate(floor, plan, args.poses, args.seed, args.tol_cm / 100, math.radians(args.tol_deg), config)
-        print(f"| {name} | {len(plan)} | {r['correct']} | {r['wrong']} | {r['ambiguous_scan']} | {r['flagged']} | "
-              f"{r['incomplete']} | {r['redrawn']} | "
-              f"{100 * r['rate']:.1f} % | {r['median_ms']:.0f} | {r['p95_ms']:.0f} | {r['max_ms']:.0f} |", flush=True)
+        print(
+            f"| {name} | {len(plan)} | {r['correct']} | {r['wrong']} | {r['ambiguous_scan']} | {r['flagged']} | "
+            f"{r['incomplete']} | {r['redrawn']} | "
+            f"{100 * r['rate']:.1f} % | {r['median_ms']:.0f} | {r['p95_ms']:.0f} | {r['max_ms']:.0f} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -61,8 +61,9 @@ PEER_NAMES = ("small_gicp_icp", "open3d", "kiss_icp", "numpy")
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.ArgumentDefaultsHelpFormatter
+    )
     p.add_argument("--log", type=Path, default=DEFAULT_LOG)
     p.add_argument("--peers-file", type=Path, default=DEFAULT_PEERS)
     p.add_argument("--peers-venv", type=Path, default=Path("/tmp/peers-venv"))
@@ -73,8 +74,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--max-iter", type=int, default=30)
     p.add_argument("--variants", default="baseline,gap,steps,gap+steps")
     p.add_argument("--no-mrpt", action="store_true")
-    p.add_argument("--mrpt-runs", type=int, default=3,
-                   help="pf-localization runs per variant (it seeds itself from the clock)")
+    p.add_argument(
+        "--mrpt-runs", type=int, default=3, help="pf-localization runs per variant (it seeds itself from the clock)"
+    )
     p.add_argument("--mrpt-dir", type=Path, help="keep MRPT's inputs and outputs here (default: temporary)")
     p.add_argument("--json", type=Path)
     return p.parse_args(argv)
@@ -85,8 +87,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def evaluation_inputs(log_path: Path, seed: int) -> tuple[Any, list[Any]]:
     """(plan, odd frames with synthetic odometry) as `evaluate_log` builds them."""
-    from planicp.io import open_log
     from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+    from planicp.io import open_log
 
     usable = [f for f in open_log(log_path) if f.reference is not None]
     even, odd = usable[0::2], usable[1::2]
@@ -116,10 +118,20 @@ def gap_windows(frames: list[Any]) -> list[dict[str, Any]]:
     second = max((s for s in spans if s[1] <= first[0] or s[0] >= first[1]), key=lambda s: s[3])
     out = []
     for (i, j, d, r), rule in ((first, "longest path"), (second, "most turning")):
-        out.append({"rule": rule, "last_scan_before": i, "first_scan_after": j,
-                    "dropped_scans": list(range(i + 1, j)), "from_t": float(t[i]), "to_t": float(t[j]),
-                    "from_t_rel": float(t[i] - t[0]), "seconds_without_scan": float(t[j] - t[i]),
-                    "path_m": float(d), "turn_deg": math.degrees(r)})
+        out.append(
+            {
+                "rule": rule,
+                "last_scan_before": i,
+                "first_scan_after": j,
+                "dropped_scans": list(range(i + 1, j)),
+                "from_t": float(t[i]),
+                "to_t": float(t[j]),
+                "from_t_rel": float(t[i] - t[0]),
+                "seconds_without_scan": float(t[j] - t[i]),
+                "path_m": float(d),
+                "turn_deg": math.degrees(r),
+            }
+        )
     return out
 
 
@@ -138,8 +150,15 @@ def step_errors(frames: list[Any], windows: list[dict[str, Any]], count: int, se
         chosen.append(k)
     chosen.sort()
     signs = rng.choice([-1.0, 1.0], size=count)
-    return [{"scan": k, "t": float(frames[k].time), "t_rel": float(frames[k].time - frames[0].time),
-             "error_deg": float(s * STEP_ERROR_DEG)} for k, s in zip(chosen, signs)]
+    return [
+        {
+            "scan": k,
+            "t": float(frames[k].time),
+            "t_rel": float(frames[k].time - frames[0].time),
+            "error_deg": float(s * STEP_ERROR_DEG),
+        }
+        for k, s in zip(chosen, signs)
+    ]
 
 
 def with_step_errors(frames: list[Any], errors: list[dict[str, Any]]) -> list[Any]:
@@ -158,7 +177,9 @@ def with_step_errors(frames: list[Any], errors: list[dict[str, Any]]) -> list[An
     return out
 
 
-def make_variants(frames: list[Any], windows: list[dict[str, Any]], errors: list[dict[str, Any]]) -> dict[str, list[Any]]:
+def make_variants(
+    frames: list[Any], windows: list[dict[str, Any]], errors: list[dict[str, Any]]
+) -> dict[str, list[Any]]:
     dropped = {k for w in windows for k in w["dropped_scans"]}
     stepped = with_step_errors(frames, errors)
 
@@ -228,14 +249,17 @@ def print_table(name: str, rows: dict[str, dict[str, Any]], scans: int) -> None:
             print(f"| {tracker:<26} | failed: {r['error'][:80]}")
             continue
         ms = "-" if r["ms_per_scan"] is None else f"{r['ms_per_scan']:.2f} ms"
-        print(f"| {tracker:<26} | {r['ate_rms_m'] * 100:>7.1f} cm | {r['position_max_m']:>6.2f} m "
-              f"| {r['lost_share'] * 100:>10.1f} % | {ms:>13} |")
+        print(
+            f"| {tracker:<26} | {r['ate_rms_m'] * 100:>7.1f} cm | {r['position_max_m']:>6.2f} m "
+            f"| {r['lost_share'] * 100:>10.1f} % | {ms:>13} |"
+        )
 
 
 def git_commit() -> str:
     try:
-        return subprocess.run(["git", "rev-parse", "HEAD"], cwd=HERE, capture_output=True, text=True,
-                              check=True).stdout.strip()
+        return subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=HERE, capture_output=True, text=True, check=True
+        ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "?"
 
@@ -245,25 +269,31 @@ def main(argv: list[str] | None = None) -> None:
     site = next(iter(sorted(args.peers_venv.glob("lib/python3*/site-packages"))), None)
     if site is not None and str(site) not in sys.path:
         sys.path.append(str(site))
+    import mrpt_pf  # noqa: E402  (benches/ is the script's folder, on sys.path)
     import planicp
 
-    import mrpt_pf  # noqa: E402  (benches/ is the script's folder, on sys.path)
-
     peers_mod = load_peers_module(args.peers_file)
-    cfg = argparse.Namespace(max_corr=args.max_corr, max_iter=args.max_iter, trim=0.8, trim_start=10,
-                             threads=1, res=0.05)
+    cfg = argparse.Namespace(
+        max_corr=args.max_corr, max_iter=args.max_iter, trim=0.8, trim_start=10, threads=1, res=0.05
+    )
     plan, frames = evaluation_inputs(args.log, args.seed)
     windows = gap_windows(frames)
     errors = step_errors(frames, windows, args.steps, args.step_seed)
     variants = make_variants(frames, windows, errors)
-    print(f"# planicp {planicp.__file__} (commit {git_commit()[:10]}); plan {len(plan)} wall points; "
-          f"{len(frames)} tracked scans")
+    print(
+        f"# planicp {planicp.__file__} (commit {git_commit()[:10]}); plan {len(plan)} wall points; "
+        f"{len(frames)} tracked scans"
+    )
     for w in windows:
-        print(f"# gap ({w['rule']}): scans {w['dropped_scans'][0]}..{w['dropped_scans'][-1]} dropped, "
-              f"{w['seconds_without_scan']:.1f} s without a scan from t={w['from_t']:.2f} "
-              f"(+{w['from_t_rel']:.1f} s), robot moved {w['path_m']:.2f} m and turned {w['turn_deg']:.0f} deg")
-    print("# odometry step errors: " + ", ".join(f"scan {e['scan']} (t={e['t']:.2f}) {e['error_deg']:+.0f} deg"
-                                                  for e in errors))
+        print(
+            f"# gap ({w['rule']}): scans {w['dropped_scans'][0]}..{w['dropped_scans'][-1]} dropped, "
+            f"{w['seconds_without_scan']:.1f} s without a scan from t={w['from_t']:.2f} "
+            f"(+{w['from_t_rel']:.1f} s), robot moved {w['path_m']:.2f} m and turned {w['turn_deg']:.0f} deg"
+        )
+    print(
+        "# odometry step errors: "
+        + ", ".join(f"scan {e['scan']} (t={e['t']:.2f}) {e['error_deg']:+.0f} deg" for e in errors)
+    )
     peers, skipped = peers_mod.load_peers(list(PEER_NAMES), cfg)
     for key, why in skipped.items():
         print(f"# skipped peer {key}: {why}")
@@ -297,12 +327,21 @@ def main(argv: list[str] | None = None) -> None:
         print_table(name, rows, len(fs))
         results[name] = {"scans": len(fs), "trackers": rows}
     if args.json:
-        doc = {"command": " ".join([Path(sys.executable).name, *sys.argv]), "commit": git_commit(),
-               "planicp": str(Path(planicp.__file__).parent), "python": platform.python_version(),
-               "seed": args.seed, "step_seed": args.step_seed, "max_corr_m": args.max_corr,
-               "max_iter": args.max_iter, "gap_windows": windows, "step_errors": errors,
-               "mrpt_settings": None if args.no_mrpt else vars(mrpt_pf.PfSettings()),
-               "peer_versions": {p.name: p.version for p in peers}, "results": results}
+        doc = {
+            "command": " ".join([Path(sys.executable).name, *sys.argv]),
+            "commit": git_commit(),
+            "planicp": str(Path(planicp.__file__).parent),
+            "python": platform.python_version(),
+            "seed": args.seed,
+            "step_seed": args.step_seed,
+            "max_corr_m": args.max_corr,
+            "max_iter": args.max_iter,
+            "gap_windows": windows,
+            "step_errors": errors,
+            "mrpt_settings": None if args.no_mrpt else vars(mrpt_pf.PfSettings()),
+            "peer_versions": {p.name: p.version for p in peers},
+            "results": results,
+        }
         args.json.write_text(json.dumps(doc, indent=1))
         print(f"\n# wrote {args.json}")
 

@@ -39,23 +39,27 @@ def main() -> None:
     config = IcpConfig.for_tracking()
     clean = replay(plan, recording, config)
     errors = position_errors(clean)
-    print(f"{len(recording.scans)} scans; clean run: RMS {np.sqrt(np.mean(errors ** 2)):.4f} m, max {errors.max():.4f} m")
+    print(f"{len(recording.scans)} scans; clean run: RMS {np.sqrt(np.mean(errors**2)):.4f} m, max {errors.max():.4f} m")
     rng = np.random.default_rng(args.seed)
     turn = np.array([[0.0, 1.0], [-1.0, 0.0]])  # row vectors times this: +90 degrees
     middle = len(recording.scans) // 2
     cases = {
-        f"scan {middle} shifted 3 m": [s + np.array([3.0, 0.0]) if k == middle else s
-                                       for k, s in enumerate(recording.scans)],
-        "1 in 5 random clouds": [rng.uniform(-10.0, 10.0, s.shape) if k % 5 == 0 and k > 0 else s
-                                 for k, s in enumerate(recording.scans)],
+        f"scan {middle} shifted 3 m": [
+            s + np.array([3.0, 0.0]) if k == middle else s for k, s in enumerate(recording.scans)
+        ],
+        "1 in 5 random clouds": [
+            rng.uniform(-10.0, 10.0, s.shape) if k % 5 == 0 and k > 0 else s for k, s in enumerate(recording.scans)
+        ],
         "1 in 5 turned 90 deg": [s @ turn if k % 5 == 0 and k > 0 else s for k, s in enumerate(recording.scans)],
     }
     for name, scans in cases.items():
         run = replay(plan, dataclasses.replace(recording, scans=scans), config)
         e = position_errors(run)
         apart = np.hypot(*(run.estimate[:, :2] - clean.estimate[:, :2]).T)
-        print(f"{name:24s} RMS {np.sqrt(np.mean(e ** 2)):.4f} m, max {e.max():.4f} m, "
-              f"largest distance from the clean run {apart.max():.4f} m (scan {int(np.argmax(apart))})")
+        print(
+            f"{name:24s} RMS {np.sqrt(np.mean(e**2)):.4f} m, max {e.max():.4f} m, "
+            f"largest distance from the clean run {apart.max():.4f} m (scan {int(np.argmax(apart))})"
+        )
 
 
 if __name__ == "__main__":

@@ -37,8 +37,10 @@ def main() -> None:
     plan = load_default_plan()
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=args.duration, seed=args.seed))
     frames = recording.scan_frames()
-    print(f"# planicp {planicp.__version__}: {len(frames)} scans of {len(frames[0].ranges)} beams, "
-          f"default plan ({len(plan)} wall points)")
+    print(
+        f"# planicp {planicp.__version__}: {len(frames)} scans of {len(frames[0].ranges)} beams, "
+        f"default plan ({len(plan)} wall points)"
+    )
     print("| correspondence search | update p50 | update p90 | of which scan_to_points | RMS error |")
     print("|---|---|---|---|---|")
     truth = recording.poses("truth")
@@ -51,8 +53,9 @@ def main() -> None:
         for k, frame in enumerate(frames):
             assert frame.odometry is not None
             t0 = time.perf_counter()
-            points = scan_to_points(frame.ranges, frame.angle_min, frame.angle_increment,
-                                    frame.range_min, frame.range_max, frame.laser_pose)
+            points = scan_to_points(
+                frame.ranges, frame.angle_min, frame.angle_increment, frame.range_min, frame.range_max, frame.laser_pose
+            )
             t1 = time.perf_counter()
             estimate = localizer.update(points, frame.odometry)
             t2 = time.perf_counter()
@@ -62,16 +65,19 @@ def main() -> None:
             replay.append((points, estimate.predicted_pose))
         p50, p90 = np.percentile(update_s, [50, 90]) * 1e3
         rms = float(np.sqrt(np.mean(np.square(errors))))
-        print(f"| {search} | {p50:.3f} ms | {p90:.3f} ms | {np.median(convert_s) * 1e3:.3f} ms "
-              f"| {rms * 100:.2f} cm |")
+        print(f"| {search} | {p50:.3f} ms | {p90:.3f} ms | {np.median(convert_s) * 1e3:.3f} ms | {rms * 100:.2f} cm |")
         steps[search] = _native_steps(plan, config, localizer, replay)
     for search, (classify_ms, view_ms, align_ms) in steps.items():
         view = f"view_from {view_ms:.3f} ms, " if view_ms is not None else ""
         print(f"# {search}: median occlusion rule {classify_ms:.3f} ms, {view}alignment {align_ms:.3f} ms")
 
 
-def _native_steps(plan: planicp.PlanMap, config: IcpConfig, localizer: Localizer,
-                  replay: list[tuple[np.ndarray, tuple[float, float, float]]]) -> tuple[float, float | None, float]:
+def _native_steps(
+    plan: planicp.PlanMap,
+    config: IcpConfig,
+    localizer: Localizer,
+    replay: list[tuple[np.ndarray, tuple[float, float, float]]],
+) -> tuple[float, float | None, float]:
     """Median milliseconds per update of the occlusion rule (one native cast and classification),
     of the view cast (the KD-tree search's visible points; None for the index, which does not use
     one) and of the alignment of the kept returns given it, done as the localizer does them."""
@@ -90,8 +96,11 @@ def _native_steps(plan: planicp.PlanMap, config: IcpConfig, localizer: Localizer
         classify_s.append(t1 - t0)
         view_s.append(t2 - t1)
         align_s.append(t3 - t2)
-    return (float(np.median(classify_s)) * 1e3, float(np.median(view_s)) * 1e3 if uses_view else None,
-            float(np.median(align_s)) * 1e3)
+    return (
+        float(np.median(classify_s)) * 1e3,
+        float(np.median(view_s)) * 1e3 if uses_view else None,
+        float(np.median(align_s)) * 1e3,
+    )
 
 
 if __name__ == "__main__":

@@ -57,8 +57,9 @@ class Simulator:
         raster = self.plan.raster
         assert raster is not None and raster.origin[2] == 0.0
         # PlanRaster is in image order (row 0 at the top); the ray caster's rows grow with +y.
-        self.grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
-                                        (raster.origin[0], raster.origin[1]))
+        self.grid = _core.OccupancyGrid(
+            np.ascontiguousarray(raster.walls[::-1]), raster.resolution, (raster.origin[0], raster.origin[1])
+        )
         self.rng = np.random.default_rng(self.seed)
         x0, y0, x1, y1 = self.plan.extent
         self.box = (x0, y0, x1, y1)
@@ -66,8 +67,16 @@ class Simulator:
         self.odom = (0.0, 0.0, 0.0)
 
     def _scan(self, pose: tuple[float, float, float], noisy: bool = True) -> np.ndarray:
-        return self.grid.cast(pose, -math.pi, 2 * math.pi / BEAMS, BEAMS, 0.05, 30.0,
-                              range_sigma=0.01 if noisy else 0.0, seed=int(self.rng.integers(2**32)))
+        return self.grid.cast(
+            pose,
+            -math.pi,
+            2 * math.pi / BEAMS,
+            BEAMS,
+            0.05,
+            30.0,
+            range_sigma=0.01 if noisy else 0.0,
+            seed=int(self.rng.integers(2**32)),
+        )
 
     def _ok(self, pose: tuple[float, float, float]) -> bool:
         r = self._scan(pose, noisy=False)
@@ -77,7 +86,11 @@ class Simulator:
     def _free_pose(self) -> tuple[float, float, float]:
         x0, y0, x1, y1 = self.box
         while True:
-            p = (float(self.rng.uniform(x0, x1)), float(self.rng.uniform(y0, y1)), float(self.rng.uniform(-math.pi, math.pi)))
+            p = (
+                float(self.rng.uniform(x0, x1)),
+                float(self.rng.uniform(y0, y1)),
+                float(self.rng.uniform(-math.pi, math.pi)),
+            )
             if self._ok(p):
                 return p
 
@@ -95,8 +108,9 @@ class Simulator:
         return pts, self.odom, self.truth
 
 
-def run(updates: int, sample_every: int = 1000, seed: int = 0, keep: list[Any] | None = None,
-        log: Any = None) -> dict[str, Any]:
+def run(
+    updates: int, sample_every: int = 1000, seed: int = 0, keep: list[Any] | None = None, log: Any = None
+) -> dict[str, Any]:
     """Runs `updates` Localizer updates; `keep` (a list) holds every scan, to simulate a leak."""
     sim = Simulator(seed=seed)
     loc = Localizer(sim.plan, sim.truth)
@@ -118,7 +132,11 @@ def run(updates: int, sample_every: int = 1000, seed: int = 0, keep: list[Any] |
         if i % sample_every == 0 or i == updates:
             samples.append((i, rss_mb()))
             if log is not None:
-                print(f"{i:>7} updates  RSS {samples[-1][1]:8.1f} MB  {time.perf_counter() - t0:7.1f} s", file=log, flush=True)
+                print(
+                    f"{i:>7} updates  RSS {samples[-1][1]:8.1f} MB  {time.perf_counter() - t0:7.1f} s",
+                    file=log,
+                    flush=True,
+                )
     mark = max(1, updates // 10)
     at_mark = min(samples, key=lambda s: abs(s[0] - mark))
     return {
@@ -145,12 +163,18 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     r = run(args.updates, args.sample_every, args.seed, log=sys.stdout)
     flat = r["growth_mb"] < args.max_growth_mb
-    print(f"\n{r['updates']} updates in {r['seconds']:.0f} s ({1e3 * r['seconds'] / r['updates']:.2f} ms each), "
-          f"{r['accepted']} accepted, median position error {100 * r['median_error_m']:.1f} cm (every 100th)")
-    print(f"RSS: start {r['rss_start_mb']:.1f} MB, at update {r['mark']} {r['rss_mark_mb']:.1f} MB, "
-          f"end {r['rss_end_mb']:.1f} MB, max {r['rss_max_mb']:.1f} MB")
-    print(f"growth from the 10 % mark to the end: {r['growth_mb']:+.2f} MB -> "
-          f"{'FLAT' if flat else 'GROWING'} (bound {args.max_growth_mb} MB)")
+    print(
+        f"\n{r['updates']} updates in {r['seconds']:.0f} s ({1e3 * r['seconds'] / r['updates']:.2f} ms each), "
+        f"{r['accepted']} accepted, median position error {100 * r['median_error_m']:.1f} cm (every 100th)"
+    )
+    print(
+        f"RSS: start {r['rss_start_mb']:.1f} MB, at update {r['mark']} {r['rss_mark_mb']:.1f} MB, "
+        f"end {r['rss_end_mb']:.1f} MB, max {r['rss_max_mb']:.1f} MB"
+    )
+    print(
+        f"growth from the 10 % mark to the end: {r['growth_mb']:+.2f} MB -> "
+        f"{'FLAT' if flat else 'GROWING'} (bound {args.max_growth_mb} MB)"
+    )
     return 0 if flat else 1
 
 

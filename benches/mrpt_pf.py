@@ -98,13 +98,16 @@ def write_carmen(path: Path, frames: list[ScanFrame]) -> None:
         r = np.where(np.isfinite(f.ranges), f.ranges, max_range + 1.0)
         text = " ".join(f"{v:.3f}" for v in r)
         o = f.odometry
-        lines.append(f"FLASER {n} {text} {laser[0]:.6f} {laser[1]:.6f} {laser[2]:.6f} "
-                     f"{o[0]:.6f} {o[1]:.6f} {o[2]:.6f} {f.time:.6f} bench {f.time:.6f}")
+        lines.append(
+            f"FLASER {n} {text} {laser[0]:.6f} {laser[1]:.6f} {laser[2]:.6f} "
+            f"{o[0]:.6f} {o[1]:.6f} {o[2]:.6f} {f.time:.6f} bench {f.time:.6f}"
+        )
     path.write_text("\n".join(lines) + "\n")
 
 
-def write_ini(path: Path, gridmap: Path, rawlog: Path, out_prefix: Path, start: tuple[float, float, float],
-              s: PfSettings) -> None:
+def write_ini(
+    path: Path, gridmap: Path, rawlog: Path, out_prefix: Path, start: tuple[float, float, float], s: PfSettings
+) -> None:
     """The pf-localization configuration."""
     x, y, yaw = start
     path.write_text(f"""# planicp intel_harder: MRPT pf-localization on the Intel evaluation inputs
@@ -200,8 +203,14 @@ class PfRun:
     workdir: Path
 
 
-def run(frames: list[ScanFrame], plan: PlanMap, start: tuple[float, float, float], workdir: Path,
-        settings: PfSettings | None = None, timeout_s: float = 3600.0) -> PfRun:
+def run(
+    frames: list[ScanFrame],
+    plan: PlanMap,
+    start: tuple[float, float, float],
+    workdir: Path,
+    settings: PfSettings | None = None,
+    timeout_s: float = 3600.0,
+) -> PfRun:
     """Writes the inputs into `workdir`, runs pf-localization, returns one pose per frame.
 
     Raises:
@@ -210,7 +219,7 @@ def run(frames: list[ScanFrame], plan: PlanMap, start: tuple[float, float, float
     s = settings or PfSettings()
     workdir.mkdir(parents=True, exist_ok=True)
     yaml_path = plan.to_ros_map(workdir / "plan.yaml")
-    _check([ "ros-map-yaml2mrpt", "-q", "-w", "-i", str(yaml_path), "-d", str(workdir)], workdir)
+    _check(["ros-map-yaml2mrpt", "-q", "-w", "-i", str(yaml_path), "-d", str(workdir)], workdir)
     gridmaps = sorted(workdir.glob("plan*.gridmap*"))
     if not gridmaps:
         raise RuntimeError(f"ros-map-yaml2mrpt wrote no .gridmap into {workdir}")
@@ -222,16 +231,23 @@ def run(frames: list[ScanFrame], plan: PlanMap, start: tuple[float, float, float
     out_prefix = workdir / "pf_out"
     write_ini(ini, gridmaps[0], rawlog, out_prefix, start, s)
     began = time.perf_counter()
-    proc = subprocess.run(["pf-localization", str(ini)], cwd=workdir, stdin=subprocess.DEVNULL,
-                          capture_output=True, text=True, timeout=timeout_s)
+    proc = subprocess.run(
+        ["pf-localization", str(ini)],
+        cwd=workdir,
+        stdin=subprocess.DEVNULL,
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+    )
     wall = time.perf_counter() - began
     (workdir / "pf.stdout").write_text(proc.stdout + proc.stderr)
     if proc.returncode != 0:
         raise RuntimeError(f"pf-localization exited {proc.returncode}: {(proc.stdout + proc.stderr)[-2000:]}")
     est = parse_estimates(proc.stdout + proc.stderr)
     if len(est) != len(frames):
-        raise RuntimeError(f"pf-localization gave {len(est)} estimates for {len(frames)} scans "
-                           f"(see {workdir / 'pf.stdout'})")
+        raise RuntimeError(
+            f"pf-localization gave {len(est)} estimates for {len(frames)} scans (see {workdir / 'pf.stdout'})"
+        )
     times_files = sorted(workdir.glob("pf_out_*/exec_times.txt"))
     steps = np.loadtxt(times_files[0]).reshape(-1) if times_files else np.array([])
     return PfRun(est, steps, wall, workdir)

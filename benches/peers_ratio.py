@@ -45,8 +45,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--peers-file", type=Path, default=DEFAULT_PEERS_FILE)
     p.add_argument("--repeats", type=int, default=3, help="timings of the main case")
     p.add_argument("--trials", type=int, default=50)
-    p.add_argument("--others", default="open3d,kiss_icp",
-                   help="further peers to time when importable (comma-separated peers.py names)")
+    p.add_argument(
+        "--others",
+        default="open3d,kiss_icp",
+        help="further peers to time when importable (comma-separated peers.py names)",
+    )
     p.add_argument("--no-scale", action="store_true", help="skip the 10k / 100k / 1M sweep")
     p.add_argument("--scale-reps", type=int, default=15, help="poses per cell of the sweep (peers.py: 7)")
     return p.parse_args(argv)
@@ -56,15 +59,20 @@ def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     peers_mod = load_peers_module(args.peers_file)
     # peers.py's own defaults make the case; only the trial count is ours.
-    case = peers_mod.parse_args(["--trials", str(args.trials), "--threads", "1",
-                                 "--scale-reps", str(args.scale_reps)])
+    case = peers_mod.parse_args(["--trials", str(args.trials), "--threads", "1", "--scale-reps", str(args.scale_reps)])
     rng = np.random.default_rng(case.seed)
     floor = peers_mod.make_floor_plan(rng, case.width, case.height, case.res, case.rooms, case.clutter_per_room)
     map_xy = floor.map_points()
     sampler = peers_mod.PoseSampler(floor, clearance=case.clearance)
     trials = peers_mod.make_trials(rng, floor, sampler, case.trials, case, case.beams)
-    cfg = argparse.Namespace(max_corr=case.max_corr, max_iter=case.max_iter, trim=case.trim,
-                             trim_start=case.trim_start, threads=1, res=case.res)
+    cfg = argparse.Namespace(
+        max_corr=case.max_corr,
+        max_iter=case.max_iter,
+        trim=case.trim,
+        trim_start=case.trim_start,
+        threads=1,
+        res=case.res,
+    )
     wanted = ["small_gicp_icp", "numpy", *PLANICP, *[o for o in args.others.split(",") if o]]
     peers, skipped = peers_mod.load_peers(wanted, cfg)
     names = [p.name for p in peers]
@@ -72,8 +80,10 @@ def main(argv: list[str] | None = None) -> None:
     missing = [n for n in PLANICP if n not in names]
     if missing:
         raise SystemExit(f"planicp cannot be imported here ({skipped})")
-    print(f"# {case.trials} trials of {case.beams} beams on peers.py's floor ({len(map_xy)} wall points), "
-          f"30 fixed iterations for all but planicp_default; baseline: {baseline}")
+    print(
+        f"# {case.trials} trials of {case.beams} beams on peers.py's floor ({len(map_xy)} wall points), "
+        f"30 fixed iterations for all but planicp_default; baseline: {baseline}"
+    )
     for name, why in skipped.items():
         print(f"# skipped {name}: {why}")
 
@@ -93,9 +103,11 @@ def main(argv: list[str] | None = None) -> None:
         print(f"| {name} | {ms} | {ratios} | {success[name] * 100:.0f} % |")
     worst = max(t / b for t, b in zip(medians["planicp"], base))
     faster = all(d < f for d, f in zip(medians["planicp_default"], medians["planicp"]))
-    print(f"\n# planicp (30 fixed iterations): at most 1/{1 / worst:.1f} of {baseline} over the repeats "
-          f"(bar 1/15); planicp_default faster than planicp in every repeat: {faster}; success "
-          f"{success['planicp'] * 100:.0f} % against {success[baseline] * 100:.0f} %")
+    print(
+        f"\n# planicp (30 fixed iterations): at most 1/{1 / worst:.1f} of {baseline} over the repeats "
+        f"(bar 1/15); planicp_default faster than planicp in every repeat: {faster}; success "
+        f"{success['planicp'] * 100:.0f} % against {success[baseline] * 100:.0f} %"
+    )
 
     if args.no_scale:
         return
@@ -113,12 +125,18 @@ def main(argv: list[str] | None = None) -> None:
         print(f"| {name} | {points} | {cells} |")
     smallest, largest = min(case.map_sizes), max(case.map_sizes)
     for name in (*PLANICP, baseline):
-        growth = [by[(name, largest)][b] / by[(name, smallest)][b] for b in case.scan_sizes
-                  if b in by.get((name, largest), {}) and b in by.get((name, smallest), {})]
+        growth = [
+            by[(name, largest)][b] / by[(name, smallest)][b]
+            for b in case.scan_sizes
+            if b in by.get((name, largest), {}) and b in by.get((name, smallest), {})
+        ]
         if growth:
-            print(f"# {name}: {largest} / {smallest} map points, time grows "
-                  + " / ".join(f"{g:.2f}x" for g in growth) + f" ({', '.join(map(str, case.scan_sizes))} beams; "
-                  f"median of {case.scale_reps} poses each)")
+            print(
+                f"# {name}: {largest} / {smallest} map points, time grows "
+                + " / ".join(f"{g:.2f}x" for g in growth)
+                + f" ({', '.join(map(str, case.scan_sizes))} beams; "
+                f"median of {case.scale_reps} poses each)"
+            )
     print(f"# sweep took {time.perf_counter() - started:.0f} s")
 
 

@@ -39,8 +39,12 @@ def office_image(size: int, wall_px: int, room_px: int) -> np.ndarray:
     door = room_px // 4
     for r in range(0, size - room_px, room_px):
         for c in range(0, size - room_px, room_px):
-            image[r + room_px // 2 - door // 2 : r + room_px // 2 + door // 2, c + room_px : c + room_px + wall_px] = 255
-            image[r + room_px : r + room_px + wall_px, c + room_px // 2 - door // 2 : c + room_px // 2 + door // 2] = 255
+            image[r + room_px // 2 - door // 2 : r + room_px // 2 + door // 2, c + room_px : c + room_px + wall_px] = (
+                255
+            )
+            image[r + room_px : r + room_px + wall_px, c + room_px // 2 - door // 2 : c + room_px // 2 + door // 2] = (
+                255
+            )
     return image
 
 
@@ -57,8 +61,9 @@ def dense_walls(length: float, counts: list[int]) -> None:
     """Two walls `length` m long, 3 m apart, of each count of points: build and first localize."""
     print(f"two {length:g} m walls, 3 m apart: PlanMap.from_points, then the first localize")
     print("points given | kept    | spacing given | build s (ratio) | first localize s (ratio) | points ratio")
-    scan = np.vstack([np.c_[np.linspace(-5.0, 5.0, 200), np.full(200, -1.5)],
-                      np.c_[np.linspace(-5.0, 5.0, 200), np.full(200, 1.5)]])
+    scan = np.vstack(
+        [np.c_[np.linspace(-5.0, 5.0, 200), np.full(200, -1.5)], np.c_[np.linspace(-5.0, 5.0, 200), np.full(200, 1.5)]]
+    )
     previous: tuple[int, float, float] | None = None
     for n in counts:
         x = np.linspace(0.0, length, n // 2)
@@ -73,8 +78,10 @@ def dense_walls(length: float, counts: list[int]) -> None:
         ratios = ("", "", "")
         if previous is not None:
             ratios = (f" ({t_build / previous[1]:.1f}x)", f" ({t_first / previous[2]:.1f}x)", f"{n / previous[0]:.0f}x")
-        print(f"{n:12.0e} | {len(plan):7d} | {length / (n // 2):10.2e} m | {t_build:7.2f}{ratios[0]:>8} | "
-              f"{t_first:8.2f}{ratios[1]:>8}         | {ratios[2]}")
+        print(
+            f"{n:12.0e} | {len(plan):7d} | {length / (n // 2):10.2e} m | {t_build:7.2f}{ratios[0]:>8} | "
+            f"{t_first:8.2f}{ratios[1]:>8}         | {ratios[2]}"
+        )
         previous = (n, t_build, t_first)
 
 
@@ -84,8 +91,7 @@ def main() -> None:
     parser.add_argument("--resolution", type=float, default=0.025)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--walls-length", type=float, default=2000.0)
-    parser.add_argument("--dense-points", default="1e5,1e6,1e7",
-                        help="comma-separated point counts of the dense walls")
+    parser.add_argument("--dense-points", default="1e5,1e6,1e7", help="comma-separated point counts of the dense walls")
     parser.add_argument("--skip-office", action="store_true")
     args = parser.parse_args()
     if not args.skip_office:

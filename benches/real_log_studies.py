@@ -39,7 +39,8 @@ from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, relocal
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
-        resolution=0.1, sigma=0.1, levels=7, angular_step=None, max_scan_points=200),
+        resolution=0.1, sigma=0.1, levels=7, angular_step=None, max_scan_points=200
+    ),
     "0.2 m, heading step from the scan, 100 points": RelocalizationConfig(angular_step=None),
     "0.2 m, 2 degrees, 100 points (the defaults)": RelocalizationConfig(),
 }
@@ -78,12 +79,16 @@ def search_study(harness: Any, logs: list[str], out: str) -> None:
                 best = found.best
                 if best is not None and not found.ambiguous and math.dist(best.pose[:2], ref[k, :2]) < 0.5:
                     right += 1
-            print(f"| {name} | {label} | {right} of {len(picked)} | {np.median(nodes) / 1e3:.0f}k | "
-                  f"{max(nodes) / 1e3:.0f}k | {short} |", flush=True)
+            print(
+                f"| {name} | {label} | {right} of {len(picked)} | {np.median(nodes) / 1e3:.0f}k | "
+                f"{max(nodes) / 1e3:.0f}k | {short} |",
+                flush=True,
+            )
 
 
-def track(harness: Any, plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray,
-          config: IcpConfig | None = None) -> tuple[dict[str, float], list[float]]:
+def track(
+    harness: Any, plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray, config: IcpConfig | None = None
+) -> tuple[dict[str, float], list[float]]:
     """The harness's error metrics (0.3 m for lost) of a `Localizer` started at the first reference
     pose, and the seconds each update took."""
     loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), config)
@@ -121,14 +126,20 @@ def nees_study(harness: Any, logs: list[str], out: str) -> None:
             e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
             if not e.accepted or e.result is None or e.relocalized or e.lost:
                 continue
-            for pose, cov, into in ((e.pose, e.covariance, estimate_nees), (e.result.pose, e.result.covariance, fit_nees)):
+            for pose, cov, into in (
+                (e.pose, e.covariance, estimate_nees),
+                (e.result.pose, e.result.covariance, fit_nees),
+            ):
                 d = np.array(pose) - ref[k]
                 d[2] = (d[2] + math.pi) % (2 * math.pi) - math.pi
                 if np.isfinite(cov).all():
                     into.append(float(d @ np.linalg.solve(cov, d)))
         a, b = np.median(estimate_nees), np.median(fit_nees)
-        print(f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} | {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
-              flush=True)
+        print(
+            f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} "
+            f"| {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
+            flush=True,
+        )
 
 
 CHI2_3_MEDIAN = 2.366
@@ -142,8 +153,11 @@ def visibility_study(harness: Any, logs: list[str], out: str) -> None:
         plan, scans, ref, odom = load(harness, name, out)
         for visible in (True, False):
             m, spent = track(harness, plan, scans, ref, odom, IcpConfig.for_tracking(use_visibility=visible))
-            print(f"| {name} | {'on (default)' if visible else 'off'} | {100 * m['ate_rmse_m']:.1f} cm | "
-                  f"{100 * m['lost_frac']:.1f} % | {1e3 * np.mean(spent):.2f} |", flush=True)
+            print(
+                f"| {name} | {'on (default)' if visible else 'off'} | {100 * m['ate_rmse_m']:.1f} cm | "
+                f"{100 * m['lost_frac']:.1f} % | {1e3 * np.mean(spent):.2f} |",
+                flush=True,
+            )
 
 
 def main() -> None:
@@ -151,8 +165,9 @@ def main() -> None:
     parser.add_argument("study", choices=("search", "visibility", "seeds", "nees"))
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
-    parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3, 4, 5, 6, 7],
-                        help="odometry seeds of the seeds study")
+    parser.add_argument(
+        "--seeds", nargs="+", type=int, default=[1, 2, 3, 4, 5, 6, 7], help="odometry seeds of the seeds study"
+    )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
     if spec is None or spec.loader is None or not os.path.exists(args.harness):

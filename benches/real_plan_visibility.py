@@ -101,7 +101,7 @@ def main() -> None:
     print("|---|---|" + "---|" * len(configs))
     for name, (floor, plan) in floors.items():
         rng = np.random.default_rng(args.seed)
-        ok = {k: 0 for k in configs}
+        ok = dict.fromkeys(configs, 0)
         ms = {k: [] for k in configs}
         for _ in range(args.poses):
             truth = floor.sample_pose(rng, clearance=0.6)

@@ -41,8 +41,9 @@ def wall_distance(x: float, y: float, angle: float) -> float:
 def distance_to_walls(points: np.ndarray) -> np.ndarray:
     """(N,) distance of map-frame points to the nearest wall line of the room."""
     xmin, xmax, ymin, ymax = ROOM
-    return np.min(np.abs(np.stack([points[:, 0] - xmin, points[:, 0] - xmax, points[:, 1] - ymin,
-                                   points[:, 1] - ymax])), axis=0)
+    return np.min(
+        np.abs(np.stack([points[:, 0] - xmin, points[:, 0] - xmax, points[:, 1] - ymin, points[:, 1] - ymax])), axis=0
+    )
 
 
 def true_pose(t: float) -> tuple[float, float, float]:
@@ -72,8 +73,10 @@ def flaser_line(t: float) -> str:
         else:
             ranges.append(f"{wall_distance(lx, ly, lyaw - math.pi / 2 + i * math.pi / 180):.4f}")
     ox, oy, oyaw = odom_pose(t)
-    return (f"FLASER {BEAMS} {' '.join(ranges)} {lx:.6f} {ly:.6f} {lyaw:.6f} {ox:.6f} {oy:.6f} {oyaw:.6f} "
-            f"{t:.6f} nohost {t:.6f}")
+    return (
+        f"FLASER {BEAMS} {' '.join(ranges)} {lx:.6f} {ly:.6f} {lyaw:.6f} {ox:.6f} {oy:.6f} {oyaw:.6f} "
+        f"{t:.6f} nohost {t:.6f}"
+    )
 
 
 def odom_line(t: float) -> str:

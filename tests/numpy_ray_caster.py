@@ -39,8 +39,11 @@ def _derived(floor: Any) -> dict[str, NDArray[Any]]:
         cls = np.zeros(floor.shape, dtype=np.uint8)
         cls[floor.clutter] = CLUTTER
         cls[floor.walls] = WALL  # clutter under a wall counts as wall
-        got = {"cell_class": cls, "padded_class": np.pad(cls, 1, constant_values=FREE).ravel(),
-               "skip_levels": box_clearance_levels(floor.occupied())}
+        got = {
+            "cell_class": cls,
+            "padded_class": np.pad(cls, 1, constant_values=FREE).ravel(),
+            "skip_levels": box_clearance_levels(floor.occupied()),
+        }
         _DERIVED[floor] = got
     return got
 
@@ -230,9 +233,7 @@ def _cast_grid(
     return dist, hit_cls
 
 
-def _cast_discs(
-    x: float, y: float, angles: NDArray[np.float64], discs: NDArray[np.float64]
-) -> NDArray[np.float64]:
+def _cast_discs(x: float, y: float, angles: NDArray[np.float64], discs: NDArray[np.float64]) -> NDArray[np.float64]:
     """Exact ray-circle first-hit distance (metres) from (x, y); 0 if the origin is inside a disc."""
     dx, dy = np.cos(angles)[:, None], np.sin(angles)[:, None]
     wx, wy = x - discs[None, :, 0], y - discs[None, :, 1]
@@ -312,15 +313,17 @@ def _simulate(
     return ranges, angle_min, angle_increment, source
 
 
-def simulate_ranges(floor: Any, pose: Any, rng: np.random.Generator, **kwargs: Any
-                    ) -> tuple[NDArray[np.float64], float, float]:
+def simulate_ranges(
+    floor: Any, pose: Any, rng: np.random.Generator, **kwargs: Any
+) -> tuple[NDArray[np.float64], float, float]:
     """`planicp.sim.simulate_ranges`, cast in numpy."""
     ranges, angle_min, angle_increment, _ = _simulate(floor, pose, rng, **kwargs)
     return ranges, angle_min, angle_increment
 
 
-def simulate_scan(floor: Any, pose: Any, rng: np.random.Generator, **kwargs: Any
-                  ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+def simulate_scan(
+    floor: Any, pose: Any, rng: np.random.Generator, **kwargs: Any
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """`planicp.sim.simulate_scan`, cast in numpy: sensor-frame points and whether each came from
     clutter or a disc rather than a wall."""
     ranges, angle_min, angle_increment, source = _simulate(floor, pose, rng, **kwargs)

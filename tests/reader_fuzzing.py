@@ -176,16 +176,102 @@ class Target:
 # ---------------------------------------------------------------------------------------------
 
 NUMBER_TOKENS = [
-    "0", "-0", "-1", "1", "2", "3", "-0.0", "0.5", "1e9", "-1e9", "1e10", "1e15", "1e300", "-1e300", "1e308",
-    "1.8e308", "1e400", "-1e400", "5e-324", "1e-320", "1e-300", "nan", "NaN", "-nan", "inf", "-inf", "Infinity",
-    "2147483647", "2147483648", "-2147483649", "4294967296", "9223372036854775807", "9223372036854775808",
-    "18446744073709551616", "1000000", "1000001", "99999999", "9" * 400, "1" * 5000, "0x10", "1_000", "\uff11",
-    "1,5", "+", "-", ".", "e", ".5e", "1e", "--1", "1e-4", "5e-2", "00", "007", "1.5", "3.14159",
+    "0",
+    "-0",
+    "-1",
+    "1",
+    "2",
+    "3",
+    "-0.0",
+    "0.5",
+    "1e9",
+    "-1e9",
+    "1e10",
+    "1e15",
+    "1e300",
+    "-1e300",
+    "1e308",
+    "1.8e308",
+    "1e400",
+    "-1e400",
+    "5e-324",
+    "1e-320",
+    "1e-300",
+    "nan",
+    "NaN",
+    "-nan",
+    "inf",
+    "-inf",
+    "Infinity",
+    "2147483647",
+    "2147483648",
+    "-2147483649",
+    "4294967296",
+    "9223372036854775807",
+    "9223372036854775808",
+    "18446744073709551616",
+    "1000000",
+    "1000001",
+    "99999999",
+    "9" * 400,
+    "1" * 5000,
+    "0x10",
+    "1_000",
+    "\uff11",
+    "1,5",
+    "+",
+    "-",
+    ".",
+    "e",
+    ".5e",
+    "1e",
+    "--1",
+    "1e-4",
+    "5e-2",
+    "00",
+    "007",
+    "1.5",
+    "3.14159",
 ]
 TEXT_TOKENS = [
-    "", " ", "\t", "\r", "\x00", "#", "%", "\u00e9", "\u202e", '"', "'", "\\", "{", "}", "[", "]", ":", ",", "- ",
-    "&a", "*a", "!!binary", "!!python/object/apply:os.system ['true']", "<<: *a", "~", "null", "true", "yes",
-    "0o777", "?", "|", ">", "@", "`", "---", "...", "\u2028", "\ufeff",
+    "",
+    " ",
+    "\t",
+    "\r",
+    "\x00",
+    "#",
+    "%",
+    "\u00e9",
+    "\u202e",
+    '"',
+    "'",
+    "\\",
+    "{",
+    "}",
+    "[",
+    "]",
+    ":",
+    ",",
+    "- ",
+    "&a",
+    "*a",
+    "!!binary",
+    "!!python/object/apply:os.system ['true']",
+    "<<: *a",
+    "~",
+    "null",
+    "true",
+    "yes",
+    "0o777",
+    "?",
+    "|",
+    ">",
+    "@",
+    "`",
+    "---",
+    "...",
+    "\u2028",
+    "\ufeff",
 ]
 RAW_TOKENS = [b"\xff\xfe", b"\x80", b"\xc3", b"\xed\xa0\x80", b"\x00" * 8, b"\r\n", b"\n" * 50]
 INTERESTING_BYTES = [0x00, 0x01, 0x7F, 0x80, 0xFF, 0x0A, 0x0D, 0x20, 0x2D, 0x2E, 0x30, 0x39, 0x65, 0x22, 0x27]
@@ -229,6 +315,7 @@ def tweak_number(rng: random.Random, text: bytes) -> bytes:
 # Generic byte mutations
 # ---------------------------------------------------------------------------------------------
 
+
 def capped(data: bytes) -> bytes:
     return data[:MAX_CASE_BYTES]
 
@@ -260,7 +347,7 @@ def mutate_bytes(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
     if op == 3:  # a range deleted
         at = rng.randrange(n)
         length = min(n - at, rng.choice((1, 4, 64, 1024, n)))
-        return data[:at] + data[at + length:]
+        return data[:at] + data[at + length :]
     if op == 4:  # a chunk duplicated, up to a thousand times
         a = rng.randrange(n)
         b = min(n, a + rng.choice((1, 8, 64, 512, 4096)))
@@ -268,19 +355,19 @@ def mutate_bytes(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
         at = rng.randrange(n + 1)
         return capped(data[:at] + data[a:b] * times + data[at:])
     if op == 5:  # truncated
-        return data[:rng.randrange(n)]
+        return data[: rng.randrange(n)]
     if op == 6:  # a token spliced in at, or over, a token boundary
         bounds = [m.start() for m in re.finditer(rb"[\s,:\[\]{}]", data)] or [0]
         at = rng.choice(bounds) + 1
         if rng.random() < 0.5:
             end = at
-            while end < n and data[end:end + 1] not in b" \t\r\n,:[]{}":
+            while end < n and data[end : end + 1] not in b" \t\r\n,:[]{}":
                 end += 1
             return capped(data[:at] + token(rng) + data[end:])
         return capped(data[:at] + token(rng) + data[at:])
     if op == 7:  # spliced with another seed
         other = rng.choice(others) if others else data
-        return capped(data[:rng.randrange(n + 1)] + other[rng.randrange(len(other) + 1):])
+        return capped(data[: rng.randrange(n + 1)] + other[rng.randrange(len(other) + 1) :])
     # op == 8: two chunks swapped
     a, b = sorted(rng.randrange(n + 1) for _ in range(2))
     c, d = sorted(rng.randrange(n + 1) for _ in range(2))
@@ -293,6 +380,7 @@ def mutate_bytes(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
 # Line and token mutations (CARMEN, g2o)
 # ---------------------------------------------------------------------------------------------
 
+
 def decompressed(data: bytes) -> tuple[bytes, str]:
     """(`data` decompressed, "gz" / "zip" / ""), or the bytes as they are when that fails."""
     try:
@@ -302,8 +390,7 @@ def decompressed(data: bytes) -> tuple[bytes, str]:
             with zipfile.ZipFile(io.BytesIO(data)) as archive:
                 names = archive.namelist()
                 return archive.read(names[0]), "zip"
-    except (OSError, EOFError, zlib.error, zipfile.BadZipFile, IndexError, KeyError, ValueError,
-            NotImplementedError):
+    except (OSError, EOFError, zlib.error, zipfile.BadZipFile, IndexError, KeyError, ValueError, NotImplementedError):
         pass
     return data, ""
 
@@ -312,7 +399,7 @@ def compressed(rng: random.Random, data: bytes, kind: str) -> bytes:
     """`data` as a gzip stream or a zip archive (sometimes one with two members, or cut short)."""
     if kind == "gz":
         out = gzip.compress(data, mtime=0)
-        return out[:rng.randrange(10, len(out))] if rng.random() < 0.2 and len(out) > 10 else out
+        return out[: rng.randrange(10, len(out))] if rng.random() < 0.2 and len(out) > 10 else out
     buffer = io.BytesIO()
     with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED if rng.random() < 0.5 else zipfile.ZIP_STORED) as archive:
         archive.writestr(zipfile.ZipInfo("log.txt", (2000, 1, 1, 0, 0, 0)), data)
@@ -343,16 +430,18 @@ def mutate_records(rng: random.Random, data: bytes, kinds: list[bytes]) -> bytes
         lines[k] = b" ".join(fields)
     elif op == 2 and fields:  # tokens deleted
         j = rng.randrange(len(fields))
-        del fields[j:j + rng.choice((1, 1, 2, 10))]
+        del fields[j : j + rng.choice((1, 1, 2, 10))]
         lines[k] = b" ".join(fields)
     elif op == 3:  # a token inserted
-        fields.insert(rng.randrange(len(fields) + 1), token(rng) if rng.random() < 0.5 else rng.choice(fields or [b"1"]))
+        fields.insert(
+            rng.randrange(len(fields) + 1), token(rng) if rng.random() < 0.5 else rng.choice(fields or [b"1"])
+        )
         lines[k] = b" ".join(fields)
     elif op == 4:  # a line repeated
         times = rng.choice((1, 2, 100, 3000))
         lines[k:k] = [lines[k]] * min(times, MAX_CASE_BYTES // (len(lines[k]) + 1))
     elif op == 5:  # lines deleted
-        del lines[k:k + rng.choice((1, 1, 5, len(lines)))]
+        del lines[k : k + rng.choice((1, 1, 5, len(lines)))]
     elif op == 6:  # lines swapped or the order shuffled
         if rng.random() < 0.8:
             j = rng.randrange(len(lines))
@@ -365,8 +454,20 @@ def mutate_records(rng: random.Random, data: bytes, kinds: list[bytes]) -> bytes
     elif op == 8 and fields and fields[0] in COUNT_FIELDS:  # a count field changed
         j = rng.choice(COUNT_FIELDS[fields[0]])
         if j < len(fields):
-            fields[j] = rng.choice([b"0", b"1", b"2", b"-1", b"2.5", b"1000000", b"1000001", b"10000000", b"1e6",
-                                    tweak_number(rng, fields[j])])
+            fields[j] = rng.choice(
+                [
+                    b"0",
+                    b"1",
+                    b"2",
+                    b"-1",
+                    b"2.5",
+                    b"1000000",
+                    b"1000001",
+                    b"10000000",
+                    b"1e6",
+                    tweak_number(rng, fields[j]),
+                ]
+            )
             lines[k] = b" ".join(fields)
     elif op == 9:  # time stamps (third last field) made equal, backwards, huge or NaN
         stamp = rng.choice([b"0", b"1e300", b"nan", b"-5", b"1e9", None])
@@ -376,8 +477,16 @@ def mutate_records(rng: random.Random, data: bytes, kinds: list[bytes]) -> bytes
                 parts[-3] = stamp if stamp is not None else str(1000.0 - m).encode()
                 lines[m] = b" ".join(parts)
     elif op == 10:  # a PARAM that the reader uses
-        name = rng.choice([b"robot_front_laser_max", b"robot_rear_laser_max", b"robot_frontlaser_offset",
-                           b"robot_frontlaser_side_offset", b"robot_frontlaser_angular_offset", b"robot_rearlaser_offset"])
+        name = rng.choice(
+            [
+                b"robot_front_laser_max",
+                b"robot_rear_laser_max",
+                b"robot_frontlaser_offset",
+                b"robot_frontlaser_side_offset",
+                b"robot_frontlaser_angular_offset",
+                b"robot_rearlaser_offset",
+            ]
+        )
         lines.insert(rng.randrange(len(lines) + 1), b"PARAM " + name + b" " + token(rng) + b" nohost 0")
     else:  # a very long line, or a line of a single byte
         lines.insert(rng.randrange(len(lines) + 1), long_line() if rng.random() < 0.3 else token(rng))
@@ -397,10 +506,50 @@ SPLICE = "@@SPLICE@@"
 def yaml_values(rng: random.Random) -> Any:
     """A value of an unexpected kind or size for a YAML or JSON document."""
     choices: list[Any] = [
-        0, -1, 1, 2, 10**30, -(10**30), 2**63, 2**31, 1e308, float("inf"), float("-inf"), float("nan"), 1e-320, -0.0,
-        0.5, 1e9, 1e10, "", "x" * 5000, "1e-4", "-5e-2", "nan", ".inf", "-", "default", None, True, False, [], {},
-        [0, 0, 0], [0, [1], 0], [1e308, 1e308, 0], {"a": 1}, "map.pgm", "../map.pgm", "/dev/zero", "/", ".",
-        "a\x00b", "\u00e9\u202e", [[0, 0], [1, 0]], [[0, 0]] * 3, list(range(50)),
+        0,
+        -1,
+        1,
+        2,
+        10**30,
+        -(10**30),
+        2**63,
+        2**31,
+        1e308,
+        float("inf"),
+        float("-inf"),
+        float("nan"),
+        1e-320,
+        -0.0,
+        0.5,
+        1e9,
+        1e10,
+        "",
+        "x" * 5000,
+        "1e-4",
+        "-5e-2",
+        "nan",
+        ".inf",
+        "-",
+        "default",
+        None,
+        True,
+        False,
+        [],
+        {},
+        [0, 0, 0],
+        [0, [1], 0],
+        [1e308, 1e308, 0],
+        {"a": 1},
+        "map.pgm",
+        "../map.pgm",
+        "/dev/zero",
+        "/",
+        ".",
+        "a\x00b",
+        "\u00e9\u202e",
+        [[0, 0], [1, 0]],
+        [[0, 0]] * 3,
+        list(range(50)),
     ]
     value = rng.choice(choices)
     if rng.random() < 0.05:
@@ -466,7 +615,9 @@ def mutate_tree(rng: random.Random, tree: Any, splice: bool) -> Any:
                 holder = holder[key]
             holder[other[-1]] = value
     elif op == 7 and isinstance(parent[last], (int, float)) and not isinstance(parent[last], bool):
-        parent[last] = _as_value(tweak_number(rng, repr(parent[last]).encode())) if rng.random() < 0.7 else -parent[last]
+        parent[last] = (
+            _as_value(tweak_number(rng, repr(parent[last]).encode())) if rng.random() < 0.7 else -parent[last]
+        )
     else:
         parent[last] = str(parent[last]) if rng.random() < 0.5 else [parent[last]]
     return tree
@@ -540,17 +691,60 @@ def yaml_snippet(rng: random.Random) -> str:
         depth = rng.choice((100, 1000, 10_000))
         return "{a: " * depth + "1" + "}" * depth
     if r == 4:
-        return rng.choice(["!!python/tuple [1, 2]", "!!set {a, b}", "!!timestamp 2001-12-14", "!!binary aGVsbG8=",
-                           "!!float nan", "!!int 0x1F", "!!str 5", "!!omap [a: 1]", "!!python/name:os.system",
-                           "!<tag:yaml.org,2002:int> '7'", "!!null ''", "!custom 1"])
+        return rng.choice(
+            [
+                "!!python/tuple [1, 2]",
+                "!!set {a, b}",
+                "!!timestamp 2001-12-14",
+                "!!binary aGVsbG8=",
+                "!!float nan",
+                "!!int 0x1F",
+                "!!str 5",
+                "!!omap [a: 1]",
+                "!!python/name:os.system",
+                "!<tag:yaml.org,2002:int> '7'",
+                "!!null ''",
+                "!custom 1",
+            ]
+        )
     if r == 5:
-        return rng.choice(["*undefined", "&a *a", "&a [*a]", "{<<: [1]}", "{? [1, 2] : 3}", "[1, 2",
-                           "'unterminated", '"\\uD800"', "{a: 1, a: 2}", "|\n  block\n", ">-\n folded"])
+        return rng.choice(
+            [
+                "*undefined",
+                "&a *a",
+                "&a [*a]",
+                "{<<: [1]}",
+                "{? [1, 2] : 3}",
+                "[1, 2",
+                "'unterminated",
+                '"\\uD800"',
+                "{a: 1, a: 2}",
+                "|\n  block\n",
+                ">-\n folded",
+            ]
+        )
     if r == 6:
         return "[" + ", ".join(["0"] * rng.choice((3, 1000, 200_000))) + "]"
     if r == 7:
-        return rng.choice(["1e-4", "5e-2", "-.inf", ".NaN", "0o17", "0b101", "1_000", "1:30", "0x_1F", "+1",
-                           "190:20:30", "~", "Null", "Yes", "Off"])
+        return rng.choice(
+            [
+                "1e-4",
+                "5e-2",
+                "-.inf",
+                ".NaN",
+                "0o17",
+                "0b101",
+                "1_000",
+                "1:30",
+                "0x_1F",
+                "+1",
+                "190:20:30",
+                "~",
+                "Null",
+                "Yes",
+                "Off",
+            ]
+        )
     return repr(rng.choice(["", "x" * 1000, "a\tb", "\u00e9"]))
 
 
@@ -573,8 +767,14 @@ def mutate_yaml(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
     text = None
     if text_size(tree, MAX_CASE_BYTES) <= MAX_CASE_BYTES:  # the dumper writes scalars out each time they occur
         try:
-            text = yaml.dump(tree, Dumper=dumper, sort_keys=False, default_flow_style=style,
-                             allow_unicode=rng.random() < 0.5, width=rng.choice((80, 10**6)))
+            text = yaml.dump(
+                tree,
+                Dumper=dumper,
+                sort_keys=False,
+                default_flow_style=style,
+                allow_unicode=rng.random() < 0.5,
+                width=rng.choice((80, 10**6)),
+            )
         except Exception:  # noqa: BLE001 - a tree the dumper refuses
             pass
     if text is None:  # (outside the handler: its traceback would keep the dumper's buffers alive)
@@ -606,9 +806,22 @@ def mutate_json(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
         return mutate_bytes(rng, data, others)
     if SPLICE in text:
         depth = rng.choice((10, 1000, 100_000))
-        snippet = rng.choice(["[" * depth + "]" * depth, '{"a":' * depth + "1" + "}" * depth, "1" * 5000,
-                              "1e400", "-1e400", "NaN", "-Infinity", '"\\ud800"', "[" + ",".join(["[0,0]"] * 100_000) + "]",
-                              "tru", '"\\u0000"', "0" * 100])
+        snippet = rng.choice(
+            [
+                "[" * depth + "]" * depth,
+                '{"a":' * depth + "1" + "}" * depth,
+                "1" * 5000,
+                "1e400",
+                "-1e400",
+                "NaN",
+                "-Infinity",
+                '"\\ud800"',
+                "[" + ",".join(["[0,0]"] * 100_000) + "]",
+                "tru",
+                '"\\u0000"',
+                "0" * 100,
+            ]
+        )
         text = text.replace(f'"{SPLICE}"', snippet, 1)
     return capped(text.encode("utf-8", errors="surrogatepass"))
 
@@ -617,12 +830,70 @@ def mutate_json(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
 # DXF mutations: group code / value pairs
 # ---------------------------------------------------------------------------------------------
 
-DXF_CODES = [b"0", b"2", b"5", b"8", b"9", b"10", b"11", b"20", b"21", b"30", b"31", b"39", b"40", b"41", b"42",
-             b"43", b"50", b"51", b"62", b"66", b"70", b"90", b"100", b"210", b"220", b"230", b"330", b"1001",
-             b"1071", b"999", b"-1", b"abc", b"", b"  10", b"1e3", b"5000"]
-DXF_NAMES = [b"LINE", b"ARC", b"CIRCLE", b"LWPOLYLINE", b"POLYLINE", b"VERTEX", b"SEQEND", b"INSERT", b"TEXT",
-             b"SECTION", b"ENDSEC", b"EOF", b"ENTITIES", b"HEADER", b"BLOCK", b"ENDBLK", b"TABLE", b"LAYER", b"HATCH",
-             b"SPLINE", b"ELLIPSE", b"3DFACE", b"line", b""]
+DXF_CODES = [
+    b"0",
+    b"2",
+    b"5",
+    b"8",
+    b"9",
+    b"10",
+    b"11",
+    b"20",
+    b"21",
+    b"30",
+    b"31",
+    b"39",
+    b"40",
+    b"41",
+    b"42",
+    b"43",
+    b"50",
+    b"51",
+    b"62",
+    b"66",
+    b"70",
+    b"90",
+    b"100",
+    b"210",
+    b"220",
+    b"230",
+    b"330",
+    b"1001",
+    b"1071",
+    b"999",
+    b"-1",
+    b"abc",
+    b"",
+    b"  10",
+    b"1e3",
+    b"5000",
+]
+DXF_NAMES = [
+    b"LINE",
+    b"ARC",
+    b"CIRCLE",
+    b"LWPOLYLINE",
+    b"POLYLINE",
+    b"VERTEX",
+    b"SEQEND",
+    b"INSERT",
+    b"TEXT",
+    b"SECTION",
+    b"ENDSEC",
+    b"EOF",
+    b"ENTITIES",
+    b"HEADER",
+    b"BLOCK",
+    b"ENDBLK",
+    b"TABLE",
+    b"LAYER",
+    b"HATCH",
+    b"SPLINE",
+    b"ELLIPSE",
+    b"3DFACE",
+    b"line",
+    b"",
+]
 
 
 def mutate_dxf(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
@@ -640,9 +911,9 @@ def mutate_dxf(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
         lines[2 * k] = rng.choice(DXF_CODES)
     elif op == 4:  # a pair deleted or repeated
         if rng.random() < 0.5:
-            del lines[2 * k:2 * k + 2]
+            del lines[2 * k : 2 * k + 2]
         else:
-            lines[2 * k:2 * k] = lines[2 * k:2 * k + 2] * rng.choice((1, 2, 1000))
+            lines[2 * k : 2 * k] = lines[2 * k : 2 * k + 2] * rng.choice((1, 2, 1000))
     elif op == 5:  # an entity (from one code 0 to the next) repeated, or deleted
         starts = [2 * j for j in range(pairs) if lines[2 * j].strip() == b"0"]
         if len(starts) >= 2:
@@ -663,10 +934,27 @@ def mutate_dxf(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
             at = rng.choice(spots)
             target = at + 3 if wanted.startswith(b"$") else at + 1
             if target < len(lines):
-                lines[target] = rng.choice([b"-1", b"0", b"25", b"1e300", b"nan", b"1e-15", b"1e15", b"-1e15", b"1e17",
-                                            b"360", b"-720", b"1", b"4", b"2147483648", tweak_number(rng, lines[target].strip())])
+                lines[target] = rng.choice(
+                    [
+                        b"-1",
+                        b"0",
+                        b"25",
+                        b"1e300",
+                        b"nan",
+                        b"1e-15",
+                        b"1e15",
+                        b"-1e15",
+                        b"1e17",
+                        b"360",
+                        b"-720",
+                        b"1",
+                        b"4",
+                        b"2147483648",
+                        tweak_number(rng, lines[target].strip()),
+                    ]
+                )
     else:  # cut at a pair boundary
-        del lines[2 * k:]
+        del lines[2 * k :]
     return capped(b"\n".join(lines))
 
 
@@ -674,15 +962,16 @@ def mutate_dxf(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
 # Image mutations: header fields of PGM, PNG and BMP
 # ---------------------------------------------------------------------------------------------
 
+
 def png_chunks(data: bytes) -> list[tuple[bytes, bytes]] | None:
     """(type, data) of each chunk of a PNG, None when it is not one."""
     if not data.startswith(b"\x89PNG\r\n\x1a\n"):
         return None
     chunks, at = [], 8
     while at + 8 <= len(data):
-        (length,) = struct.unpack(">I", data[at:at + 4])
-        kind = data[at + 4:at + 8]
-        chunks.append((kind, data[at + 8:at + 8 + length]))
+        (length,) = struct.unpack(">I", data[at : at + 4])
+        kind = data[at + 4 : at + 8]
+        chunks.append((kind, data[at + 8 : at + 8 + length]))
         at += 12 + length
     return chunks
 
@@ -705,8 +994,11 @@ def mutate_image(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
         if op == 0 and kind == b"IHDR" and len(body) == 13:  # width, height, depth, colour type, interlace
             fields = list(struct.unpack(">IIBBBBB", body))
             j = rng.randrange(7)
-            fields[j] = rng.choice([0, 1, 2, 3, 4, 6, 8, 16, 255, 14000, 65535, 2**31 - 1, 2**32 - 1]) if j < 2 else \
-                rng.choice([0, 1, 2, 3, 4, 6, 7, 8, 16, 255])
+            fields[j] = (
+                rng.choice([0, 1, 2, 3, 4, 6, 8, 16, 255, 14000, 65535, 2**31 - 1, 2**32 - 1])
+                if j < 2
+                else rng.choice([0, 1, 2, 3, 4, 6, 7, 8, 16, 255])
+            )
             chunks[k] = (kind, struct.pack(">IIBBBBB", *fields))
         elif op == 1 and kind == b"IDAT":  # compressed pixels changed (decompressing, editing, recompressing)
             try:
@@ -715,7 +1007,7 @@ def mutate_image(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
                     if pixels:
                         pixels[rng.randrange(len(pixels))] = rng.randrange(256)
                 if rng.random() < 0.3:
-                    pixels = pixels[:rng.randrange(len(pixels) + 1)]
+                    pixels = pixels[: rng.randrange(len(pixels) + 1)]
                 chunks[k] = (kind, zlib.compress(bytes(pixels)))
             except zlib.error:
                 chunks[k] = (kind, mutate_bytes(rng, body, []))
@@ -727,9 +1019,15 @@ def mutate_image(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
             else:
                 chunks[k:k] = [chunks[k]] * rng.choice((1, 2, 50))
         elif op == 4:  # an ancillary chunk added: a palette, a huge text, a gamma, transparency
-            extra = rng.choice([(b"PLTE", bytes(range(256)) * 3), (b"tEXt", b"k\x00" + b"v" * 100_000),
-                                (b"gAMA", b"\x00\x00\x00\x00"), (b"tRNS", b"\x00" * 256),
-                                (b"zTXt", b"k\x00\x00" + zlib.compress(b"z" * 10_000_000))])
+            extra = rng.choice(
+                [
+                    (b"PLTE", bytes(range(256)) * 3),
+                    (b"tEXt", b"k\x00" + b"v" * 100_000),
+                    (b"gAMA", b"\x00\x00\x00\x00"),
+                    (b"tRNS", b"\x00" * 256),
+                    (b"zTXt", b"k\x00\x00" + zlib.compress(b"z" * 10_000_000)),
+                ]
+            )
             chunks.insert(rng.randrange(1, len(chunks) + 1), extra)
         else:
             return mutate_bytes(rng, data, others)
@@ -742,13 +1040,39 @@ def mutate_image(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
             if j == 0:
                 parts[0] = rng.choice([b"P1", b"P2", b"P3", b"P4", b"P5", b"P6", b"P7", b"P0"])
             else:
-                parts[j] = rng.choice([b"0", b"1", b"2", b"255", b"256", b"65535", b"65536", b"14000", b"99999999",
-                                       b"-1", b"4294967297", tweak_number(rng, parts[j])])
-            return b"".join(parts) + data[match.end():]
+                parts[j] = rng.choice(
+                    [
+                        b"0",
+                        b"1",
+                        b"2",
+                        b"255",
+                        b"256",
+                        b"65535",
+                        b"65536",
+                        b"14000",
+                        b"99999999",
+                        b"-1",
+                        b"4294967297",
+                        tweak_number(rng, parts[j]),
+                    ]
+                )
+            return b"".join(parts) + data[match.end() :]
     if data[:2] == b"BM" and len(data) >= 54:
         out = bytearray(data)
-        field = rng.choice([(2, "<I"), (10, "<I"), (14, "<I"), (18, "<i"), (22, "<i"), (26, "<H"), (28, "<H"),
-                            (30, "<I"), (34, "<I"), (46, "<I")])
+        field = rng.choice(
+            [
+                (2, "<I"),
+                (10, "<I"),
+                (14, "<I"),
+                (18, "<i"),
+                (22, "<i"),
+                (26, "<H"),
+                (28, "<H"),
+                (30, "<I"),
+                (34, "<I"),
+                (46, "<I"),
+            ]
+        )
         value = rng.choice([0, 1, 8, 24, 32, 2, 3, 14000, -14000, 2**31 - 1, -(2**31), 65535])
         try:
             struct.pack_into(field[1], out, field[0], value)
@@ -761,6 +1085,7 @@ def mutate_image(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
 # ---------------------------------------------------------------------------------------------
 # .npz mutations (plan cache entries)
 # ---------------------------------------------------------------------------------------------
+
 
 def npz_bytes(members: list[tuple[str, bytes]], method: int = zipfile.ZIP_STORED) -> bytes:
     """A zip archive of `members` with fixed time stamps (so a case's bytes depend on its seed only)."""
@@ -779,30 +1104,61 @@ def mutate_npy(rng: random.Random, body: bytes) -> bytes:
     header = match.group(4)
     op = rng.randrange(5)
     if op == 0:
-        shape = rng.choice([b"()", b"(0,)", b"(-1,)", b"(3,)", b"(300000000,)", b"(100000, 100000)", b"(2, 3, 4)",
-                            b"(9223372036854775807,)", b"(1.5,)", b"('a',)", b"(1, -1)", b"(65536, 65536, 2)"])
+        shape = rng.choice(
+            [
+                b"()",
+                b"(0,)",
+                b"(-1,)",
+                b"(3,)",
+                b"(300000000,)",
+                b"(100000, 100000)",
+                b"(2, 3, 4)",
+                b"(9223372036854775807,)",
+                b"(1.5,)",
+                b"('a',)",
+                b"(1, -1)",
+                b"(65536, 65536, 2)",
+            ]
+        )
         header = re.sub(rb"'shape': \([^)]*\)", b"'shape': " + shape, header)
     elif op == 1:
-        descr = rng.choice([b"'|O'", b"'<U10'", b"'|b1'", b"'>f8'", b"'<f4'", b"'V8'", b"'<i8'", b"'|u1'", b"'<c16'",
-                            b"'S0'", b"[('a', '<f8')]", b"'<M8[s]'", b"'xyz'", b"'<f8", b"1"])
+        descr = rng.choice(
+            [
+                b"'|O'",
+                b"'<U10'",
+                b"'|b1'",
+                b"'>f8'",
+                b"'<f4'",
+                b"'V8'",
+                b"'<i8'",
+                b"'|u1'",
+                b"'<c16'",
+                b"'S0'",
+                b"[('a', '<f8')]",
+                b"'<M8[s]'",
+                b"'xyz'",
+                b"'<f8",
+                b"1",
+            ]
+        )
         header = re.sub(rb"'descr': '[^']*'", b"'descr': " + descr, header)
     elif op == 2:
         header = header.replace(b"False", b"True") if b"False" in header else header.replace(b"True", b"False")
     elif op == 3:
         header = mutate_bytes(rng, header, [])
     else:
-        data = bytearray(body[match.end():])
+        data = bytearray(body[match.end() :])
         for _ in range(rng.choice((1, 8))):
             if data:
                 data[rng.randrange(len(data))] = rng.randrange(256)
-        return body[:match.end()] + bytes(data[:rng.randrange(len(data) + 1)] if rng.random() < 0.2 else data)
+        return body[: match.end()] + bytes(data[: rng.randrange(len(data) + 1)] if rng.random() < 0.2 else data)
     pad = 64 - (10 + len(header) + 1) % 64
     version = match.group(2) if rng.random() < 0.9 else rng.choice([b"\x02\x00", b"\x03\x00", b"\x09\x00"])
     size = len(header) + pad + 1
     if version == b"\x01\x00" and size > 0xFFFF:
         version = b"\x02\x00"
     length = struct.pack("<H", size) if version == b"\x01\x00" else struct.pack("<I", size)
-    return match.group(1) + version + length + header + b" " * pad + b"\n" + body[match.end():]
+    return match.group(1) + version + length + header + b" " * pad + b"\n" + body[match.end() :]
 
 
 def mutate_npz(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
@@ -836,6 +1192,7 @@ def mutate_npz(rng: random.Random, data: bytes, others: list[bytes]) -> bytes:
 # Seeds
 # ---------------------------------------------------------------------------------------------
 
+
 def small_map_image() -> Any:
     """A 120 x 140 px crop of tests/data/tb3_sandbox.pgm (real SLAM map content: walls, free space
     and unknown), as a uint8 array."""
@@ -854,8 +1211,15 @@ def encoded(image: Any, ext: str, params: list[int] | None = None) -> bytes:
 
 
 def map_yaml(image: str, **changes: Any) -> bytes:
-    values: dict[str, Any] = {"image": image, "mode": "trinary", "resolution": 0.05, "origin": [-10.0, -10.0, 0.0],
-                              "negate": 0, "occupied_thresh": 0.65, "free_thresh": 0.196}
+    values: dict[str, Any] = {
+        "image": image,
+        "mode": "trinary",
+        "resolution": 0.05,
+        "origin": [-10.0, -10.0, 0.0],
+        "negate": 0,
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+    }
     values.update(changes)
     lines = [f"{k}: {json.dumps(v)}" if not isinstance(v, str) else f"{k}: {v}" for k, v in values.items()]
     return ("\n".join(lines) + "\n").encode()
@@ -894,8 +1258,9 @@ def ros_map_yaml_seeds() -> list[Seed]:
         "raw": map_yaml("raw.pgm", mode="raw", occupied_thresh=0.2, free_thresh=0.1),
         "edge-detector": map_yaml("map.pgm", planicp_edge_detector="auto", resolution=0.1),
         "tb3": (DATA / "tb3_sandbox.yaml").read_bytes().replace(b"tb3_sandbox.pgm", b"map.pgm"),
-        "office": (HERE.parent / "python" / "planicp" / "data" / "office_plan.yaml").read_bytes().replace(
-            b"office_plan.png", b"map.pgm"),
+        "office": (HERE.parent / "python" / "planicp" / "data" / "office_plan.yaml")
+        .read_bytes()
+        .replace(b"office_plan.png", b"map.pgm"),
     }
     images = {"map.pgm": pgm, "raw.pgm": encoded(raw, ".pgm")}
     return [Seed(name, {"map.yaml": text, **images}, "map.yaml") for name, text in yamls.items()]
@@ -915,12 +1280,21 @@ def plan_image_seeds() -> list[Seed]:
 def house_expo_seeds() -> list[Seed]:
     real = (DATA / "house_expo_room_0000.json").read_bytes()
     square = json.dumps({"verts": [[0, 0], [6, 0], [6, 4], [0, 4]], "bbox": {"min": [0, 0], "max": [6, 4]}}).encode()
-    closed = json.dumps({"id": "x", "room_num": 2, "verts": [[1.0, 1.0], [9.5, 1.0], [9.5, 7.25], [5, 7.25], [5, 4],
-                                                              [1.0, 4.0], [1.0, 1.0]],
-                         "bbox": {"min": [1.0, 1.0], "max": [9.5, 7.25]}, "room_category": {"bedroom": [[1, 1, 5, 4]]}},
-                        indent=1).encode()
-    return [Seed("room_0000", {"plan.json": real}, "plan.json"), Seed("square", {"plan.json": square}, "plan.json"),
-            Seed("closed", {"plan.json": closed}, "plan.json")]
+    closed = json.dumps(
+        {
+            "id": "x",
+            "room_num": 2,
+            "verts": [[1.0, 1.0], [9.5, 1.0], [9.5, 7.25], [5, 7.25], [5, 4], [1.0, 4.0], [1.0, 1.0]],
+            "bbox": {"min": [1.0, 1.0], "max": [9.5, 7.25]},
+            "room_category": {"bedroom": [[1, 1, 5, 4]]},
+        },
+        indent=1,
+    ).encode()
+    return [
+        Seed("room_0000", {"plan.json": real}, "plan.json"),
+        Seed("square", {"plan.json": square}, "plan.json"),
+        Seed("closed", {"plan.json": closed}, "plan.json"),
+    ]
 
 
 R12_DXF = """0
@@ -1061,13 +1435,20 @@ def dxf_seeds() -> list[Seed]:
         scale = 1000.0 if units == 4 else 1.0
         doc.layers.add("WALLS")
         msp = doc.modelspace()
-        msp.add_lwpolyline([(0, 0, 0, 0, 0.0), (8 * scale, 0, 0, 0, 0.4), (8 * scale, 5 * scale), (0, 5 * scale)],
-                           format="xyseb", close=True, dxfattribs={"layer": "WALLS"})
+        msp.add_lwpolyline(
+            [(0, 0, 0, 0, 0.0), (8 * scale, 0, 0, 0, 0.4), (8 * scale, 5 * scale), (0, 5 * scale)],
+            format="xyseb",
+            close=True,
+            dxfattribs={"layer": "WALLS"},
+        )
         msp.add_line((2 * scale, 0), (2 * scale, 3 * scale), dxfattribs={"layer": "WALLS"})
-        msp.add_arc((4 * scale, 2.5 * scale), 1 * scale, 30, 300, dxfattribs={"layer": "WALLS", "extrusion": (0, 0, -1)})
+        msp.add_arc(
+            (4 * scale, 2.5 * scale), 1 * scale, 30, 300, dxfattribs={"layer": "WALLS", "extrusion": (0, 0, -1)}
+        )
         msp.add_circle((6 * scale, 2.5 * scale), 0.3 * scale, dxfattribs={"layer": "COLUMNS"})
-        msp.add_polyline2d([(1 * scale, 1 * scale), (3 * scale, 1 * scale), (3 * scale, 2 * scale)],
-                           dxfattribs={"layer": "WALLS"})
+        msp.add_polyline2d(
+            [(1 * scale, 1 * scale), (3 * scale, 1 * scale), (3 * scale, 2 * scale)], dxfattribs={"layer": "WALLS"}
+        )
         msp.add_text("Room 1", dxfattribs={"layer": "TEXT"})
         block = doc.blocks.new("DOOR")
         block.add_line((0, 0), (1 * scale, 0))
@@ -1082,48 +1463,68 @@ def carmen_seeds() -> list[Seed]:
     import carmen_excerpt as ex
 
     excerpt = ("\n".join(ex.log_lines()[:24]) + "\n").encode()
-    robotlaser = "\n".join([
-        "# ROBOTLASER1 log with remissions",
-        "PARAM robot_frontlaser_offset 0.1 nohost 0",
-        "ODOM 0.0 0.0 0.0 0 0 0 1.0 nohost 1.0",
-        "ROBOTLASER1 0 -1.570796 3.141593 0.5236 50.0 0.1 0 7 1.0 1.1 1.2 1.3 1.2 1.1 1.0 2 0.5 0.5 "
-        "0.1 0.0 0.0 0.0 0.0 0.0 0.3 0.1 0.5 0.5 0.5 1.05 nohost 1.05",
-        "ODOM 0.1 0.0 0.01 0 0 0 1.1 nohost 1.1",
-        "ROBOTLASER1 0 -1.570796 3.141593 0.5236 50.0 0.1 0 7 1.0 1.1 1.2 81.9 1.2 1.1 -1 0 "
-        "0.2 0.0 0.01 0.1 0.0 0.01 0.3 0.1 0.5 0.5 0.5 1.15 nohost 1.15",
-        "ODOM 0.2 0.0 0.02 0 0 0 1.2 nohost 1.2",
-    ]).encode() + b"\n"
-    two_lasers = "\n".join([
-        "PARAM robot_front_laser_max 30.0",
-        "PARAM robot_rearlaser_offset -0.2 nohost 0",
-        "FLASER 5 1.0 2.0 3.0 40.0 0.0 1.0 2.0 0.5 1.0 2.0 0.5 2.0 nohost 2.0",
-        "RLASER 5 1.0 2.0 3.0 4.0 5.0 1.0 2.0 0.5 1.0 2.0 0.5 2.0 nohost 2.0",
-        "FLASER 5 1.0 2.0 3.0 4.0 5.0 1.1 2.0 0.5 1.1 2.0 0.5 2.1 nohost 2.1",
-        "TRUEPOS 1 2 3 1 2 3 2.1 nohost 2.1",
-    ]).encode() + b"\n"
-    return [Seed("excerpt", {"robot.log": excerpt}, "robot.log"),
-            Seed("excerpt-gz", {"robot.log": gzip.compress(excerpt, mtime=0)}, "robot.log"),
-            Seed("robotlaser1", {"robot.log": robotlaser}, "robot.log"),
-            Seed("two-lasers", {"robot.log": two_lasers}, "robot.log")]
+    robotlaser = (
+        "\n".join(
+            [
+                "# ROBOTLASER1 log with remissions",
+                "PARAM robot_frontlaser_offset 0.1 nohost 0",
+                "ODOM 0.0 0.0 0.0 0 0 0 1.0 nohost 1.0",
+                "ROBOTLASER1 0 -1.570796 3.141593 0.5236 50.0 0.1 0 7 1.0 1.1 1.2 1.3 1.2 1.1 1.0 2 0.5 0.5 "
+                "0.1 0.0 0.0 0.0 0.0 0.0 0.3 0.1 0.5 0.5 0.5 1.05 nohost 1.05",
+                "ODOM 0.1 0.0 0.01 0 0 0 1.1 nohost 1.1",
+                "ROBOTLASER1 0 -1.570796 3.141593 0.5236 50.0 0.1 0 7 1.0 1.1 1.2 81.9 1.2 1.1 -1 0 "
+                "0.2 0.0 0.01 0.1 0.0 0.01 0.3 0.1 0.5 0.5 0.5 1.15 nohost 1.15",
+                "ODOM 0.2 0.0 0.02 0 0 0 1.2 nohost 1.2",
+            ]
+        ).encode()
+        + b"\n"
+    )
+    two_lasers = (
+        "\n".join(
+            [
+                "PARAM robot_front_laser_max 30.0",
+                "PARAM robot_rearlaser_offset -0.2 nohost 0",
+                "FLASER 5 1.0 2.0 3.0 40.0 0.0 1.0 2.0 0.5 1.0 2.0 0.5 2.0 nohost 2.0",
+                "RLASER 5 1.0 2.0 3.0 4.0 5.0 1.0 2.0 0.5 1.0 2.0 0.5 2.0 nohost 2.0",
+                "FLASER 5 1.0 2.0 3.0 4.0 5.0 1.1 2.0 0.5 1.1 2.0 0.5 2.1 nohost 2.1",
+                "TRUEPOS 1 2 3 1 2 3 2.1 nohost 2.1",
+            ]
+        ).encode()
+        + b"\n"
+    )
+    return [
+        Seed("excerpt", {"robot.log": excerpt}, "robot.log"),
+        Seed("excerpt-gz", {"robot.log": gzip.compress(excerpt, mtime=0)}, "robot.log"),
+        Seed("robotlaser1", {"robot.log": robotlaser}, "robot.log"),
+        Seed("two-lasers", {"robot.log": two_lasers}, "robot.log"),
+    ]
 
 
 def g2o_seeds() -> list[Seed]:
     lines = (DATA / "killian-excerpt.g2o").read_bytes().split(b"\n")
     vertices = lines[:6]  # three vertices, each with its scan
-    edges = [line for line in lines if line.startswith(b"EDGE_SE2 0 1") or line.startswith(b"EDGE_SE2 1 2")]
+    edges = [line for line in lines if line.startswith((b"EDGE_SE2 0 1", b"EDGE_SE2 1 2"))]
     excerpt = b"\n".join(vertices + [b"#SEQUENTIAL EDGES"] + edges) + b"\n"
-    tiny = "\n".join([
-        "VERTEX_SE2 0 0.0 0.0 0.0",
-        "ROBOTLASER1 0 -1.570796 3.141593 0.785398 50.0 0.1 0 5 1.0 1.1 1.2 1.1 1.0 0 0.2 0.0 0.0 0.0 0.0 0.0 "
-        "0 0 0.5 0.5 0.5 10.0 nohost 10.0",
-        "VERTEX_SE2 1 0.5 0.0 0.1",
-        "ROBOTLASER1 0 -1.570796 3.141593 0.785398 50.0 0.1 0 5 1.0 1.1 51.0 1.1 1.0 0 0.7 0.0 0.1 0.5 0.0 0.1 "
-        "0 0 0.5 0.5 0.5 10.2 nohost 10.2",
-        "EDGE_SE2 0 1 0.5 0.0 0.1 500.0 0.0 0.0 500.0 0.0 2000.0",
-    ]).encode() + b"\n"
+    tiny = (
+        "\n".join(
+            [
+                "VERTEX_SE2 0 0.0 0.0 0.0",
+                "ROBOTLASER1 0 -1.570796 3.141593 0.785398 50.0 0.1 0 5 1.0 1.1 1.2 1.1 1.0 0 0.2 0.0 0.0 0.0 0.0 0.0 "
+                "0 0 0.5 0.5 0.5 10.0 nohost 10.0",
+                "VERTEX_SE2 1 0.5 0.0 0.1",
+                "ROBOTLASER1 0 -1.570796 3.141593 0.785398 50.0 0.1 0 5 1.0 1.1 51.0 1.1 1.0 0 0.7 0.0 0.1 0.5 0.0 0.1 "
+                "0 0 0.5 0.5 0.5 10.2 nohost 10.2",
+                "EDGE_SE2 0 1 0.5 0.0 0.1 500.0 0.0 0.0 500.0 0.0 2000.0",
+            ]
+        ).encode()
+        + b"\n"
+    )
     zipped = compressed(random.Random(0), excerpt, "zip")
-    return [Seed("killian", {"graph.g2o": excerpt}, "graph.g2o"), Seed("tiny", {"graph.g2o": tiny}, "graph.g2o"),
-            Seed("killian-zip", {"graph.g2o": zipped}, "graph.g2o")]
+    return [
+        Seed("killian", {"graph.g2o": excerpt}, "graph.g2o"),
+        Seed("tiny", {"graph.g2o": tiny}, "graph.g2o"),
+        Seed("killian-zip", {"graph.g2o": zipped}, "graph.g2o"),
+    ]
 
 
 STUDY_DOC_EXAMPLE = """name: clutter-and-drift
@@ -1171,9 +1572,11 @@ success:
   max_position_error_m: 0.5
   allow_lost_at_end: true
 """
-    return [Seed("doc-example", {"study.yaml": STUDY_DOC_EXAMPLE.encode()}, "study.yaml"),
-            Seed("rich", {"study.yaml": rich.encode()}, "study.yaml"),
-            Seed("minimal", {"study.yaml": b"name: m\nplans: [default]\n"}, "study.yaml")]
+    return [
+        Seed("doc-example", {"study.yaml": STUDY_DOC_EXAMPLE.encode()}, "study.yaml"),
+        Seed("rich", {"study.yaml": rich.encode()}, "study.yaml"),
+        Seed("minimal", {"study.yaml": b"name: m\nplans: [default]\n"}, "study.yaml"),
+    ]
 
 
 CACHE_IMAGE = "plan.png"
@@ -1204,6 +1607,7 @@ def cache_seeds() -> list[Seed]:
 # ---------------------------------------------------------------------------------------------
 # What each target calls, and what a good result is
 # ---------------------------------------------------------------------------------------------
+
 
 def check_plan(plan: Any) -> None:
     import numpy as np
@@ -1331,31 +1735,102 @@ def _study_error() -> type[BaseException]:
 def targets() -> dict[str, Target]:
     """Every target by name."""
     io_errors = (ValueError, FileNotFoundError)
-    return {t.name: t for t in [
-        Target("ros_map_yaml", "PlanMap.from_ros_map (map YAML mutated)", io_errors, ros_map_yaml_seeds, mutate_yaml,
-               run_ros_map, lambda s: "map.yaml"),
-        Target("ros_map_image", "PlanMap.from_ros_map (map image mutated)", io_errors, ros_map_image_seeds,
-               mutate_image, run_ros_map, lambda s: "map.yaml"),
-        Target("plan_image", "PlanMap.from_image", io_errors, plan_image_seeds, mutate_image, run_plan_image,
-               lambda s: s.target),
-        Target("house_expo", "PlanMap.from_house_expo (points; resolution=0.1 every other case)", io_errors,
-               house_expo_seeds, mutate_json, run_house_expo, lambda s: "plan.json"),
-        Target("dxf", "PlanMap.from_dxf (all layers; layers=['walls'] every third case)", io_errors, dxf_seeds,
-               mutate_dxf, run_dxf, lambda s: "plan.dxf", DXF_MAX_BYTES),
-        Target("carmen", "io.read_carmen (errors='raise' every fourth case)", io_errors, carmen_seeds,
-               lambda rng, data, others: mutate_records(rng, data, [b"FLASER", b"RLASER", b"ROBOTLASER1", b"ODOM"]),
-               run_carmen, lambda s: "robot.log"),
-        Target("g2o", "io.read_g2o / read_g2o_graph (errors='raise' every fourth case)", io_errors, g2o_seeds,
-               lambda rng, data, others: mutate_records(rng, data, [b"VERTEX_SE2", b"EDGE_SE2", b"ROBOTLASER1"]),
-               run_g2o, lambda s: "graph.g2o"),
-        Target("study", "sweep.load_study (and its to_yaml round trip)", (_study_error(),), study_seeds, mutate_yaml,
-               run_study, lambda s: "study.yaml"),
-        Target("plan_cache", "PlanMap.from_image with a mutated cache entry (.npz): rebuilt, never an error", (),
-               cache_seeds, mutate_npz, run_cache, lambda s: s.target),
-        Target("_control", "the harness's check: a reader that breaks the contract on purpose", (ValueError,),
-               lambda: [Seed("x", {"x.txt": b"x"}, "x.txt")], lambda rng, data, others: data, run_control,
-               lambda s: "x.txt"),
-    ]}
+    return {
+        t.name: t
+        for t in [
+            Target(
+                "ros_map_yaml",
+                "PlanMap.from_ros_map (map YAML mutated)",
+                io_errors,
+                ros_map_yaml_seeds,
+                mutate_yaml,
+                run_ros_map,
+                lambda s: "map.yaml",
+            ),
+            Target(
+                "ros_map_image",
+                "PlanMap.from_ros_map (map image mutated)",
+                io_errors,
+                ros_map_image_seeds,
+                mutate_image,
+                run_ros_map,
+                lambda s: "map.yaml",
+            ),
+            Target(
+                "plan_image",
+                "PlanMap.from_image",
+                io_errors,
+                plan_image_seeds,
+                mutate_image,
+                run_plan_image,
+                lambda s: s.target,
+            ),
+            Target(
+                "house_expo",
+                "PlanMap.from_house_expo (points; resolution=0.1 every other case)",
+                io_errors,
+                house_expo_seeds,
+                mutate_json,
+                run_house_expo,
+                lambda s: "plan.json",
+            ),
+            Target(
+                "dxf",
+                "PlanMap.from_dxf (all layers; layers=['walls'] every third case)",
+                io_errors,
+                dxf_seeds,
+                mutate_dxf,
+                run_dxf,
+                lambda s: "plan.dxf",
+                DXF_MAX_BYTES,
+            ),
+            Target(
+                "carmen",
+                "io.read_carmen (errors='raise' every fourth case)",
+                io_errors,
+                carmen_seeds,
+                lambda rng, data, others: mutate_records(rng, data, [b"FLASER", b"RLASER", b"ROBOTLASER1", b"ODOM"]),
+                run_carmen,
+                lambda s: "robot.log",
+            ),
+            Target(
+                "g2o",
+                "io.read_g2o / read_g2o_graph (errors='raise' every fourth case)",
+                io_errors,
+                g2o_seeds,
+                lambda rng, data, others: mutate_records(rng, data, [b"VERTEX_SE2", b"EDGE_SE2", b"ROBOTLASER1"]),
+                run_g2o,
+                lambda s: "graph.g2o",
+            ),
+            Target(
+                "study",
+                "sweep.load_study (and its to_yaml round trip)",
+                (_study_error(),),
+                study_seeds,
+                mutate_yaml,
+                run_study,
+                lambda s: "study.yaml",
+            ),
+            Target(
+                "plan_cache",
+                "PlanMap.from_image with a mutated cache entry (.npz): rebuilt, never an error",
+                (),
+                cache_seeds,
+                mutate_npz,
+                run_cache,
+                lambda s: s.target,
+            ),
+            Target(
+                "_control",
+                "the harness's check: a reader that breaks the contract on purpose",
+                (ValueError,),
+                lambda: [Seed("x", {"x.txt": b"x"}, "x.txt")],
+                lambda rng, data, others: data,
+                run_control,
+                lambda s: "x.txt",
+            ),
+        ]
+    }
 
 
 READERS = ["ros_map_yaml", "ros_map_image", "plan_image", "house_expo", "dxf", "carmen", "g2o", "study", "plan_cache"]
@@ -1365,6 +1840,7 @@ READERS = ["ros_map_yaml", "ros_map_image", "plan_image", "house_expo", "dxf", "
 # ---------------------------------------------------------------------------------------------
 # Cases
 # ---------------------------------------------------------------------------------------------
+
 
 def make_case(target: Target, seeds: list[Seed], seed: int, index: int) -> tuple[Seed, Files]:
     """The seed case `index` starts from and its mutated files: a function of (target, seed, index)."""
@@ -1376,7 +1852,7 @@ def make_case(target: Target, seeds: list[Seed], seed: int, index: int) -> tuple
     aware = 1.0 if mix < 0.45 else 0.0 if mix < 0.75 else 0.5
     for _ in range(rng.choice((1, 1, 1, 1, 2, 2, 3, 5))):
         data = target.mutate(rng, data, others) if rng.random() < aware else mutate_bytes(rng, data, others)
-        data = data[:target.max_bytes]
+        data = data[: target.max_bytes]
     files = dict(base.files)
     files[base.target] = data
     return base, files
@@ -1483,8 +1959,9 @@ def reset_peak() -> bool:
         return False
 
 
-def worker(name: str, seed: int, first: int, count: int, failures: Path, work: Path,
-           case_seconds: float = CASE_SECONDS) -> int:
+def worker(
+    name: str, seed: int, first: int, count: int, failures: Path, work: Path, case_seconds: float = CASE_SECONDS
+) -> int:
     """Runs cases first .. first + count - 1 of a target, writing one line per event to stdout:
     `B {json}` after start-up (its resident set), `G i` before case i is made, `S i` before it
     runs (its files are then in `work`/case, where the parent finds them after a crash or hang),
@@ -1510,9 +1987,21 @@ def worker(name: str, seed: int, first: int, count: int, failures: Path, work: P
         try:
             entry, files = make_case(target, seeds, seed, index)
         except Exception:  # noqa: BLE001 - a harness error: reported as one, and the next case made
-            print("D " + json.dumps({"i": index, "class": "HARNESS", "s": 0.0, "mem": 0, "kept": 0, "seed": "",
-                                     "failure": f"harness: making the case failed: {traceback.format_exc()}"}),
-                  flush=True)
+            print(
+                "D "
+                + json.dumps(
+                    {
+                        "i": index,
+                        "class": "HARNESS",
+                        "s": 0.0,
+                        "mem": 0,
+                        "kept": 0,
+                        "seed": "",
+                        "failure": f"harness: making the case failed: {traceback.format_exc()}",
+                    }
+                ),
+                flush=True,
+            )
             continue
         write_files(folder, files)
         print(f"S {index}", flush=True)
@@ -1533,14 +2022,28 @@ def worker(name: str, seed: int, first: int, count: int, failures: Path, work: P
         if breach is not None:
             save_failure(failures, name, seed, index, files, f"{breach}\n\n{trace}")
         kept = (memory_kib("VmRSS") - before) * 1024  # what the reader left resident (a leak adds up here)
-        print("D " + json.dumps({"i": index, "class": kind, "s": seconds, "mem": memory, "kept": kept,
-                                 "seed": entry.name, "failure": breach}), flush=True)
+        print(
+            "D "
+            + json.dumps(
+                {
+                    "i": index,
+                    "class": kind,
+                    "s": seconds,
+                    "mem": memory,
+                    "kept": kept,
+                    "seed": entry.name,
+                    "failure": breach,
+                }
+            ),
+            flush=True,
+        )
     return 0
 
 
 # ---------------------------------------------------------------------------------------------
 # The parent: workers in subprocesses, crashes and hangs caught
 # ---------------------------------------------------------------------------------------------
+
 
 @dataclasses.dataclass
 class Report:
@@ -1577,8 +2080,9 @@ def _lines(stream: Any, out: queue.Queue[str | None]) -> None:
     out.put(None)
 
 
-def run_target(name: str, cases: int, seed: int, failures: Path, python: str = sys.executable,
-               case_seconds: float = CASE_SECONDS) -> Report:
+def run_target(
+    name: str, cases: int, seed: int, failures: Path, python: str = sys.executable, case_seconds: float = CASE_SECONDS
+) -> Report:
     """Fuzzes target `name` for `cases` cases in worker processes (one more after each crash or
     hang), each case bounded to `case_seconds`."""
     report = Report(name)
@@ -1589,11 +2093,29 @@ def run_target(name: str, cases: int, seed: int, failures: Path, python: str = s
         work = Path(tempfile.mkdtemp(prefix=f"planicp-fuzz-{name}-"))
         log = work / "worker.stderr"
         with open(log, "w") as errors:
-            proc = subprocess.Popen([python, str(Path(__file__).resolve()), "--worker", name, "--seed", str(seed),
-                                     "--first", str(next_case), "--count", str(cases - next_case),
-                                     "--failures", str(failures), "--work", str(work),
-                                     "--case-seconds", str(case_seconds)],
-                                    stdout=subprocess.PIPE, stderr=errors, text=True)
+            proc = subprocess.Popen(
+                [
+                    python,
+                    str(Path(__file__).resolve()),
+                    "--worker",
+                    name,
+                    "--seed",
+                    str(seed),
+                    "--first",
+                    str(next_case),
+                    "--count",
+                    str(cases - next_case),
+                    "--failures",
+                    str(failures),
+                    "--work",
+                    str(work),
+                    "--case-seconds",
+                    str(case_seconds),
+                ],
+                stdout=subprocess.PIPE,
+                stderr=errors,
+                text=True,
+            )
             lines: queue.Queue[str | None] = queue.Queue()
             threading.Thread(target=_lines, args=(proc.stdout, lines), daemon=True).start()
             current, done = -1, next_case
@@ -1609,7 +2131,7 @@ def run_target(name: str, cases: int, seed: int, failures: Path, python: str = s
                 if line is None:
                     break
                 running = line.startswith("S ")
-                if line.startswith("G ") or line.startswith("S "):
+                if line.startswith(("G ", "S ")):
                     current = int(line[2:])
                 elif line.startswith("D "):
                     event = json.loads(line[2:])
@@ -1649,8 +2171,13 @@ def run_target(name: str, cases: int, seed: int, failures: Path, python: str = s
         report.classes["CRASH" if not hung else "HANG"] += 1
         next_case = current + 1
     if report.rss_drift > MAX_RSS_DRIFT_BYTES:
-        report.failures.append((-1, f"the worker's resident set grew by {report.rss_drift / 2**20:.0f} MiB over "
-                                    f"its cases (bound {MAX_RSS_DRIFT_BYTES >> 20} MiB): a leak"))
+        report.failures.append(
+            (
+                -1,
+                f"the worker's resident set grew by {report.rss_drift / 2**20:.0f} MiB over "
+                f"its cases (bound {MAX_RSS_DRIFT_BYTES >> 20} MiB): a leak",
+            )
+        )
     report.seconds = time.perf_counter() - started
     return report
 
@@ -1677,8 +2204,10 @@ def replay(name: str, seed: int, index: int) -> int:
         signal.signal(signal.SIGALRM, _timeout)
         exc, caught, trace = run_case(target, entry, folder, index)
         breach = contract_breach(target, entry, exc, caught)
-        print(f"case {index} of {name} (seed {seed}, from seed file {entry.name}): "
-              f"{'ok' if exc is None else outcome_class(exc, folder)}")
+        print(
+            f"case {index} of {name} (seed {seed}, from seed file {entry.name}): "
+            f"{'ok' if exc is None else outcome_class(exc, folder)}"
+        )
         for message in caught:
             print(f"warning: {message[:500]}")
         if trace:
@@ -1689,12 +2218,16 @@ def replay(name: str, seed: int, index: int) -> int:
 
 def format_reports(reports: list[Report]) -> str:
     """A table of the reports."""
-    rows = ["| reader | cases | outcome classes | read (ok) | max case (s) | max case memory (MiB) | RSS drift (MiB) "
-            "| failures | wall (s) |",
-            "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    rows = [
+        "| reader | cases | outcome classes | read (ok) | max case (s) | max case memory (MiB) | RSS drift (MiB) "
+        "| failures | wall (s) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for r in reports:
-        rows.append(f"| {r.target} | {r.cases} | {len(r.classes)} | {r.classes.get('ok', 0)} | {r.max_case_seconds:.3f} | "
-                    f"{r.max_case_memory / 2**20:.1f} | {r.rss_drift / 2**20:.1f} | {len(r.failures)} | {r.seconds:.0f} |")
+        rows.append(
+            f"| {r.target} | {r.cases} | {len(r.classes)} | {r.classes.get('ok', 0)} | {r.max_case_seconds:.3f} | "
+            f"{r.max_case_memory / 2**20:.1f} | {r.rss_drift / 2**20:.1f} | {len(r.failures)} | {r.seconds:.0f} |"
+        )
     return "\n".join(rows)
 
 
@@ -1704,8 +2237,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cases", type=int, default=10_000, help="cases per reader (default 10000)")
     parser.add_argument("--reader", action="append", help="a reader (repeatable); default: all of them")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--failures", type=Path, default=Path("fuzz-failures"),
-                        help="folder for failing inputs (default ./fuzz-failures)")
+    parser.add_argument(
+        "--failures",
+        type=Path,
+        default=Path("fuzz-failures"),
+        help="folder for failing inputs (default ./fuzz-failures)",
+    )
     parser.add_argument("--replay", type=int, metavar="CASE", help="run one case in this process and print it")
     parser.add_argument("--verbose", action="store_true", help="list every outcome class")
     parser.add_argument("--jobs", type=int, default=1, help="readers fuzzed at once (default 1)")
@@ -1713,7 +2250,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first", type=int, default=0, help=argparse.SUPPRESS)
     parser.add_argument("--count", type=int, default=0, help=argparse.SUPPRESS)
     parser.add_argument("--work", type=Path, help=argparse.SUPPRESS)
-    parser.add_argument("--case-seconds", type=float, default=CASE_SECONDS, help=f"bound of a case (default {CASE_SECONDS})")
+    parser.add_argument(
+        "--case-seconds", type=float, default=CASE_SECONDS, help=f"bound of a case (default {CASE_SECONDS})"
+    )
     args = parser.parse_args(argv)
     if args.worker:
         return worker(args.worker, args.seed, args.first, args.count, args.failures, args.work, args.case_seconds)
@@ -1725,16 +2264,20 @@ def main(argv: list[str] | None = None) -> int:
         return sum(replay(n, args.seed, args.replay) for n in names)
     reports = []
     with concurrent.futures.ThreadPoolExecutor(max(1, args.jobs)) as pool:
-        running = [pool.submit(run_target, name, args.cases, args.seed, args.failures, sys.executable,
-                               args.case_seconds) for name in names]
+        running = [
+            pool.submit(run_target, name, args.cases, args.seed, args.failures, sys.executable, args.case_seconds)
+            for name in names
+        ]
         for future in running:
             report = future.result()
             reports.append(report)
-            print(f"{report.target}: {report.cases} cases, {len(report.classes)} outcome classes, max case "
-                  f"{report.max_case_seconds:.3f} s (case {report.slowest}), max case memory "
-                  f"{report.max_case_memory / 2**20:.1f} MiB (case {report.hungriest}), RSS drift "
-                  f"{report.rss_drift / 2**20:.1f} MiB, {len(report.failures)} failures, {report.seconds:.0f} s",
-                  flush=True)
+            print(
+                f"{report.target}: {report.cases} cases, {len(report.classes)} outcome classes, max case "
+                f"{report.max_case_seconds:.3f} s (case {report.slowest}), max case memory "
+                f"{report.max_case_memory / 2**20:.1f} MiB (case {report.hungriest}), RSS drift "
+                f"{report.rss_drift / 2**20:.1f} MiB, {len(report.failures)} failures, {report.seconds:.0f} s",
+                flush=True,
+            )
             if args.verbose:
                 for kind, count in report.classes.most_common():
                     print(f"    {count:6d}  {kind}")

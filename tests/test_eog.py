@@ -22,8 +22,8 @@ from planicp import (
     scan_to_points,
 )
 from planicp._core import OccupancyGrid
-from planicp.mapping.eog_state import STATE_COLOURS
 from planicp.evaluation.figures import plot_eog, plot_eog_comparison
+from planicp.mapping.eog_state import STATE_COLOURS
 
 RES = 0.1
 FOV = math.radians(360.0)
@@ -187,8 +187,9 @@ def test_laser_scan_input_with_no_returns() -> None:
     assert (quiet.observation_states() == EogState.UNKNOWN).all()
     # A laser mounted backwards on the base: its beam 0 looks along -x.
     back = EnhancedOccupancyGrid(plan, RES, margin=0.0)
-    back.integrate_ranges([1.0], 0.0, 0.1, (2.05, 2.05, 0.0), range_min=0.1, range_max=5.0,
-                          laser_pose=(0.0, 0.0, math.pi))
+    back.integrate_ranges(
+        [1.0], 0.0, 0.1, (2.05, 2.05, 0.0), range_min=0.1, range_max=5.0, laser_pose=(0.0, 0.0, math.pi)
+    )
     assert back.observation_states()[20, 10] == EogState.OCCUPIED
 
 
@@ -273,7 +274,9 @@ def test_png_uses_the_thesis_colours(tmp_path: Path) -> None:
     top_left = rgb[::2, ::2][::-1]  # back to rows growing with +y
     for state in EogState:
         assert (states == state).any()
-        np.testing.assert_array_equal(top_left[states == state], np.tile(STATE_COLOURS[state], ((states == state).sum(), 1)))
+        np.testing.assert_array_equal(
+            top_left[states == state], np.tile(STATE_COLOURS[state], ((states == state).sum(), 1))
+        )
     assert STATE_COLOURS[EogState.ARCHITECTURAL][2] > 200  # blue
     with pytest.raises(ValueError, match="must end in .png"):
         grid.to_png(tmp_path / "eog.jpeg")

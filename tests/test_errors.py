@@ -34,7 +34,7 @@ def box_points(w: float = 4.0, h: float = 3.0, spacing: float = 0.05) -> np.ndar
         [
             np.column_stack([xs, np.zeros_like(xs)]),
             np.column_stack([xs + spacing, np.full_like(xs, h)]),
-            np.column_stack([np.zeros_like(ys) , ys + spacing]),
+            np.column_stack([np.zeros_like(ys), ys + spacing]),
             np.column_stack([np.full_like(ys, w), ys]),
         ]
     )
@@ -249,7 +249,9 @@ def test_localize_accepts_int_and_float32_like_float64(plan: PlanMap) -> None:
     s32 = (scan64 / 20.0).astype(np.float32)
     assert localize(s32, plan, guess).pose == localize(s32.astype(np.float64), plan, guess).pose
     # integer pose is accepted too
-    assert localize(scan64 / 20.0, plan, np.array([2, 1, 0])).pose == localize(scan64 / 20.0, plan, (2.0, 1.0, 0.0)).pose
+    assert (
+        localize(scan64 / 20.0, plan, np.array([2, 1, 0])).pose == localize(scan64 / 20.0, plan, (2.0, 1.0, 0.0)).pose
+    )
 
 
 # --------------------------------------------------------------------------------------------------
@@ -592,7 +594,8 @@ EXTREME_CASES = {
         box_points()[:60] * 1e-300 - 1e-300, PlanMap.from_points(box_points() * 1e-300), (0.0, 0.0, 0.0)
     ),
     "subnormal 5e-324": lambda: localize(
-        np.array([[5e-324, 0.0], [0.0, 5e-324], [5e-324, 5e-324]]), PlanMap.from_points([[0.0, 0.0], [5e-324, 0.0]]),
+        np.array([[5e-324, 0.0], [0.0, 5e-324], [5e-324, 5e-324]]),
+        PlanMap.from_points([[0.0, 0.0], [5e-324, 0.0]]),
         (0.0, 0.0, 0.0),
     ),
     "plan of one point": lambda: localize(box_points()[:50], PlanMap.from_points([[1.0, 1.0]]), (1.0, 1.0, 0.0)),
@@ -615,23 +618,33 @@ EXTREME_CASES = {
         box_points()[:50], PlanMap.from_points(box_points() * 1e-3 + 1e9), (0.0, 0.0, 0.0)
     ),
     "huge visibility_range": lambda: localize(
-        se2.transform_points(se2.inverse(TRUTH), box_points()), PlanMap.from_points(box_points()), TRUTH,
+        se2.transform_points(se2.inverse(TRUTH), box_points()),
+        PlanMap.from_points(box_points()),
+        TRUTH,
         IcpConfig(visibility_range=1e300),
     ),
     "tiny visibility_range": lambda: localize(
-        se2.transform_points(se2.inverse(TRUTH), box_points()), PlanMap.from_points(box_points()), TRUTH,
+        se2.transform_points(se2.inverse(TRUTH), box_points()),
+        PlanMap.from_points(box_points()),
+        TRUTH,
         IcpConfig(visibility_range=1e-300),
     ),
     "huge max_correspondence_distance": lambda: localize(
-        se2.transform_points(se2.inverse(TRUTH), box_points()), PlanMap.from_points(box_points()), TRUTH,
+        se2.transform_points(se2.inverse(TRUTH), box_points()),
+        PlanMap.from_points(box_points()),
+        TRUTH,
         IcpConfig(max_correspondence_distance=1e300),
     ),
     "tiny max_correspondence_distance": lambda: localize(
-        se2.transform_points(se2.inverse(TRUTH), box_points()), PlanMap.from_points(box_points()), TRUTH,
+        se2.transform_points(se2.inverse(TRUTH), box_points()),
+        PlanMap.from_points(box_points()),
+        TRUTH,
         IcpConfig(max_correspondence_distance=1e-300),
     ),
     "huge schedule factor": lambda: localize(
-        se2.transform_points(se2.inverse(TRUTH), box_points()), PlanMap.from_points(box_points()), TRUTH,
+        se2.transform_points(se2.inverse(TRUTH), box_points()),
+        PlanMap.from_points(box_points()),
+        TRUTH,
         IcpConfig(correspondence_schedule=(1e300, 1.0)),
     ),
     "huge subsample": lambda: localize(
@@ -641,7 +654,9 @@ EXTREME_CASES = {
         box_points(), PlanMap.from_points(box_points()), TRUTH, IcpConfig(trim_ratio=1e-300)
     ),
     "huge yaw": lambda: localize(box_points(), PlanMap.from_points(box_points()), (1.0, 1.0, 1e300)),
-    "pose far outside the plan (1e6)": lambda: localize(box_points(), PlanMap.from_points(box_points()), (1e6, -1e6, 0.0)),
+    "pose far outside the plan (1e6)": lambda: localize(
+        box_points(), PlanMap.from_points(box_points()), (1e6, -1e6, 0.0)
+    ),
     "huge explicit resolution": lambda: localize(
         box_points(), PlanMap.from_points(box_points(), resolution=1e300), TRUTH
     ),
@@ -677,7 +692,8 @@ _HANG_SCRIPT = textwrap.dedent(
     import numpy as np
     import planicp
     xs = np.arange(0.0, 4.0, 0.05)
-    box = np.vstack([np.c_[xs, 0 * xs], np.c_[xs, 0 * xs + 3.0], np.c_[0 * xs, xs * 0.75], np.c_[0 * xs + 4.0, xs * 0.75]])
+    box = np.vstack([np.c_[xs, 0 * xs], np.c_[xs, 0 * xs + 3.0],
+                     np.c_[0 * xs, xs * 0.75], np.c_[0 * xs + 4.0, xs * 0.75]])
     plan = planicp.PlanMap.from_points(box)
     case = sys.argv[1]
     try:
@@ -732,8 +748,9 @@ def run_isolated(code: str) -> subprocess.CompletedProcess[str]:
     """`code` run by this interpreter in a fresh process, with its address space capped at 4 GiB
     so that an allocation of tens of GB fails there as it would on a small robot computer."""
     prelude = "import resource\nresource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))\n"
-    return subprocess.run([sys.executable, "-c", prelude + textwrap.dedent(code)], capture_output=True, text=True,
-                          timeout=300)
+    return subprocess.run(
+        [sys.executable, "-c", prelude + textwrap.dedent(code)], capture_output=True, text=True, timeout=300
+    )
 
 
 def test_a_search_region_larger_than_the_plan_is_clipped_to_it() -> None:
@@ -790,8 +807,7 @@ def test_an_occupancy_grid_too_large_for_memory_is_an_error() -> None:
         except planicp.PlanicpError as exc:
             print("refused:", exc)
     """)
-    assert done.returncode == 0 and "refused: could not allocate" in done.stdout, (done.returncode,
-                                                                                   done.stderr[-2000:])
+    assert done.returncode == 0 and "refused: could not allocate" in done.stdout, (done.returncode, done.stderr[-2000:])
 
 
 def test_poses_beyond_a_billion_metres_are_refused_at_the_door(plan: PlanMap, scan: np.ndarray) -> None:

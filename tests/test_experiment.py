@@ -58,8 +58,11 @@ def test_without_outlier_rejection_is_worse_and_replay_is_deterministic() -> Non
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=20.0, seed=4))
     again = replay(plan, recording, IcpConfig.for_tracking())
     np.testing.assert_array_equal(again.estimate, recording.estimate)
-    naive = replay(plan, recording, IcpConfig(max_correspondence_distance=50.0, use_visibility=False,
-                                              correspondence_schedule=(1.0,)))
+    naive = replay(
+        plan,
+        recording,
+        IcpConfig(max_correspondence_distance=50.0, use_visibility=False, correspondence_schedule=(1.0,)),
+    )
     assert naive.metrics()["planicp_position_rms_m"] > 3 * recording.metrics()["planicp_position_rms_m"]
 
 
@@ -86,13 +89,28 @@ def test_default_demo_writes_figures_metrics_and_report(tmp_path: Path, capsys: 
     printed = capsys.readouterr().out
     assert "odometry" in printed and "planicp" in printed
     names = {p.name for p in out.iterdir()}
-    assert names == {"position_error.png", "heading_error.png", "paths.png", "plan.png", "scan_without_rejection.png",
-                     "scan_with_rejection.png", "metrics.json", "report.md", "eog_odometry.png", "eog_planicp.png",
-                     "eog_comparison.png", "eog_planicp.yaml", "eog_planicp.pgm"}
+    assert names == {
+        "position_error.png",
+        "heading_error.png",
+        "paths.png",
+        "plan.png",
+        "scan_without_rejection.png",
+        "scan_with_rejection.png",
+        "metrics.json",
+        "report.md",
+        "eog_odometry.png",
+        "eog_planicp.png",
+        "eog_comparison.png",
+        "eog_planicp.yaml",
+        "eog_planicp.pgm",
+    }
     metrics = json.loads((out / "metrics.json").read_text())
     default = metrics["runs"]["planicp (default)"]
     assert metrics["scans"] == 3001 and set(metrics["runs"]) == {
-        "planicp (default)", "without outlier rejection", "without automatic trimming"}
+        "planicp (default)",
+        "without outlier rejection",
+        "without automatic trimming",
+    }
     # The enhanced occupancy grid from planicp's poses agrees with the ground-truth grid; the one
     # from odometry does not.
     grid = metrics["occupancy_grid"]

@@ -10,7 +10,6 @@ import pytest
 from matplotlib.figure import Figure
 
 from planicp import PlanMap
-
 from planicp.evaluation import figures
 
 
@@ -37,8 +36,9 @@ def test_error_figures_plot_each_series(tmp_path: Path) -> None:
 
 def test_scan_match_splits_inliers_and_outliers(plan: PlanMap) -> None:
     scan = np.array([[1.0, 0.0], [2.0, 0.0], [1.0, 1.0]])
-    fig = figures.plot_scan_match(plan, scan, (1.0, 1.0, -math.pi / 2), np.array([True, True, False]),
-                                  initial_pose=(1.1, 1.0, -1.5))
+    fig = figures.plot_scan_match(
+        plan, scan, (1.0, 1.0, -math.pi / 2), np.array([True, True, False]), initial_pose=(1.1, 1.0, -1.5)
+    )
     ax = fig.axes[0]
     offsets = [c.get_offsets() for c in ax.collections]
     assert [len(o) for o in offsets] == [len(plan), 2, 1]

@@ -64,7 +64,9 @@ settings.register_profile(
     database=None,
     suppress_health_check=list(HealthCheck),
 )
-FUZZ = settings.get_profile("planicp-fuzz-long" if os.environ.get("HYPOTHESIS_PROFILE") == "long" else "planicp-fuzz-ci")
+FUZZ = settings.get_profile(
+    "planicp-fuzz-long" if os.environ.get("HYPOTHESIS_PROFILE") == "long" else "planicp-fuzz-ci"
+)
 
 #: Seconds one test may run before the watchdog dumps every thread's stack and ends the process.
 HANG_SECONDS = 1800 if os.environ.get("HYPOTHESIS_PROFILE") == "long" else 300
@@ -97,8 +99,26 @@ def call(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[bool, Any]:
 # strategies
 # --------------------------------------------------------------------------------------------------
 
-SPECIALS = [0.0, -0.0, 1.0, -1.0, math.nan, math.inf, -math.inf, 1e9, -1e9, 1.0000000001e9, 1e18, 1e300, -1e300,
-            1e-300, 5e-324, 1.7976931348623157e308, 2.2250738585072014e-308, 2.0**53]
+SPECIALS = [
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    math.nan,
+    math.inf,
+    -math.inf,
+    1e9,
+    -1e9,
+    1.0000000001e9,
+    1e18,
+    1e300,
+    -1e300,
+    1e-300,
+    5e-324,
+    1.7976931348623157e308,
+    2.2250738585072014e-308,
+    2.0**53,
+]
 
 values = st.one_of(
     st.floats(-50.0, 50.0),
@@ -159,7 +179,9 @@ anything = st.one_of(
     st.dictionaries(st.text(max_size=4), values, max_size=2),
 )
 
-poses = st.one_of(st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-4, 4)), st.tuples(values, values, values), anything)
+poses = st.one_of(
+    st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-4, 4)), st.tuples(values, values, values), anything
+)
 
 _BOX = None
 
@@ -262,8 +284,13 @@ def test_plan_from_points(data: Any) -> None:
         if ok:
             assert idx.ndim == 1 and (np.diff(idx.astype(np.int64)) > 0).all() and (idx < len(pts)).all()
         directions = data.draw(st.one_of(st.sampled_from([8, 720]), st.integers(-1, 2**70), values, anything))
-        ok, view = call(plan.view_from, pose, data.draw(st.one_of(st.sampled_from([1.0, 30.0]), values)), directions,
-                        data.draw(st.one_of(st.none(), scans(), arrays(20))))
+        ok, view = call(
+            plan.view_from,
+            pose,
+            data.draw(st.one_of(st.sampled_from([1.0, 30.0]), values)),
+            directions,
+            data.draw(st.one_of(st.none(), scans(), arrays(20))),
+        )
         if ok:
             # NaN: a direction outside the scan's arc, not cast.
             assert view.ranges.shape == (directions,) and (np.isnan(view.ranges) | (view.ranges >= 0)).all()
@@ -425,8 +452,9 @@ def test_native_grids(data: Any) -> None:
 def test_localizer(data: Any) -> None:
     gate_kw = data.draw(
         st.dictionaries(
-            st.sampled_from(["require_convergence", "min_inliers", "min_inlier_ratio", "max_translation_jump",
-                             "max_rotation_jump"]),
+            st.sampled_from(
+                ["require_convergence", "min_inliers", "min_inlier_ratio", "max_translation_jump", "max_rotation_jump"]
+            ),
             st.one_of(values, anything, st.integers(-3, 100)),
             max_size=2,
         )
@@ -488,8 +516,12 @@ def test_enhanced_occupancy_grid(data: Any) -> None:
         return
     for _ in range(data.draw(st.integers(1, 3))):
         before = (eog.shape, eog.scans)
-        ok, _ = call(eog.integrate, data.draw(scans()), data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)),
-                     data.draw(st.one_of(st.just((0.0, 0.0)), anything)))
+        ok, _ = call(
+            eog.integrate,
+            data.draw(scans()),
+            data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)),
+            data.draw(st.one_of(st.just((0.0, 0.0)), anything)),
+        )
         if not ok:
             assert (eog.shape, eog.scans) == before
     p = eog.probabilities()  # NaN where never observed (documented)
@@ -509,7 +541,11 @@ CARMEN_LINES = [
     "# comment",
     "PARAM robot_front_laser_max 30",
 ]
-G2O_LINES = ["VERTEX_SE2 0 0 0 0", "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1", "ROBOTLASER1 0 -1.57 3.14 0.0175 81.9 0.01 0 2 1 2 0"]
+G2O_LINES = [
+    "VERTEX_SE2 0 0 0 0",
+    "EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1",
+    "ROBOTLASER1 0 -1.57 3.14 0.0175 81.9 0.01 0 2 1 2 0",
+]
 TRAJ_LINES = ["0 0 0 0 0 0 0 1", "1.0 1 2 0 0 0 0.7071 0.7071", "1 0 0 0 0 1 0 0 0 0 1 0"]
 
 
@@ -523,8 +559,14 @@ def garbled(draw: Any, lines: list[str]) -> str:
             if not tokens:
                 break
             i = draw(st.integers(0, len(tokens) - 1))
-            tokens[i] = draw(st.one_of(st.sampled_from(["nan", "inf", "-inf", "1e400", "1e-400", "", "x", "-0",
-                                                         "99999999999999999999", "0x10"]), st.text(max_size=4)))
+            tokens[i] = draw(
+                st.one_of(
+                    st.sampled_from(
+                        ["nan", "inf", "-inf", "1e400", "1e-400", "", "x", "-0", "99999999999999999999", "0x10"]
+                    ),
+                    st.text(max_size=4),
+                )
+            )
         if draw(st.integers(0, 4)) == 0 and tokens:
             tokens = tokens[: draw(st.integers(0, len(tokens)))]
         out.append(" ".join(tokens))
@@ -579,12 +621,23 @@ def test_robustness_api(data: Any) -> None:
         ok, cov = call(noise.propagate, np.diag([0.01, 0.01, 0.001]), data.draw(poses), data.draw(poses))
         if ok:
             assert cov.shape == (3, 3) and not np.isnan(cov).any()
-    call(planicp.RecoveryConfig, min_inlier_ratio=data.draw(number), confirmations=data.draw(number),
-         margin=data.draw(number), local_radius=data.draw(number), max_beyond=data.draw(number))
+    call(
+        planicp.RecoveryConfig,
+        min_inlier_ratio=data.draw(number),
+        confirmations=data.draw(number),
+        margin=data.draw(number),
+        local_radius=data.draw(number),
+        max_beyond=data.draw(number),
+    )
     ok, region = call(planicp.SearchRegion, data.draw(poses), data.draw(number), data.draw(number))
     plan = box_plan()
-    ok_found, found = call(planicp.relocalize, data.draw(scans()), plan, region=region if ok else None,
-                           max_candidates=data.draw(st.one_of(st.integers(-1, 6), anything)))
+    ok_found, found = call(
+        planicp.relocalize,
+        data.draw(scans()),
+        plan,
+        region=region if ok else None,
+        max_candidates=data.draw(st.one_of(st.integers(-1, 6), anything)),
+    )
     if ok_found:
         for c in found.candidates:
             check_pose(c.pose)
@@ -598,9 +651,14 @@ def test_robustness_api(data: Any) -> None:
                     check_pose(c.pose)
                 break
     call(planicp.RecoveryConfig, search_nodes=data.draw(st.one_of(st.none(), number)))
-    ok, loc = call(Localizer, plan, data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)), None,
-                   initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)),
-                   fusion=fusion if fusion_ok else data.draw(st.one_of(st.none(), anything)))
+    ok, loc = call(
+        Localizer,
+        plan,
+        data.draw(st.one_of(st.just((3.0, 2.0, 0.3)), poses)),
+        None,
+        initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)),
+        fusion=fusion if fusion_ok else data.draw(st.one_of(st.none(), anything)),
+    )
     if ok:
         ok, estimate = call(loc.update, data.draw(scans()), data.draw(poses))
         if ok:
@@ -616,15 +674,51 @@ def test_robustness_api(data: Any) -> None:
 
 def test_every_public_name_is_fuzzed() -> None:
     """A new public name must be added to this file (or here, with a reason)."""
-    covered = {"AcceptanceGate", "EnhancedOccupancyGrid", "IcpConfig", "IcpResult", "Localizer", "PlanMap",
-               "PlanRaster", "PlanicpError", "PlanicpInternalError", "localize", "scan_to_points", "se2", "__version__",
-               "Estimate", "OccupancyModel", "RosMap", "compare_grids", "read_ros_map", "resolution_from_pixels",
-               "DegeneracyRule", "LostRule", "MotionNoise", "RecoveryConfig", "SearchRegion", "SearchInSteps",
-               "relocalize", "ContinuityRule", "OcclusionRule", "FusionRule", "WallView"}
+    covered = {
+        "AcceptanceGate",
+        "EnhancedOccupancyGrid",
+        "IcpConfig",
+        "IcpResult",
+        "Localizer",
+        "PlanMap",
+        "PlanRaster",
+        "PlanicpError",
+        "PlanicpInternalError",
+        "localize",
+        "scan_to_points",
+        "se2",
+        "__version__",
+        "Estimate",
+        "OccupancyModel",
+        "RosMap",
+        "compare_grids",
+        "read_ros_map",
+        "resolution_from_pixels",
+        "DegeneracyRule",
+        "LostRule",
+        "MotionNoise",
+        "RecoveryConfig",
+        "SearchRegion",
+        "SearchInSteps",
+        "relocalize",
+        "ContinuityRule",
+        "OcclusionRule",
+        "FusionRule",
+        "WallView",
+    }
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py).
-    elsewhere = {"EogState", "GridAgreement", "OccupancyGridMessage", "synthetic", "vector_plan", "Degeneracy",
-                 "Candidate", "Relocalization", "RelocalizationConfig"}
+    elsewhere = {
+        "EogState",
+        "GridAgreement",
+        "OccupancyGridMessage",
+        "synthetic",
+        "vector_plan",
+        "Degeneracy",
+        "Candidate",
+        "Relocalization",
+        "RelocalizationConfig",
+    }
     assert set(planicp.__all__) <= covered | elsewhere, set(planicp.__all__) - covered - elsewhere
 
 
@@ -632,7 +726,9 @@ def test_every_public_name_is_fuzzed() -> None:
 @given(st.data())
 def test_small_helpers(data: Any) -> None:
     """resolution_from_pixels, OccupancyModel, read_ros_map on garbled YAML, compare_grids."""
-    ok, r = call(planicp.resolution_from_pixels, data.draw(poses), data.draw(poses), data.draw(st.one_of(values, anything)))
+    ok, r = call(
+        planicp.resolution_from_pixels, data.draw(poses), data.draw(poses), data.draw(st.one_of(values, anything))
+    )
     if ok:
         assert isinstance(r, float) and math.isfinite(r) and r > 0
     names = ["p_hit", "p_miss", "p_min", "p_max", "free_threshold", "occupied_threshold"]
@@ -671,8 +767,12 @@ def test_small_helpers(data: Any) -> None:
 
 def test_se2_garbage_is_a_type_error_not_an_index_error() -> None:
     for bad in ("", "ab", None, 3.0, (1.0, 2.0), (1.0, 2.0, 3.0, 4.0)):
-        for fn, args in ((se2.compose, (bad, (0.0, 0.0, 0.0))), (se2.inverse, (bad,)),
-                         (se2.between, ((0.0, 0.0, 0.0), bad)), (se2.transform_points, (bad, np.zeros((1, 2))))):
+        for fn, args in (
+            (se2.compose, (bad, (0.0, 0.0, 0.0))),
+            (se2.inverse, (bad,)),
+            (se2.between, ((0.0, 0.0, 0.0), bad)),
+            (se2.transform_points, (bad, np.zeros((1, 2)))),
+        ):
             with pytest.raises(TypeError, match=r"must be an \(x, y, yaw\) triple"):
                 fn(*args)
 

@@ -23,8 +23,10 @@ CASES = 100
 def test_a_reader_keeps_its_contract_on_mutated_files(reader: str, tmp_path: Path) -> None:
     report = fuzz.run_target(reader, CASES, seed=0, failures=tmp_path)
     failed = "\n".join(f"case {index}: {what[:300]}" for index, what in report.failures)
-    assert not report.failures, f"{reader}: {failed}\n(inputs and tracebacks under {tmp_path}; replay with " \
-                                f"{fuzz.replay_command(reader, 0, report.failures[0][0])})"
+    assert not report.failures, (
+        f"{reader}: {failed}\n(inputs and tracebacks under {tmp_path}; replay with "
+        f"{fuzz.replay_command(reader, 0, report.failures[0][0])})"
+    )
     assert report.cases == CASES
     # The mutations reach both sides of every reader: files it reads, and files it refuses.
     refusals = [kind for kind in report.classes if kind != "ok"]

@@ -17,12 +17,12 @@ import pytest
 import carmen_excerpt
 from planicp import EnhancedOccupancyGrid, PlanMap
 from planicp._core import PlanicpError
-from planicp.cli import main as cli_main
-from planicp.plans.default_plan import default_plan_path, load_default_plan
-from planicp.io import read_carmen
-from planicp.evaluation.log_evaluation import plan_from_scans
 from planicp._validation import brief
+from planicp.cli import main as cli_main
+from planicp.evaluation.log_evaluation import plan_from_scans
+from planicp.io import read_carmen
 from planicp.io.yaml_documents import MAX_EXPANDED_VALUES, expanded_size, load_yaml
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.sweep import StudyError, load_study
 
 MAP_KEYS = "resolution: 0.05\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
@@ -49,7 +49,9 @@ def test_a_ros_map_whose_aliases_expand_to_billions_is_refused_in_bounded_memory
     a_map_image(tmp_path)
     values = {"image": "m.pgm", "resolution": "0.05", "origin": "[0, 0, 0]", "negate": "0", "mode": "trinary"}
     values[key] = "*l8"
-    text = alias_bomb() + "".join(f"{k}: {v}\n" for k, v in values.items()) + "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    text = (
+        alias_bomb() + "".join(f"{k}: {v}\n" for k, v in values.items()) + "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
     (tmp_path / "bomb.yaml").write_text(text)
     assert len(text) < 1000
     code = f"""
@@ -189,7 +191,7 @@ def test_a_cache_entry_that_loads_but_was_changed_is_rebuilt(tmp_path: Path, tam
     if tamper == "shifted points":
         arrays[name] = arrays[name] + 1.0
     elif tamper == "a wrong shape":
-        arrays[name] = arrays[name].reshape(-1)[: 49].reshape(7, 7)
+        arrays[name] = arrays[name].reshape(-1)[:49].reshape(7, 7)
     elif tamper == "a missing array":
         del arrays[name]
     else:
@@ -249,7 +251,9 @@ def test_an_image_of_a_billion_pixels_is_refused_from_its_header(tmp_path: Path)
     (tmp_path / "huge.png").write_bytes(png + b"\x00" * 100)
     (tmp_path / "huge.pgm").write_bytes(b"P5\n# a comment\n50000 50000\n255\n" + b"\x00" * 100)
     for name in ("huge.png", "huge.pgm"):
-        with pytest.raises(ValueError, match=r"is \d+ x \d+ pixels \(\d+ million\); plan images are read up to 200 mil"):
+        with pytest.raises(
+            ValueError, match=r"is \d+ x \d+ pixels \(\d+ million\); plan images are read up to 200 mil"
+        ):
             PlanMap.from_image(tmp_path / name, 0.05, cache=False)
     (tmp_path / "m.yaml").write_text("image: huge.png\norigin: [0, 0, 0]\n" + MAP_KEYS)
     with pytest.raises(ValueError, match=r"ROS map image .* is 30000 x 30000 pixels"):
@@ -274,11 +278,14 @@ def test_colour_images_convert_to_grey_as_the_mean_of_their_channels(tmp_path: P
     expected = (expected * a + 255.0 * (1.0 - a)).astype(np.uint8)
     np.testing.assert_array_equal(load_gray(rgba), expected)
     rgb16 = rng.integers(0, 65536, (50, 40, 3), dtype=np.uint16)
-    np.testing.assert_array_equal(load_gray(rgb16), load_gray(rgb16[:, :, :3].astype(np.float64).mean(axis=2).astype(np.uint16)))
+    np.testing.assert_array_equal(
+        load_gray(rgb16), load_gray(rgb16[:, :, :3].astype(np.float64).mean(axis=2).astype(np.uint16))
+    )
 
 
-def test_a_log_line_of_megabytes_is_cut_skipped_and_never_held_whole(tmp_path: Path,
-                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_log_line_of_megabytes_is_cut_skipped_and_never_held_whole(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A 1.5 MB .log.gz with one 1.6 GB line reached 4.75 GB, and the line's token was embedded in
     the error. Here with the limit lowered to 1 kB: the long line is cut, skipped as malformed and
     quoted by a short prefix; the lines around it are read."""
@@ -336,7 +343,9 @@ def test_an_occupancy_grid_too_fine_for_its_cell_budget_is_refused_before_anythi
     plan = load_default_plan()
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     for resolution in (0.001, 0.0005):
-        with pytest.raises(ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a resolution of at least"):
+        with pytest.raises(
+            ValueError, match=r"would need about [\d.e+]+ cells \(max_cells 16777216\); give a resolution of at least"
+        ):
             EnhancedOccupancyGrid(plan, resolution=resolution)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000  # KiB
 
@@ -359,8 +368,11 @@ def test_dxf_arcs_of_cad_float_noise_and_of_absurd_radius_give_a_plan_or_one_cle
         doc.modelspace().add_circle((0.0, 0.0), radius)
         doc.saveas(tmp_path / "huge.dxf")
         before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        with pytest.raises(ValueError, match=r"huge\.dxf': CIRCLE .* on layer 0: an arc of radius 1e\+1[47] drawing "
-                                             r"units would take \d+ points .* check the drawing's units"):
+        with pytest.raises(
+            ValueError,
+            match=r"huge\.dxf': CIRCLE .* on layer 0: an arc of radius 1e\+1[47] drawing "
+            r"units would take \d+ points .* check the drawing's units",
+        ):
             dxf_segments(tmp_path / "huge.dxf")
         assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000
 
@@ -403,12 +415,15 @@ def test_a_folder_a_device_or_a_symlink_loop_as_the_image_is_named_as_what_it_is
         PlanMap.from_image(tmp_path / "missing.png", 0.05)
 
 
-@pytest.mark.parametrize(("line", "match"), [
-    ("image: [m.pgm]", r"image must be the image file's name, got \['m\.pgm'\]"),
-    ("image: m.pgm\nmode: [trinary]", r"mode must be one of .*, got \['trinary'\]"),
-    ("image: m.pgm\norigin: [0, [1], 0]", r"origin must be three numbers, got \[0, \[1\], 0\]"),
-    ("image: m.pgm\nnegate: [0]", r"negate must be 0 or 1, got \[0\]"),
-])
+@pytest.mark.parametrize(
+    ("line", "match"),
+    [
+        ("image: [m.pgm]", r"image must be the image file's name, got \['m\.pgm'\]"),
+        ("image: m.pgm\nmode: [trinary]", r"mode must be one of .*, got \['trinary'\]"),
+        ("image: m.pgm\norigin: [0, [1], 0]", r"origin must be three numbers, got \[0, \[1\], 0\]"),
+        ("image: m.pgm\nnegate: [0]", r"negate must be 0 or 1, got \[0\]"),
+    ],
+)
 def test_a_ros_map_value_of_the_wrong_type_is_named_briefly(tmp_path: Path, line: str, match: str) -> None:
     a_map_image(tmp_path)
     keys = {"origin": "[0, 0, 0]", "negate": "0"}
@@ -419,7 +434,8 @@ def test_a_ros_map_value_of_the_wrong_type_is_named_briefly(tmp_path: Path, line
 
 
 def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_source(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     from planicp.io import yaml_documents
 
     with pytest.raises(ValueError, match="^doc.yaml nests its values too deeply"):
@@ -433,20 +449,21 @@ def test_yaml_documents_too_long_too_deep_or_invalid_are_refused_naming_the_sour
 
 @pytest.mark.parametrize("option", ["--open-px", "--close-px"])
 @pytest.mark.parametrize("size", [10**9, 2**40])
-def test_a_morphology_size_larger_than_the_image_is_one_clear_line(tmp_path: Path, option: str, size: int,
-                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_morphology_size_larger_than_the_image_is_one_clear_line(
+    tmp_path: Path, option: str, size: int, capsys: pytest.CaptureFixture[str]
+) -> None:
     """`--open-px 1e9` gave a raw cv2.error (a 10^18-byte kernel), `--close-px 2**40` "Can't parse 'ksize'"."""
     image = tmp_path / "plan.png"
     cv2.imwrite(str(image), np.pad(np.zeros((20, 20), np.uint8), 10, constant_values=255))
-    code = cli_main(["plan", str(image), "--resolution", "0.05", option, str(size), "--out", str(tmp_path / "out"),
-                  "--no-cache"])
+    code = cli_main(
+        ["plan", str(image), "--resolution", "0.05", option, str(size), "--out", str(tmp_path / "out"), "--no-cache"]
+    )
     err = capsys.readouterr().err
     assert code == 2 and len(err.splitlines()) == 1
     assert f"{option[2:].replace('-', '_')}={size} pixels is larger than the plan image" in err and "40 x 40" in err
 
 
-def test_a_binary_file_given_as_a_log_gives_a_short_error(tmp_path: Path,
-                                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_binary_file_given_as_a_log_gives_a_short_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """5 MB of random bytes to `replay` gave a 1.26 MB error quoting every junk "record type"."""
     log = tmp_path / "binary.log"
     log.write_bytes(np.random.default_rng(0).integers(0, 256, 5_000_000, dtype=np.uint8).tobytes())
@@ -456,20 +473,26 @@ def test_a_binary_file_given_as_a_log_gives_a_short_error(tmp_path: Path,
     assert "no usable FLASER, RLASER or ROBOTLASER1 line" in err and "(not a record): " in err
 
 
-@pytest.mark.parametrize(("param", "reason"), [
-    ("robot_front_laser_max abc", "is not a number"),
-    ("robot_front_laser_max -5", "must be a positive number of metres"),
-    ("robot_front_laser_max 1e400", "must be a positive number of metres"),
-    ("robot_frontlaser_offset 1e300", "must be a finite number within"),
-])
+@pytest.mark.parametrize(
+    ("param", "reason"),
+    [
+        ("robot_front_laser_max abc", "is not a number"),
+        ("robot_front_laser_max -5", "must be a positive number of metres"),
+        ("robot_front_laser_max 1e400", "must be a positive number of metres"),
+        ("robot_frontlaser_offset 1e300", "must be a finite number within"),
+    ],
+)
 def test_a_bad_param_line_is_skipped_and_named_not_the_whole_log(tmp_path: Path, param: str, reason: str) -> None:
     """`PARAM robot_front_laser_max -5` refused the whole log ("need 0 <= range_min < range_max")
     without naming file or line; `abc` or `1e300` were silently ignored or used."""
     lines = ["PARAM " + param + " nohost 0", *carmen_excerpt.log_lines()]
     path = tmp_path / "param.log"
     path.write_text("\n".join(lines) + "\n")
-    with pytest.warns(UserWarning, match=rf"param.log: skipped 1 malformed line\(s\); first at line 1 \(PARAM\): "
-                                         rf"{param.split()[0]}.*{reason}.*the default is used"):
+    with pytest.warns(
+        UserWarning,
+        match=rf"param.log: skipped 1 malformed line\(s\); first at line 1 \(PARAM\): "
+        rf"{param.split()[0]}.*{reason}.*the default is used",
+    ):
         log = read_carmen(path)
     clean = tmp_path / "clean.log"
     clean.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
@@ -482,7 +505,8 @@ def test_a_bad_param_line_is_skipped_and_named_not_the_whole_log(tmp_path: Path,
 
 
 def test_plans_from_scans_too_fine_for_the_pixel_budget_name_the_finest_resolution_that_fits(
-        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """`evaluate-log --resolution 1e-6` tried to allocate 313 TiB (a traceback)."""
     path = tmp_path / "room.log"
     path.write_text("\n".join(carmen_excerpt.log_lines()) + "\n")
@@ -510,6 +534,7 @@ def test_an_occupancy_grid_too_fine_names_the_finest_resolution_that_fits() -> N
 
 # Found by fuzzing the readers (tests/reader_fuzzing.py, benches/fuzz_readers.py): each failed as
 # the test's docstring says before its fix.
+
 
 def _peak_growth_kib(before: int) -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
@@ -546,7 +571,9 @@ def test_a_study_value_made_of_a_long_string_aliased_thousands_of_times_is_quote
     text = 'name: x\nplans: [[&s "' + "x" * 100_000 + '", ' + ", ".join(["*s"] * 30_000) + "]]\n"
     (tmp_path / "s.yaml").write_text(text)
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    with pytest.raises(StudyError, match=r"key 'plans\[0\]' must be a path or a mapping with 'path', got \['xxx") as info:
+    with pytest.raises(
+        StudyError, match=r"key 'plans\[0\]' must be a path or a mapping with 'path', got \['xxx"
+    ) as info:
         load_study(tmp_path / "s.yaml")
     assert len(str(info.value)) < 400 and _peak_growth_kib(before) < 100_000
 
@@ -554,7 +581,9 @@ def test_a_study_value_made_of_a_long_string_aliased_thousands_of_times_is_quote
 def test_a_study_asking_for_a_trillion_seeds_is_refused(tmp_path: Path) -> None:
     """`seeds: {count: 1000000000000}` raised MemoryError building the tuple of seeds."""
     (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 1000000000000}\n")
-    with pytest.raises(StudyError, match=r"key 'seeds.count' asks for 1000000000000 seeds; a study runs at most 100000"):
+    with pytest.raises(
+        StudyError, match=r"key 'seeds.count' asks for 1000000000000 seeds; a study runs at most 100000"
+    ):
         load_study(tmp_path / "s.yaml")
     (tmp_path / "s.yaml").write_text("name: x\nplans: [default]\nseeds: {start: 5, count: 3}\n")
     assert load_study(tmp_path / "s.yaml")[0].seeds == (5, 6, 7)
@@ -585,11 +614,11 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
     central = data.rfind(b"PK\x01\x02")
     if damage == "local header":
         data[0:4] = b"PK\x03\x04"
-        offset = int.from_bytes(data[central + 42:central + 46], "little")
-        data[central + 42:central + 46] = (offset + 5).to_bytes(4, "little")
+        offset = int.from_bytes(data[central + 42 : central + 46], "little")
+        data[central + 42 : central + 46] = (offset + 5).to_bytes(4, "little")
     elif damage == "offset before the start":
-        offset = int.from_bytes(data[end + 16:end + 20], "little")
-        data[end + 16:end + 20] = (offset + 10).to_bytes(4, "little")
+        offset = int.from_bytes(data[end + 16 : end + 20], "little")
+        data[end + 16 : end + 20] = (offset + 10).to_bytes(4, "little")
     elif damage == "version":
         data[central + 6] = 84  # the version needed to extract: 8.4
     else:
@@ -600,20 +629,27 @@ def test_a_damaged_zip_log_is_a_value_error_naming_the_file(tmp_path: Path, dama
     if damage == "checksum":  # found on the member's first block: no line before the break
         with pytest.raises(ValueError, match=r"r\.log: no usable .* \(skipped: \(compressed stream ends early\): 1"):
             read_carmen(path)
-        with pytest.raises(ValueError, match=r"r\.log: compressed data ends early or is corrupt after line 0: Bad CRC-32 "
-                                             r"for file 'log\.txt'"):
+        with pytest.raises(
+            ValueError,
+            match=r"r\.log: compressed data ends early or is corrupt after line 0: Bad CRC-32 "
+            r"for file 'log\.txt'",
+        ):
             read_carmen(path, errors="raise")
         return
-    match = r"starts like a zip archive but is not one \(zip file version 8\.4\)" if damage == "version" else \
-        r"the file 'log\.txt' in this zip archive cannot be read"
+    match = (
+        r"starts like a zip archive but is not one \(zip file version 8\.4\)"
+        if damage == "version"
+        else r"the file 'log\.txt' in this zip archive cannot be read"
+    )
     for reader in (read_carmen, read_g2o):
         with pytest.raises(ValueError, match=r"r\.log: " + match):
             reader(path)
 
 
 @pytest.mark.parametrize("packing", ["gz", "zip"])
-def test_a_compressed_log_that_expands_hundreds_of_times_is_refused(tmp_path: Path, packing: str,
-                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_compressed_log_that_expands_hundreds_of_times_is_refused(
+    tmp_path: Path, packing: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A 1.5 MB gzip log expanding to 1.2 GB of text took 15 s only to decompress (and its lines, had
     they been scans, gigabytes). Real logs expand 3 to 5 times; over 100 times, and past 16 MiB (1
     MiB here, to keep the test fast), is refused whatever errors= says."""
@@ -635,8 +671,11 @@ def test_a_compressed_log_that_expands_hundreds_of_times_is_refused(tmp_path: Pa
         path.write_bytes(buffer.getvalue())
     assert len(text) > 100 * path.stat().st_size
     for errors in ("skip", "raise"):
-        with pytest.raises(ValueError, match=r"bomb\.log\.(gz|zip): the compressed log expands to more than \d+ bytes, "
-                                             r"over 100 times its size .* refused as a decompression bomb"):
+        with pytest.raises(
+            ValueError,
+            match=r"bomb\.log\.(gz|zip): the compressed log expands to more than \d+ bytes, "
+            r"over 100 times its size .* refused as a decompression bomb",
+        ):
             read_carmen(path, errors=errors)  # type: ignore[arg-type]
     path.write_bytes(gzip.compress(text[:900_000]))  # under the floor: read
     assert len(read_carmen(path)) == 1
@@ -649,8 +688,11 @@ def test_a_carmen_maximum_range_param_of_zero_or_less_is_ignored(tmp_path: Path)
 
     for value in ("0", "-5"):
         path = tmp_path / "r.log"
-        path.write_text(f"PARAM robot_front_laser_max {value}\n" + FLASER.format(pose="0 0 0", t=1.0)
-                        + FLASER.format(pose="0 0 0", t=2.0))
+        path.write_text(
+            f"PARAM robot_front_laser_max {value}\n"
+            + FLASER.format(pose="0 0 0", t=1.0)
+            + FLASER.format(pose="0 0 0", t=2.0)
+        )
         log = read_carmen(path)
         assert len(log) == 2 and log[0].range_max == 80.0
 
@@ -661,13 +703,22 @@ def test_a_log_line_with_a_pose_beyond_the_coordinate_limit_is_skipped_as_malfor
     from planicp.io import read_carmen, read_g2o, read_g2o_graph
 
     path = tmp_path / "r.log"
-    path.write_text(FLASER.format(pose="0 0 0", t=1.0) + FLASER.format(pose="1e308 0 0", t=1.5)
-                    + "ODOM 1e12 0 0 0 0 0 1.7 host 1.7\n" + FLASER.format(pose="0 0 0", t=2.0))
-    with pytest.warns(UserWarning, match=r"r\.log: skipped 2 malformed line\(s\); first at line 2 \(FLASER\): the laser "
-                                         r"and odometry poses: a coordinate of 1e\+308 m is beyond \+-1e\+09 m"):
+    path.write_text(
+        FLASER.format(pose="0 0 0", t=1.0)
+        + FLASER.format(pose="1e308 0 0", t=1.5)
+        + "ODOM 1e12 0 0 0 0 0 1.7 host 1.7\n"
+        + FLASER.format(pose="0 0 0", t=2.0)
+    )
+    with pytest.warns(
+        UserWarning,
+        match=r"r\.log: skipped 2 malformed line\(s\); first at line 2 \(FLASER\): the laser "
+        r"and odometry poses: a coordinate of 1e\+308 m is beyond \+-1e\+09 m",
+    ):
         log = read_carmen(path)
     assert len(log) == 2 and log.skipped == {"FLASER (malformed)": 1, "ODOM (malformed)": 1}
-    with pytest.raises(ValueError, match=r"r\.log, line 2: bad FLASER line: the laser and odometry poses: a coordinate"):
+    with pytest.raises(
+        ValueError, match=r"r\.log, line 2: bad FLASER line: the laser and odometry poses: a coordinate"
+    ):
         read_carmen(path, errors="raise")
     # A mount (the laser's pose in the robot, from a ROBOTLASER1 line's two poses) beyond the limit:
     # the line is malformed, not the log.
@@ -677,8 +728,14 @@ def test_a_log_line_with_a_pose_beyond_the_coordinate_limit_is_skipped_as_malfor
         assert len(read_carmen(path, reference=False)) == 1
     graph = tmp_path / "g.g2o"
     scan = scan.replace("{poses}", "0.2 0.0 0.0 0.0 0.0 0.0")
-    graph.write_text("VERTEX_SE2 0 0 0 0\n" + scan.format(t=1.0) + "VERTEX_SE2 1 1e300 0 0\n" + scan.format(t=2.0)
-                     + "VERTEX_SE2 2 1 0 0\n" + scan.format(t=3.0))
+    graph.write_text(
+        "VERTEX_SE2 0 0 0 0\n"
+        + scan.format(t=1.0)
+        + "VERTEX_SE2 1 1e300 0 0\n"
+        + scan.format(t=2.0)
+        + "VERTEX_SE2 2 1 0 0\n"
+        + scan.format(t=3.0)
+    )
     with pytest.warns(UserWarning, match=r"skipped 2 malformed line\(s\); first at line 3 \(VERTEX_SE2\)"):
         log = read_g2o(graph)
     assert [f.odometry for f in log] == [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)]  # the scan of vertex 1 is not vertex 0's
@@ -699,12 +756,17 @@ def test_a_record_kind_of_hundreds_of_kilobytes_is_quoted_briefly(tmp_path: Path
         assert len(str(info.value)) < 300
 
 
-@pytest.mark.parametrize(("text", "match"), [
-    ("0\nSECTION\n0\nENDSEC\n0\nEOF\n", r" could not be read as DXF: IndexError: list index out of range"),
-    ("0\nSECTION\n2\nENTITIES\n0\nPOLYLINE\n8\n0\n66\n1\n70\n0\n0\nVERTEX\n8\n0\n42\n0.0\n0\nVERTEX\n8\n0\n10\n1.0\n"
-     "20\n0.0\n0\nSEQEND\n0\nENDSEC\n0\nEOF\n",
-     r": POLYLINE \w+ on layer 0: damaged \(AttributeError: 'NoneType' object has no attribute 'x'\)"),
-])
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("0\nSECTION\n0\nENDSEC\n0\nEOF\n", r" could not be read as DXF: IndexError: list index out of range"),
+        (
+            "0\nSECTION\n2\nENTITIES\n0\nPOLYLINE\n8\n0\n66\n1\n70\n0\n0\nVERTEX\n8\n0\n42\n0.0\n0\nVERTEX\n8\n0\n10\n1.0\n"
+            "20\n0.0\n0\nSEQEND\n0\nENDSEC\n0\nEOF\n",
+            r": POLYLINE \w+ on layer 0: damaged \(AttributeError: 'NoneType' object has no attribute 'x'\)",
+        ),
+    ],
+)
 def test_a_damaged_dxf_file_is_a_value_error_naming_the_file(tmp_path: Path, text: str, match: str) -> None:
     """ezdxf's recovery raised IndexError on a SECTION without a name, and a recovered VERTEX
     without a location gave AttributeError from the reader."""
@@ -715,7 +777,8 @@ def test_a_damaged_dxf_file_is_a_value_error_naming_the_file(tmp_path: Path, tex
 
 
 def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_naming_the_file(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A 4 KB HouseExpo file with one vertex 260 km away had 26 million points sampled (61 s, 2.6
     GB) before the core refused their visibility raster, in a message naming no file; a DXF or
     HouseExpo plan of too many points was refused naming no file either."""
@@ -724,29 +787,44 @@ def test_vector_plans_too_large_for_their_spacing_are_refused_before_sampling_na
     house = {"verts": [[0, 0], [10, 0], [10, 260_000], [0, 8]], "bbox": {"min": [0, 0], "max": [10, 260_000]}}
     (tmp_path / "h.json").write_text(json.dumps(house))
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': walls spanning 10 x 260000 m need a visibility "
-                                         r"raster of 2\.91e\+09 cells at 0\.03 m \(limit 268435456\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"HouseExpo file '.*h\.json': walls spanning 10 x 260000 m need a visibility "
+        r"raster of 2\.91e\+09 cells at 0\.03 m \(limit 268435456\)",
+    ):
         PlanMap.from_house_expo(tmp_path / "h.json")
     assert _peak_growth_kib(before) < 50_000
     from planicp.plans import vector_plan
 
     monkeypatch.setattr(vector_plan, "_MAX_SAMPLES", 1000)
-    (tmp_path / "h.json").write_text(json.dumps({"verts": [[0, 0], [30, 0], [30, 20]], "bbox": {"min": [0, 0], "max": [30, 20]}}))
+    (tmp_path / "h.json").write_text(
+        json.dumps({"verts": [[0, 0], [30, 0], [30, 20]], "bbox": {"min": [0, 0], "max": [30, 20]}})
+    )
     with pytest.raises(ValueError, match=r"HouseExpo file '.*h\.json': sampling .* more than 1000 points"):
         PlanMap.from_house_expo(tmp_path / "h.json")
     ezdxf = pytest.importorskip("ezdxf")
     doc = ezdxf.new()
     doc.modelspace().add_line((0.0, 0.0), (100.0, 0.0))
     doc.saveas(tmp_path / "d.dxf")
-    with pytest.raises(ValueError, match=r"DXF file '.*d\.dxf': sampling 100 m of walls every 0\.02 m gives more than 1000"):
+    with pytest.raises(
+        ValueError, match=r"DXF file '.*d\.dxf': sampling 100 m of walls every 0\.02 m gives more than 1000"
+    ):
         PlanMap.from_dxf(tmp_path / "d.dxf")
 
 
-@pytest.mark.parametrize(("values", "match"), [
-    ("resolution: 0.05\norigin: [1e12, 0, 0]", r"origin \['1e12', 0, 0\] is beyond \+-1e\+09 m"),
-    ("resolution: 1.0e9\norigin: [0, 0, 0]", r"its 20 x 20 pixels at 1e\+09 m from origin \[0, 0, 0\] reach beyond"),
-])
-def test_a_ros_map_beyond_the_coordinate_limit_is_refused_naming_the_map(tmp_path: Path, values: str, match: str) -> None:
+@pytest.mark.parametrize(
+    ("values", "match"),
+    [
+        ("resolution: 0.05\norigin: [1e12, 0, 0]", r"origin \['1e12', 0, 0\] is beyond \+-1e\+09 m"),
+        (
+            "resolution: 1.0e9\norigin: [0, 0, 0]",
+            r"its 20 x 20 pixels at 1e\+09 m from origin \[0, 0, 0\] reach beyond",
+        ),
+    ],
+)
+def test_a_ros_map_beyond_the_coordinate_limit_is_refused_naming_the_map(
+    tmp_path: Path, values: str, match: str
+) -> None:
     """An origin of 1e12 m gave "origin has a coordinate of 1.000000e+12 m" and a resolution of 1e9 m
     the core's "plan has a coordinate of 1.45e10 m", neither naming the map."""
     a_map_image(tmp_path)
@@ -786,16 +864,22 @@ def test_a_pgm_header_claiming_a_width_of_hundreds_of_digits_is_refused_briefly(
     """A PGM header giving a width of 400 digits raised OverflowError ("int too large to convert to
     float") from the message that refused it."""
     (tmp_path / "p.pgm").write_bytes(b"P5\n" + b"9" * 400 + b" 10\n255\n" + b"\x00" * 100)
-    with pytest.raises(ValueError, match=r"p\.pgm is 999\.\.\.\(400 digits\) x 10 pixels \(999\.\.\.\(395 digits\) million\)"):
+    with pytest.raises(
+        ValueError, match=r"p\.pgm is 999\.\.\.\(400 digits\) x 10 pixels \(999\.\.\.\(395 digits\) million\)"
+    ):
         PlanMap.from_image(tmp_path / "p.pgm", 0.05, cache=False)
 
 
-@pytest.mark.parametrize(("image", "match"), [
-    ('"m\\0.pgm"', r"image 'm\\x00\.pgm' is no file name: it holds a NUL character"),
-    ("m" * 300 + ".pgm", r"image 'mmm.*' cannot be opened: File name too long"),
-])
-def test_a_ros_map_image_name_the_file_system_cannot_take_is_refused_naming_the_map(tmp_path: Path, image: str,
-                                                                                     match: str) -> None:
+@pytest.mark.parametrize(
+    ("image", "match"),
+    [
+        ('"m\\0.pgm"', r"image 'm\\x00\.pgm' is no file name: it holds a NUL character"),
+        ("m" * 300 + ".pgm", r"image 'mmm.*' cannot be opened: File name too long"),
+    ],
+)
+def test_a_ros_map_image_name_the_file_system_cannot_take_is_refused_naming_the_map(
+    tmp_path: Path, image: str, match: str
+) -> None:
     """An image name holding a NUL raised ValueError "embedded null byte" (naming no map), and one of
     300 characters OSError [Errno 36] File name too long."""
     (tmp_path / "m.yaml").write_text(f"image: {image}\norigin: [0, 0, 0]\n" + MAP_KEYS)
@@ -814,11 +898,14 @@ def test_a_house_expo_file_without_its_keys_lists_the_keys_it_has_briefly(tmp_pa
     assert len(str(info.value)) < 300
 
 
-@pytest.mark.parametrize(("line", "key"), [
-    ("plans: [{path: hall.png, resolution: 0.05, origin: [1, 2, BIG]}]", r"'plans\[0\]': origin"),
-    ("plans: [default]\nfurniture: [BIG]", r"'furniture\[0\]': furniture"),
-    ("plans: [default]\nsensors: {a: {range_max: BIG}}", r"'sensors\.a': range_max"),
-])
+@pytest.mark.parametrize(
+    ("line", "key"),
+    [
+        ("plans: [{path: hall.png, resolution: 0.05, origin: [1, 2, BIG]}]", r"'plans\[0\]': origin"),
+        ("plans: [default]\nfurniture: [BIG]", r"'furniture\[0\]': furniture"),
+        ("plans: [default]\nsensors: {a: {range_max: BIG}}", r"'sensors\.a': range_max"),
+    ],
+)
 def test_a_study_number_of_hundreds_of_digits_is_a_study_error(tmp_path: Path, line: str, key: str) -> None:
     """An integer of 400 digits where a float belongs raised OverflowError ("int too large to convert
     to float") from load_study."""

@@ -55,7 +55,10 @@ _SCRIPT = textwrap.dedent(
 @pytest.mark.parametrize("case", ["localize", "localize_kd_tree", "relocalize"])
 def test_ctrl_c_stops_a_long_native_call_with_keyboard_interrupt(case: str) -> None:
     child = subprocess.Popen(
-        [sys.executable, "-c", _SCRIPT, case], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        [sys.executable, "-c", _SCRIPT, case],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     try:

@@ -25,9 +25,18 @@ def frames(count: int = 12) -> list[ScanFrame]:
         ranges = rng.uniform(0.5, 9.0, 91)
         ranges[k % 91] = np.inf
         ranges[(5 * k + 3) % 91] = np.nan
-        out.append(ScanFrame(1700000000.0 + 0.1 * k + 1e-4, ranges, -math.pi / 2, math.pi / 90, 0.1, 10.0,
-                             laser_pose=MOUNT, odometry=(0.3 * k, -0.1 * k, math.atan2(math.sin(2.9 + 0.05 * k),
-                                                                                        math.cos(2.9 + 0.05 * k)))))
+        out.append(
+            ScanFrame(
+                1700000000.0 + 0.1 * k + 1e-4,
+                ranges,
+                -math.pi / 2,
+                math.pi / 90,
+                0.1,
+                10.0,
+                laser_pose=MOUNT,
+                odometry=(0.3 * k, -0.1 * k, math.atan2(math.sin(2.9 + 0.05 * k), math.cos(2.9 + 0.05 * k))),
+            )
+        )
     return out
 
 
@@ -46,7 +55,8 @@ def test_round_trip(tmp_path: Path, version: int) -> None:
         # LaserScan carries float32 ranges: exactly the float32 values, inf and NaN included.
         np.testing.assert_array_equal(got.ranges, want.ranges.astype(np.float32).astype(np.float64))
         assert (got.angle_min, got.range_min, got.range_max) == pytest.approx(
-            (want.angle_min, want.range_min, want.range_max), abs=1e-6)
+            (want.angle_min, want.range_min, want.range_max), abs=1e-6
+        )
         assert got.angle_increment == pytest.approx(want.angle_increment, rel=1e-6)
         assert got.laser_pose == pytest.approx(MOUNT, abs=1e-12)
         assert got.odometry == pytest.approx(want.odometry, abs=1e-9)
@@ -100,9 +110,12 @@ def test_an_odometry_message_whose_orientation_is_no_rotation_is_skipped_and_cou
 def test_missing_topic_names_bag_and_topics(tmp_path: Path) -> None:
     path = tmp_path / "run.bag"
     write_bag(path, frames(2), version=1)
-    with pytest.raises(ValueError, match=r"run.bag has no topic '/front_scan'; topics present: "
-                                         r"/odom \(nav_msgs/msg/Odometry\), /scan \(sensor_msgs/msg/LaserScan\), "
-                                         r"/tf_static \(tf2_msgs/msg/TFMessage\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"run.bag has no topic '/front_scan'; topics present: "
+        r"/odom \(nav_msgs/msg/Odometry\), /scan \(sensor_msgs/msg/LaserScan\), "
+        r"/tf_static \(tf2_msgs/msg/TFMessage\)",
+    ):
         read_bag(path, scan_topic="/front_scan")
     with pytest.raises(ValueError, match=r"has no topic '/wheel_odom'"):
         read_bag(path, odom_topic="/wheel_odom")
@@ -123,31 +136,45 @@ def test_mount_from_a_tf_static_chain(tmp_path: Path) -> None:
 
     def tf(parent: str, child: str, x: float, y: float, yaw: float) -> object:
         return t["geometry_msgs/msg/TransformStamped"](
-            header=t["std_msgs/msg/Header"](stamp=stamp, frame_id=parent), child_frame_id=child,
+            header=t["std_msgs/msg/Header"](stamp=stamp, frame_id=parent),
+            child_frame_id=child,
             transform=t["geometry_msgs/msg/Transform"](
                 translation=t["geometry_msgs/msg/Vector3"](x=x, y=y, z=0.3),
-                rotation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2))))
+                rotation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+            ),
+        )
 
     scan = t["sensor_msgs/msg/LaserScan"](
-        header=t["std_msgs/msg/Header"](stamp=stamp, frame_id="laser"), angle_min=-1.0, angle_max=1.0,
-        angle_increment=1.0, time_increment=0.0, scan_time=0.0, range_min=0.1, range_max=5.0,
-        ranges=np.array([1.0, 7.0, 2.0], dtype=np.float32), intensities=np.zeros(0, dtype=np.float32))
+        header=t["std_msgs/msg/Header"](stamp=stamp, frame_id="laser"),
+        angle_min=-1.0,
+        angle_max=1.0,
+        angle_increment=1.0,
+        time_increment=0.0,
+        scan_time=0.0,
+        range_min=0.1,
+        range_max=5.0,
+        ranges=np.array([1.0, 7.0, 2.0], dtype=np.float32),
+        intensities=np.zeros(0, dtype=np.float32),
+    )
     path = tmp_path / "chain"
     writer_options = {"version": 8} if "version" in Writer.__init__.__code__.co_varnames else {}
     with Writer(path, **writer_options) as writer:
         c_tf = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store)
         c_scan = writer.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=store)
-        msg = t["tf2_msgs/msg/TFMessage"](transforms=[tf("plate", "laser", 0.1, 0.0, math.pi / 2),
-                                                      tf("base_link", "plate", 0.5, 0.2, math.pi / 2)])
+        msg = t["tf2_msgs/msg/TFMessage"](
+            transforms=[tf("plate", "laser", 0.1, 0.0, math.pi / 2), tf("base_link", "plate", 0.5, 0.2, math.pi / 2)]
+        )
         writer.write(c_tf, 10_000_000_000, store.serialize_cdr(msg, "tf2_msgs/msg/TFMessage"))
         writer.write(c_scan, 10_000_000_000, store.serialize_cdr(scan, "sensor_msgs/msg/LaserScan"))
     log = read_bag(path, odom_topic=None)
     # plate at (0.5, 0.2) turned 90 deg; laser 0.1 m along the plate's x, i.e. +y in base: (0.5, 0.3), 180 deg.
     assert log[0].laser_pose == pytest.approx((0.5, 0.3, math.pi), abs=1e-12)
     assert log[0].ranges[1] == np.inf  # 7 m > range_max 5 m: no return
-    np.testing.assert_allclose(log[0].points(), [[0.5 - math.cos(-1.0), 0.3 - math.sin(-1.0)],
-                                                [0.5 - 2 * math.cos(1.0), 0.3 - 2 * math.sin(1.0)]],
-                               atol=1e-7)
+    np.testing.assert_allclose(
+        log[0].points(),
+        [[0.5 - math.cos(-1.0), 0.3 - math.sin(-1.0)], [0.5 - 2 * math.cos(1.0), 0.3 - 2 * math.sin(1.0)]],
+        atol=1e-7,
+    )
     assert read_bag(path, odom_topic=None, laser_pose=(0, 0, 0))[0].laser_pose == (0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match=r"no /tf_static chain from base frame 'base' to laser frame 'laser'"):
         read_bag(path, odom_topic=None, base_frame="base")

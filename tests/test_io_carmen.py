@@ -56,8 +56,13 @@ def test_reference_pose_is_the_base_not_the_laser(excerpt: Path) -> None:
 def test_hand_computed_reference_with_laser_offset(tmp_path: Path) -> None:
     # Laser at (1, 2) facing +y, mounted 0.5 m ahead of the base: the base is at (1, 1.5), facing +y.
     ranges = " ".join(["2.0"] * 181)
-    path = write(tmp_path, ["PARAM robot_frontlaser_offset 0.5 nohost 0",
-                            f"FLASER 181 {ranges} 1.0 2.0 1.5707963267948966 7 8 0.1 12.5 host 12.5"])
+    path = write(
+        tmp_path,
+        [
+            "PARAM robot_frontlaser_offset 0.5 nohost 0",
+            f"FLASER 181 {ranges} 1.0 2.0 1.5707963267948966 7 8 0.1 12.5 host 12.5",
+        ],
+    )
     frame = read_carmen(path)[0]
     assert frame.reference == pytest.approx((1.0, 1.5, math.pi / 2), abs=1e-12)
     assert frame.odometry == (7.0, 8.0, 0.1)  # no ODOM lines: the laser line's own odometry
@@ -69,8 +74,9 @@ def test_hand_computed_reference_with_laser_offset(tmp_path: Path) -> None:
 
 def test_laser_pose_argument_overrides_params(tmp_path: Path) -> None:
     ranges = " ".join(["2.0"] * 180)
-    path = write(tmp_path, ["PARAM robot_frontlaser_offset 0.5 nohost 0",
-                            f"FLASER 180 {ranges} 1.0 2.0 0.0 0 0 0 3.0 host 3.0"])
+    path = write(
+        tmp_path, ["PARAM robot_frontlaser_offset 0.5 nohost 0", f"FLASER 180 {ranges} 1.0 2.0 0.0 0 0 0 3.0 host 3.0"]
+    )
     frame = read_carmen(path, laser_pose=(0.0, 0.0, 0.0))[0]
     assert frame.reference == pytest.approx((1.0, 2.0, 0.0))
     assert frame.laser_pose == (0.0, 0.0, 0.0)
@@ -120,9 +126,13 @@ def test_odometry_is_the_odom_stream_at_scan_time(excerpt: Path) -> None:
 
 def test_odometry_interpolation_wraps_the_angle(tmp_path: Path) -> None:
     ranges = " ".join(["2.0"] * 180)
-    lines = ["ODOM 0 0 3.1 0 0 0 10.0 h 10.0", "ODOM 1 2 -3.1 0 0 0 11.0 h 11.0",
-             f"FLASER 180 {ranges} 0 0 0 0 0 0 10.25 h 10.25", f"FLASER 180 {ranges} 0 0 0 0 0 0 10.5 h 10.5",
-             f"FLASER 180 {ranges} 0 0 0 0 0 0 12.0 h 12.0"]
+    lines = [
+        "ODOM 0 0 3.1 0 0 0 10.0 h 10.0",
+        "ODOM 1 2 -3.1 0 0 0 11.0 h 11.0",
+        f"FLASER 180 {ranges} 0 0 0 0 0 0 10.25 h 10.25",
+        f"FLASER 180 {ranges} 0 0 0 0 0 0 10.5 h 10.5",
+        f"FLASER 180 {ranges} 0 0 0 0 0 0 12.0 h 12.0",
+    ]
     log = read_carmen(write(tmp_path, lines))
     a, b, outside = (f.odometry for f in log)
     step = 2 * math.pi - 6.2  # the short way from 3.1 to -3.1 goes through pi
@@ -133,8 +143,11 @@ def test_odometry_interpolation_wraps_the_angle(tmp_path: Path) -> None:
 
 def test_all_zero_odom_lines_are_placeholders(tmp_path: Path) -> None:
     ranges = " ".join(["2.0"] * 180)
-    lines = ["ODOM 0 0 0 0 0 0 0.5 h 0.5", "ODOM 0 0 0 0 0 0 1.5 h 1.5",
-             f"FLASER 180 {ranges} 4 5 0.2 1 2 0.3 1.0 h 1.0"]
+    lines = [
+        "ODOM 0 0 0 0 0 0 0.5 h 0.5",
+        "ODOM 0 0 0 0 0 0 1.5 h 1.5",
+        f"FLASER 180 {ranges} 4 5 0.2 1 2 0.3 1.0 h 1.0",
+    ]
     log = read_carmen(write(tmp_path, lines))
     assert log[0].odometry == (1.0, 2.0, 0.3)
     assert log.skipped["ODOM (all-zero placeholders)"] == 2
@@ -226,11 +239,18 @@ def test_truncated_gzip_keeps_the_lines_before(tmp_path: Path, excerpt: Path) ->
         read_carmen(cut, errors="raise")
 
 
-def robotlaser_line(t: float, laser: tuple[float, float, float], robot: tuple[float, float, float],
-                    ranges: list[float], max_range: float = 50.0) -> str:
+def robotlaser_line(
+    t: float,
+    laser: tuple[float, float, float],
+    robot: tuple[float, float, float],
+    ranges: list[float],
+    max_range: float = 50.0,
+) -> str:
     r = " ".join(f"{v}" for v in ranges)
-    return (f"ROBOTLASER1 0 -1.0 2.0 0.5 {max_range} 0.1 0 {len(ranges)} {r} 2 0.3 0.4 "
-            f"{laser[0]} {laser[1]} {laser[2]} {robot[0]} {robot[1]} {robot[2]} 0.1 0.2 0.5 0.3 0 {t} host {t}")
+    return (
+        f"ROBOTLASER1 0 -1.0 2.0 0.5 {max_range} 0.1 0 {len(ranges)} {r} 2 0.3 0.4 "
+        f"{laser[0]} {laser[1]} {laser[2]} {robot[0]} {robot[1]} {robot[2]} 0.1 0.2 0.5 0.3 0 {t} host {t}"
+    )
 
 
 def test_robotlaser1_own_geometry_and_mount(tmp_path: Path) -> None:

@@ -54,6 +54,7 @@ def test_killian_vertices_are_chained_odometry() -> None:
     assert np.abs(motion[:, 2] - graph.measurements[:, 2]).max() < 0.01
     assert np.hypot(*graph.measurements[:, :2].T).sum() == pytest.approx(32.998, abs=1e-3)  # metres (awk over the file)
 
+
 def test_zipped_graph_as_rtb_data_ships_it(tmp_path: Path) -> None:
     packed = tmp_path / "killian.g2o.zip"
     with zipfile.ZipFile(packed, "w", compression=zipfile.ZIP_DEFLATED) as archive:
@@ -89,8 +90,12 @@ def test_broken_graph_lines(tmp_path: Path) -> None:
     assert reasons[6].startswith("the vertex pose must be finite")
     assert reasons[7] == "the VERTEX_SE2 line before it is malformed: the scan has no pose"
     assert reasons[14].startswith("truncated: EDGE_SE2")
-    assert log.skipped == {"ROBOTLASER1 (malformed)": 2, "VERTEX_SE2 (malformed)": 1, "EDGE_SE2 (malformed)": 1,
-                           "FIX": 1}
+    assert log.skipped == {
+        "ROBOTLASER1 (malformed)": 2,
+        "VERTEX_SE2 (malformed)": 1,
+        "EDGE_SE2 (malformed)": 1,
+        "FIX": 1,
+    }
     assert len(log) == 5
     with pytest.raises(ValueError, match=rf"{path}, line 1: bad ROBOTLASER1 line"):
         read_g2o(path, errors="raise")

@@ -51,8 +51,9 @@ def test_evo_reads_our_kitti_file(tmp_path: Path) -> None:
     traj = file_interface.read_kitti_poses_file(str(path))
     se3 = np.array(traj.poses_se3)
     np.testing.assert_allclose(se3[:, :2, 3], poses[:, :2], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(np.angle(np.exp(1j * (np.arctan2(se3[:, 1, 0], se3[:, 0, 0]) - poses[:, 2]))),
-                               0.0, atol=1e-9)
+    np.testing.assert_allclose(
+        np.angle(np.exp(1j * (np.arctan2(se3[:, 1, 0], se3[:, 0, 0]) - poses[:, 2]))), 0.0, atol=1e-9
+    )
     np.testing.assert_array_equal(se3[:, 2, 3], 0.0)
     np.testing.assert_array_equal(read_kitti(path)[:, :2], poses[:, :2])
 
@@ -82,8 +83,7 @@ def test_interpolation_edges() -> None:
     out, inside = interpolate_poses(t, p, np.array([-0.1, 0.0, 0.5, 1.0, 2.0, 3.0, 3.1]))
     assert inside.tolist() == [False, True, True, True, True, True, False]
     assert np.isnan(out[[0, 6]]).all()
-    np.testing.assert_allclose(out[1:6], [[0, 0, 0], [0.5, 0, 0.25], [2, 0, 0.5], [3, 1, 0], [4, 2, -0.5]],
-                               atol=1e-12)
+    np.testing.assert_allclose(out[1:6], [[0, 0, 0], [0.5, 0, 0.25], [2, 0, 0.5], [3, 1, 0], [4, 2, -0.5]], atol=1e-12)
     single, inside = interpolate_poses(np.array([2.0]), np.array([[1.0, 2.0, 3.0]]), np.array([2.0, 2.5]))
     assert inside.tolist() == [True, False] and single[0].tolist() == [1.0, 2.0, 3.0]
     with pytest.raises(ValueError, match="non-decreasing"):

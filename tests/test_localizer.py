@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
+from planicp import sim as syn
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
-from planicp import sim as syn
 
 DEG = math.pi / 180.0
 Pose = tuple[float, float, float]
@@ -328,9 +328,7 @@ def test_a_scan_turned_by_a_right_angle_does_not_move_the_pose() -> None:
     assert apart.max() < 0.05, (int(np.argmax(apart)), apart.max())
 
 
-def test_an_uncertain_prediction_is_searched_around(
-    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
-) -> None:
+def test_an_uncertain_prediction_is_searched_around(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
     """A prediction 1 m off whose covariance says so (3 sigma = 1.2 m, as after odometry over a long
     gap in the scans): the plan is searched around it instead of trusting ICP's nearest fit."""
     off = se2.compose(path[0], (0.7, -0.7, 8 * DEG))
@@ -384,13 +382,20 @@ def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> No
     from planicp.sweep.runs import expand_runs
     from planicp.sweep.study import Study
 
-    study = Study.from_dict({
-        "name": "one run", "duration_s": 60, "plans": ["default"], "seeds": [3], "furniture": [0],
-        "people": [2],
-        "sensors": {"budget": {"fov_deg": 180, "beams": 181, "range_max": 6.0, "range_sigma": 0.03,
-                               "dropout": 0.1}},
-        "odometry": {"thesis": {}},
-    })
+    study = Study.from_dict(
+        {
+            "name": "one run",
+            "duration_s": 60,
+            "plans": ["default"],
+            "seeds": [3],
+            "furniture": [0],
+            "people": [2],
+            "sensors": {
+                "budget": {"fov_deg": 180, "beams": 181, "range_max": 6.0, "range_sigma": 0.03, "dropout": 0.1}
+            },
+            "odometry": {"thesis": {}},
+        }
+    )
     (spec,) = expand_runs(study)
     assert spec.run_id == "ea5715a8fb28ab6c"
     config = spec.experiment_config()
@@ -398,8 +403,9 @@ def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> No
     recording, _ = run_experiment(plan, config)
     truth, scan = tuple(recording.truth[346]), recording.scans[346]
     for sd in (0.35, 0.5):
-        localizer = Localizer(plan, truth, config.icp,
-                              initial_covariance=np.diag([sd ** 2, sd ** 2, math.radians(2.0) ** 2]))
+        localizer = Localizer(
+            plan, truth, config.icp, initial_covariance=np.diag([sd**2, sd**2, math.radians(2.0) ** 2])
+        )
         estimate = localizer.update(scan, (0.0, 0.0, 0.0))
         error = math.hypot(estimate.pose[0] - truth[0], estimate.pose[1] - truth[1])
         assert estimate.accepted and not estimate.relocalized, (sd, estimate.reason)
@@ -407,7 +413,8 @@ def test_a_search_for_an_uncertain_start_keeps_to_the_stated_uncertainty() -> No
 
 
 def test_returns_through_walls_are_judged_against_what_sound_tracking_showed(
-        plan: PlanMap, path: list[Pose], scans: list[np.ndarray], tracking: Any) -> None:
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray], tracking: Any
+) -> None:
     """A place through whose walls more of a scan's returns pass than the recovery allows is not
     taken: `max_beyond`, or the share the soundly tracked scans showed at their own poses when that
     is more (a SLAM map's sparse cells let beams through at the right place too)."""

@@ -14,19 +14,18 @@ import numpy as np
 import pytest
 
 import carmen_excerpt as ex
-
 from planicp import PlanMap
 from planicp.cli import main as cli_main
-from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.evaluation.figures import plot_quality
-from planicp.io import open_log, read_tum
 from planicp.evaluation.log_evaluation import OdometryDrift, evaluate_log, plan_from_scans, synthesise_odometry
 from planicp.evaluation.log_replay import track_log
+from planicp.evaluation.trajectory_metrics import error_summary, pose_errors
+from planicp.io import open_log, read_tum
+from planicp.plans.default_plan import default_plan_path, load_default_plan
 from planicp.progress import progress_bar
 from planicp.se2 import between
 from planicp.sim.experiment import ExperimentConfig, Recording, run_experiment
 from planicp.sim.odometry import ErrorGenerator
-from planicp.evaluation.trajectory_metrics import error_summary, pose_errors
 
 RES = 0.05
 
@@ -48,9 +47,9 @@ def room_image(tmp_path_factory: pytest.TempPathFactory) -> Path:
     image = np.full((rows, cols), 255, dtype=np.uint8)
     inside = np.zeros((rows, cols), dtype=bool)
     # Image row r covers y in [-0.5 + (rows - r - 1) * RES, ...): interior x 0..10, y 0..6.
-    inside[int(0.5 / RES):rows - int(0.5 / RES), int(0.5 / RES):cols - int(0.5 / RES)] = True
+    inside[int(0.5 / RES) : rows - int(0.5 / RES), int(0.5 / RES) : cols - int(0.5 / RES)] = True
     wall = np.zeros_like(inside)
-    wall[int(0.4 / RES):rows - int(0.4 / RES), int(0.4 / RES):cols - int(0.4 / RES)] = True
+    wall[int(0.4 / RES) : rows - int(0.4 / RES), int(0.4 / RES) : cols - int(0.4 / RES)] = True
     image[wall & ~inside] = 0
     path = tmp_path_factory.mktemp("plan") / "room.png"
     cv2.imwrite(str(path), image)
@@ -63,17 +62,42 @@ def recording() -> Recording:
     return recording
 
 
-def test_replay_command_on_a_carmen_log(carmen_log: Path, room_image: Path, tmp_path: Path,
-                                       capsys: pytest.CaptureFixture[str]) -> None:
+def test_replay_command_on_a_carmen_log(
+    carmen_log: Path, room_image: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "replay"
-    code = cli_main(["replay", str(carmen_log), "--plan", str(room_image), "--resolution", str(RES),
-                     "--origin", "-0.5", "-0.5", "0", "--out", str(out)])
+    code = cli_main(
+        [
+            "replay",
+            str(carmen_log),
+            "--plan",
+            str(room_image),
+            "--resolution",
+            str(RES),
+            "--origin",
+            "-0.5",
+            "-0.5",
+            "0",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     printed = capsys.readouterr().out
     assert "40 scans" in printed and "ATE RMS" in printed
     assert {p.name for p in out.iterdir()} == {
-        "trajectory.tum", "odometry.tum", "reference.tum", "paths.png", "quality.png", "position_error.png",
-        "heading_error.png", "eog.png", "eog.yaml", "eog.pgm", "metrics.json"}
+        "trajectory.tum",
+        "odometry.tum",
+        "reference.tum",
+        "paths.png",
+        "quality.png",
+        "position_error.png",
+        "heading_error.png",
+        "eog.png",
+        "eog.yaml",
+        "eog.pgm",
+        "metrics.json",
+    }
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["scans"] == 40 and metrics["accepted_share"] == 1.0
     assert metrics["skipped"] == {"NEFF": 40}
@@ -87,13 +111,18 @@ def test_replay_command_on_a_carmen_log(carmen_log: Path, room_image: Path, tmp_
     assert np.sqrt(np.mean(errors**2)) == pytest.approx(metrics["planicp"]["ate_rms_m"], abs=1e-6)
 
 
-def test_replay_errors_name_the_problem(carmen_log: Path, room_image: Path, tmp_path: Path,
-                                       capsys: pytest.CaptureFixture[str]) -> None:
+def test_replay_errors_name_the_problem(
+    carmen_log: Path, room_image: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "x"
     assert cli_main(["replay", str(carmen_log), "--plan", str(room_image), "--out", str(out)]) == 2
     assert "needs a resolution" in capsys.readouterr().err
-    assert cli_main(["replay", str(tmp_path / "none.log"), "--plan", str(room_image), "--resolution", "0.05",
-                     "--out", str(out)]) == 2
+    assert (
+        cli_main(
+            ["replay", str(tmp_path / "none.log"), "--plan", str(room_image), "--resolution", "0.05", "--out", str(out)]
+        )
+        == 2
+    )
     assert "log not found" in capsys.readouterr().err
     frames = [replace(f, reference=None) for f in open_log(carmen_log)]
     plan = PlanMap.from_image(room_image, RES, (-0.5, -0.5, 0.0), cache=False)
@@ -155,8 +184,9 @@ def test_plan_from_scans_puts_walls_where_the_scans_end(carmen_log: Path) -> Non
 def test_synthesised_odometry() -> None:
     times = np.array([0.0, 1.0, 2.5, 3.0])
     reference = np.array([[1.0, 2.0, 0.5], [2.0, 2.5, 0.8], [2.5, 4.0, 2.0], [2.0, 4.5, 3.1]])
-    exact = OdometryDrift(ErrorGenerator(0.0, 0.0), translation_noise_fraction=0.0, rotation_noise_per_rad=0.0,
-                          rotation_noise_per_m=0.0)
+    exact = OdometryDrift(
+        ErrorGenerator(0.0, 0.0), translation_noise_fraction=0.0, rotation_noise_per_rad=0.0, rotation_noise_per_m=0.0
+    )
     odom = synthesise_odometry(times, reference, exact, np.random.default_rng(0))
     assert tuple(odom[0]) == (0.0, 0.0, 0.0)
     for k in range(1, 4):
@@ -171,8 +201,14 @@ def test_synthesised_odometry() -> None:
     arc = (0.01 + 5e-5) * np.array([[math.cos(j * 5e-5), math.sin(j * 5e-5)] for j in range(100)]).sum(axis=0)
     np.testing.assert_allclose(odom[1, :2], arc, rtol=1e-9)  # the error generator's arc
     # Noise: seeded and of the stated size (2 % of 1 m on x and y).
-    noisy = np.array([synthesise_odometry(np.array([0.0, 1.0]), straight, OdometryDrift(ErrorGenerator(0.0, 0.0)),
-                                          np.random.default_rng(s))[1] for s in range(400)])
+    noisy = np.array(
+        [
+            synthesise_odometry(
+                np.array([0.0, 1.0]), straight, OdometryDrift(ErrorGenerator(0.0, 0.0)), np.random.default_rng(s)
+            )[1]
+            for s in range(400)
+        ]
+    )
     assert np.std(noisy[:, 1]) == pytest.approx(0.02, rel=0.15)
     with pytest.raises(ValueError, match="translation_noise_fraction"):
         OdometryDrift(translation_noise_fraction=-1.0)
@@ -188,8 +224,20 @@ def test_a_bag_of_a_simulated_run_replays_to_the_same_trajectory(recording: Reco
     for version, name in runs:
         bag = write_bag(tmp_path / name, frames, version=version)
         out = tmp_path / f"out{version}"
-        code = cli_main(["replay", str(bag), "--plan", str(default_plan_path()), "--initial-pose", str(x), str(y),
-                         str(yaw), "--out", str(out)])
+        code = cli_main(
+            [
+                "replay",
+                str(bag),
+                "--plan",
+                str(default_plan_path()),
+                "--initial-pose",
+                str(x),
+                str(y),
+                str(yaw),
+                "--out",
+                str(out),
+            ]
+        )
         assert code == 0
         times, poses = read_tum(out / "trajectory.tum")
         np.testing.assert_allclose(times, recording.times, atol=1e-6)

@@ -73,6 +73,7 @@ def test_bad_arguments_are_refused_with_the_reason() -> None:
 def _coarse_log(tmp_path: Path, slower: float) -> Path:
     """The reader-test excerpt with its stamps printed as a UNIX time with 6 significant digits (a
     clock ticking over every 10,000 s), the log's time running `slower` times as slow."""
+
     def coarse(match: re.Match[str]) -> str:
         return f"{1.10287e9 + float(match.group(0)) * slower:.6g}"
 
@@ -123,8 +124,8 @@ def test_reader_drops_a_line_written_late(tmp_path: Path) -> None:
     lines = ex.log_lines()
     flaser = [i for i, line in enumerate(lines) if line.startswith("FLASER")]
     fields = lines[flaser[5]].split()
-    fields[2:2 + ex.BEAMS] = ["nan"] * ex.BEAMS
-    dirty = lines[:flaser[30] + 1] + [" ".join(fields)] + lines[flaser[30] + 1:]
+    fields[2 : 2 + ex.BEAMS] = ["nan"] * ex.BEAMS
+    dirty = lines[: flaser[30] + 1] + [" ".join(fields)] + lines[flaser[30] + 1 :]
     clean_path, dirty_path = tmp_path / "clean.log", tmp_path / "late.log"
     clean_path.write_text("\n".join(lines) + "\n")
     dirty_path.write_text("\n".join(dirty) + "\n")
@@ -142,8 +143,9 @@ def test_late_copies_tell_a_late_message_from_a_glitched_clock() -> None:
     # A straight drive at 1 m per record. Record 3's stamp goes back a little and its pose is in
     # place (a clock glitch, as the Intel log's four): kept. Record 6 carries record 1's stamp and
     # pose (a message written late): a late copy.
-    poses = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0], [1, 0, 0], [6, 0, 0],
-                      [7, 0, 0]], dtype=float)
+    poses = np.array(
+        [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0], [5, 0, 0], [1, 0, 0], [6, 0, 0], [7, 0, 0]], dtype=float
+    )
     times = np.array([0.0, 1.0, 2.0, 1.9, 4.0, 5.0, 1.0, 6.0, 7.0])
     # Many more records in order so that two stamps going back are a small share of the steps.
     poses = np.vstack([poses, np.column_stack([np.arange(8, 60), np.zeros(52), np.zeros(52)])])
@@ -160,8 +162,7 @@ def test_late_copies_tell_a_late_message_from_a_glitched_clock() -> None:
     assert not late_copies(shuffled, turning).any()
 
 
-def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path,
-                                                           capsys: pytest.CaptureFixture[str]) -> None:
+def test_evaluate_log_takes_a_log_whose_stamps_never_change(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "eval"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

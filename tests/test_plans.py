@@ -86,8 +86,9 @@ def test_image_ros_map_round_trip(floor: synthetic.Floor, tmp_path: Path) -> Non
     with pytest.raises(ValueError, match="planicp_edge_detector must be one of"):
         PlanMap.from_ros_map(yaml_path, cache=False)
     with pytest.raises(ValueError, match="edge_detector must be one of"):
-        write_ros_map(tmp_path / "bad.yaml", np.zeros((4, 4), dtype=np.int8), 0.05, (0.0, 0.0, 0.0),
-                      edge_detector="faces")
+        write_ros_map(
+            tmp_path / "bad.yaml", np.zeros((4, 4), dtype=np.int8), 0.05, (0.0, 0.0, 0.0), edge_detector="faces"
+        )
     assert not (tmp_path / "bad.yaml").exists()  # refused before anything is written
 
 
@@ -102,8 +103,9 @@ def test_ros_map_and_image_of_it_agree(name: str) -> None:
     threshold = math.ceil(255 * (1 - ros.occupied_thresh))
     for ros_reading, image_reading in (("centres", "centres"), ("auto", "auto"), ("boundary", "boundary")):
         plan = PlanMap.from_ros_map(DATA / f"{name}.yaml", edge_detector=ros_reading)
-        image_plan = PlanMap.from_image(DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold,
-                                        edge_detector=image_reading)
+        image_plan = PlanMap.from_image(
+            DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold, edge_detector=image_reading
+        )
         np.testing.assert_array_equal(plan.points, image_plan.points)
     by_default = PlanMap.from_ros_map(DATA / f"{name}.yaml")
     occupied = int(np.count_nonzero(ros.wall_raster().walls))
@@ -127,8 +129,15 @@ def write_map(folder: Path, pixels: np.ndarray, **meta: object) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     h, w = pixels.shape
     (folder / "m.pgm").write_bytes(f"P5\n{w} {h}\n255\n".encode() + pixels.astype(np.uint8).tobytes())
-    fields = {"image": "m.pgm", "resolution": 0.1, "origin": [0.0, 0.0, 0.0], "negate": 0,
-              "occupied_thresh": 0.65, "free_thresh": 0.196, **meta}
+    fields = {
+        "image": "m.pgm",
+        "resolution": 0.1,
+        "origin": [0.0, 0.0, 0.0],
+        "negate": 0,
+        "occupied_thresh": 0.65,
+        "free_thresh": 0.196,
+        **meta,
+    }
     text = "".join(f"{k}: {v}\n" for k, v in fields.items())
     (folder / "m.yaml").write_text(text)
     return folder / "m.yaml"
@@ -372,8 +381,12 @@ def test_free_polygon_raster_walls_the_outline_and_fills_notches() -> None:
     from scipy.spatial import cKDTree
 
     # every inner wall surface point lies on the outline (within a pixel), and the outline is covered
-    inner = plan.points[(plan.points[:, 0] > -0.01) & (plan.points[:, 0] < 4.01)
-                        & (plan.points[:, 1] > -0.01) & (plan.points[:, 1] < 3.01)]
+    inner = plan.points[
+        (plan.points[:, 0] > -0.01)
+        & (plan.points[:, 0] < 4.01)
+        & (plan.points[:, 1] > -0.01)
+        & (plan.points[:, 1] < 3.01)
+    ]
     assert cKDTree(sampled).query(inner)[0].max() <= 0.05
     assert cKDTree(plan.points).query(sampled)[0].max() <= 0.05
     # the notch (between x 1.7 and 2.3 above y 2) is wall all the way up through the band
@@ -493,8 +506,10 @@ def test_a_map_server_map_defaults_to_the_surface_reading(tmp_path: Path) -> Non
     import cv2
 
     cv2.imwrite(str(tmp_path / "m.pgm"), walls)
-    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
-                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    (tmp_path / "m.yaml").write_text(
+        "image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
     walls[12:15, 2:28] = 0  # a wall three cells thick: every cell a surface point, as beams ended there
     cv2.imwrite(str(tmp_path / "m.pgm"), walls)
     plan = PlanMap.from_ros_map(tmp_path / "m.yaml", cache=False)

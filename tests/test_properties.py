@@ -251,7 +251,10 @@ def _not_far_away(a: np.ndarray) -> bool:
 @given(
     st.one_of(
         hnp.arrays(dtype=ANY_DTYPE, shape=ANY_SHAPE).filter(_not_far_away),
-        st.lists(st.one_of(st.floats(-1e6, 1e6), st.just(math.nan), st.just(math.inf), st.text(max_size=2), st.none()), max_size=4),
+        st.lists(
+            st.one_of(st.floats(-1e6, 1e6), st.just(math.nan), st.just(math.inf), st.text(max_size=2), st.none()),
+            max_size=4,
+        ),
     )
 )
 def test_garbage_initial_poses(pose: Any) -> None:

@@ -89,7 +89,6 @@ def test_matches_synthetic_reference(layout: str) -> None:
     assert agree == total
 
 
-
 @pytest.mark.parametrize("layout", synthetic.LAYOUTS)
 def test_package_scans_match_the_numpy_reference(layout: str) -> None:
     """planicp.sim.simulate_scan and simulate_ranges (the native caster, noise drawn in Python) give the
@@ -104,8 +103,9 @@ def test_package_scans_match_the_numpy_reference(layout: str) -> None:
         if k % 4 == 0:
             x, y, yaw = ox + round((x - ox) / res) * res, oy + round((y - oy) / res) * res, 0.0
         discs = np.column_stack([np.array([x, y]) + rng.uniform(-3.0, 3.0, (4, 2)), rng.uniform(0.1, 0.4, 4)])
-        kwargs: dict[str, Any] = dict(beams=1081, fov=FOV, max_range=12.0, range_sigma=0.01, dropout=0.05,
-                                      dynamic_discs=discs)
+        kwargs: dict[str, Any] = dict(
+            beams=1081, fov=FOV, max_range=12.0, range_sigma=0.01, dropout=0.05, dynamic_discs=discs
+        )
         got = synthetic.simulate_ranges(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
         want = numpy_ray_caster.simulate_ranges(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
         assert np.array_equal(got[0], want[0]) and got[1:] == want[1:]
@@ -113,6 +113,7 @@ def test_package_scans_match_the_numpy_reference(layout: str) -> None:
         ref_points, ref_clutter = numpy_ray_caster.simulate_scan(floor, (x, y, yaw), np.random.default_rng(k), **kwargs)
         assert np.array_equal(points, ref_points) and np.array_equal(clutter, ref_clutter)
         assert 0 < clutter.sum() < clutter.size
+
 
 def test_rows_grow_with_y_and_origin_is_the_lower_left_corner() -> None:
     cells = np.zeros((40, 30), dtype=bool)

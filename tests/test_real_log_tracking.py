@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 import planicp
-from planicp.io import ScanFrame, read_g2o
 from planicp.evaluation.log_evaluation import OdometryDrift, plan_from_scans, synthesise_odometry
+from planicp.io import ScanFrame, read_g2o
 from planicp.plans.ros_map import write_ros_map
 from planicp.se2 import compose
 
@@ -60,26 +60,30 @@ def killian(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[np.nda
     frames = [replace(frame, reference=frame.odometry) for frame in log]
     yaml_path = write_scan_map(frames[0::2], tmp_path_factory.mktemp("killian"))
     reference = poses[1::2]
-    odometries = [synthesise_odometry(log.times()[1::2], reference, OdometryDrift(), np.random.default_rng(seed))
-                  for seed in DRAWS]
+    odometries = [
+        synthesise_odometry(log.times()[1::2], reference, OdometryDrift(), np.random.default_rng(seed))
+        for seed in DRAWS
+    ]
     return yaml_path, scans[1::2], reference, odometries
 
 
 def test_a_real_recording_tracked_from_a_map_loaded_from_its_yaml(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]]) -> None:
+    killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]],
+) -> None:
     yaml_path, scans, reference, odometries = killian
     plan = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
     errors = [track(plan, scans, reference, odometry) for odometry in odometries]
     for odometry in odometries:
         dead_reckoned = np.array([compose(tuple(reference[0]), tuple(o)) for o in odometry])
         assert np.hypot(*(dead_reckoned[:, :2] - reference[:, :2]).T).max() > 5.0  # drifts metres away
-    ates = [float(np.sqrt(np.mean(e ** 2))) for e in errors]
+    ates = [float(np.sqrt(np.mean(e**2))) for e in errors]
     worst = max(float(e.max()) for e in errors)
     assert np.mean(ates) < 0.055 and worst < 0.25, (ates, worst)  # measured: mean 4.8 cm, worst 20 cm
 
 
 def test_an_occupancy_grid_is_read_as_surfaces_not_as_wall_material(
-        killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]]) -> None:
+    killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]],
+) -> None:
     """The default reading of a map_server map (every occupied cell's centre) tracks the same
     scans closer than the faces of the occupied cells, which put every surface half a cell to a
     cell in front of where the beams ended."""

@@ -11,7 +11,6 @@ import pytest
 from numpy.typing import NDArray
 
 import planicp
-
 from planicp import (
     AcceptanceGate,
     DegeneracyRule,
@@ -24,15 +23,15 @@ from planicp import (
     PlanRaster,
     RecoveryConfig,
     localize,
+    se2,
 )
 from planicp.plans.default_plan import load_default_plan
-from planicp import se2
-from planicp.tracking.lost_rule import LostDetector
-from planicp.tracking.fusion_rule import fuse_with_prediction
 from planicp.se2 import between, compose
 from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, LidarModel, Recording, run_experiment
 from planicp.sim.world import Furnishing
+from planicp.tracking.fusion_rule import fuse_with_prediction
+from planicp.tracking.lost_rule import LostDetector
 
 CHI2_3_95 = 7.8147
 
@@ -67,8 +66,13 @@ def test_corridor_keeps_odometry_along_the_axis_and_corrects_the_rest(seed: int)
     corrected, the along-corridor error stays that of odometry (without the degeneracy handling
     ICP slides by centimetres to decimetres)."""
     plan = _corridor()
-    config = ExperimentConfig(duration_s=60.0, seed=seed, lidar=LidarModel(range_max=10.0),
-                              furnishing=Furnishing(0, 0, 0, 0), error_generator=None)
+    config = ExperimentConfig(
+        duration_s=60.0,
+        seed=seed,
+        lidar=LidarModel(range_max=10.0),
+        furnishing=Furnishing(0, 0, 0, 0),
+        error_generator=None,
+    )
     recording, _ = run_experiment(plan, config)
     odometry = recording.odometry - recording.truth
     planicp = recording.estimate - recording.truth
@@ -78,15 +82,18 @@ def test_corridor_keeps_odometry_along_the_axis_and_corrects_the_rest(seed: int)
     heading_planicp, heading_odometry = _rms(_wrap(planicp[:, 2])), _rms(_wrap(odometry[:, 2]))
     assert across_planicp < 0.002 and across_planicp < across_odometry / 3, (across_planicp, across_odometry)
     assert heading_planicp < math.radians(0.02) and heading_planicp < heading_odometry / 2, (
-        heading_planicp, heading_odometry)
+        heading_planicp,
+        heading_odometry,
+    )
     poses, estimates = _track(plan, recording)
     flagged = [e for e in estimates if e.degeneracy is not None]  # type: ignore[attr-defined]
     assert len(flagged) > 0.5 * len(estimates)
     for e in flagged:
         assert abs(e.degeneracy.axis[0]) > 0.99  # type: ignore[attr-defined]
     # the fit alone (no fusion with the prediction, no degeneracy handling) slides along the axis
-    sliding, _ = _track(plan, recording, degeneracy=DegeneracyRule(min_constraint=0.0),
-                        fusion=FusionRule(max_innovation=0.0))
+    sliding, _ = _track(
+        plan, recording, degeneracy=DegeneracyRule(min_constraint=0.0), fusion=FusionRule(max_innovation=0.0)
+    )
     assert _rms(sliding[:, 0] - recording.truth[:, 0]) > 3 * along_planicp
 
 
@@ -112,8 +119,9 @@ def test_covariance_matches_the_error_spread() -> None:
     assert raw.mean() > 2 * calibrated.mean() and np.mean(raw < CHI2_3_95) < 0.8
 
 
-def _kidnap(seed: int, config: IcpConfig | None = None,
-            recovery: RecoveryConfig | None = None) -> tuple[int | None, int | None]:
+def _kidnap(
+    seed: int, config: IcpConfig | None = None, recovery: RecoveryConfig | None = None
+) -> tuple[int | None, int | None]:
     """Tracks 10 s of one run, then feeds the scans of another run from the first place that is in
     a room (not the corridor) and more than 5 m away, with odometry that continues smoothly: the
     robot was carried there without telling the localizer. Returns (scans until `lost`, scans until
@@ -122,8 +130,11 @@ def _kidnap(seed: int, config: IcpConfig | None = None,
     before, _ = run_experiment(plan, ExperimentConfig(duration_s=10.0, seed=seed))
     after, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=1000 + seed))
     corridor_y = 10.3
-    start = next(j for j in range(1, len(after.times) - 30)
-                 if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - corridor_y) > 1.5)
+    start = next(
+        j
+        for j in range(1, len(after.times) - 30)
+        if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - corridor_y) > 1.5
+    )
     localizer = Localizer(plan, tuple(before.truth[0]), config, recovery=recovery)
     for scan, odom in zip(before.scans, before.odometry_in_odom):
         localizer.update(scan, tuple(odom))
@@ -198,8 +209,11 @@ def test_a_place_adopted_before_the_whole_plan_was_searched_stays_on_trial() -> 
     plan = load_default_plan()
     before, _ = run_experiment(plan, ExperimentConfig(duration_s=10.0, seed=0))
     after, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=1000))
-    start = next(j for j in range(1, len(after.times) - 30)
-                 if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - 10.3) > 1.5)
+    start = next(
+        j
+        for j in range(1, len(after.times) - 30)
+        if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - 10.3) > 1.5
+    )
     # 15,000 nodes an update: the whole plan's search ends three updates after the place nearby is
     # adopted (at the default 20,000 the two searches end together and the right place is found).
     localizer = Localizer(plan, tuple(before.truth[0]), recovery=RecoveryConfig(search_nodes=15_000))
@@ -292,14 +306,20 @@ def test_lost_detector_rules() -> None:
     assert detector.lost
     detector.reset()
     assert not detector.lost
-    for cfg, message in (({"min_inlier_ratio": 0.0}, "min_inlier_ratio must be in"),
-                         ({"confirmations": 0}, "confirmations must be at least 1"),
-                         ({"margin": 2.0}, "margin must be in"), ({"local_radius": -1.0}, "local_radius"),
-                         ({"search": "global"}, "search must be a RelocalizationConfig")):
+    for cfg, message in (
+        ({"min_inlier_ratio": 0.0}, "min_inlier_ratio must be in"),
+        ({"confirmations": 0}, "confirmations must be at least 1"),
+        ({"margin": 2.0}, "margin must be in"),
+        ({"local_radius": -1.0}, "local_radius"),
+        ({"search": "global"}, "search must be a RelocalizationConfig"),
+    ):
         with pytest.raises((ValueError, TypeError), match=message):
             RecoveryConfig(**cfg)  # type: ignore[arg-type]
-    for bad, message in (({"window": 0}, "window must be at least 1"), ({"min_score": 1.5}, "min_score must be in"),
-                         ({"max_rejections": 0}, "max_rejections must be at least 1")):
+    for bad, message in (
+        ({"window": 0}, "window must be at least 1"),
+        ({"min_score": 1.5}, "min_score must be in"),
+        ({"max_rejections": 0}, "max_rejections must be at least 1"),
+    ):
         with pytest.raises(ValueError, match=message):
             LostRule(**bad)  # type: ignore[arg-type]
 
@@ -390,8 +410,13 @@ def test_translation_constraint_and_degeneracy_rule() -> None:
     # Near the corridor's end its end wall constrains the axis too.
     t = np.linspace(-0.9, 0.9, 100)
     along = np.linspace(-1.0, 7.0, 300)
-    end = np.concatenate([np.column_stack([along, np.full_like(along, 1.0)]),
-                          np.column_stack([along, np.full_like(along, -1.0)]), np.column_stack([np.full_like(t, -1.0), t])])
+    end = np.concatenate(
+        [
+            np.column_stack([along, np.full_like(along, 1.0)]),
+            np.column_stack([along, np.full_like(along, -1.0)]),
+            np.column_stack([np.full_like(t, -1.0), t]),
+        ]
+    )
     near_end = localize(end, corridor, (1.0, 1.0, 0.0))
     assert near_end.translation_constraint()[1] > 50
     assert DegeneracyRule().check(near_end) is None
@@ -463,13 +488,19 @@ def test_the_recovery_refuses_places_the_scan_sees_through() -> None:
     plan = load_default_plan()
     recording, _ = run_experiment(plan, ExperimentConfig(duration_s=2.0, seed=3, furnishing=Furnishing(0, 0, 0, 0)))
     scan, truth = recording.scans[-1], tuple(recording.truth[-1])
-    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate(),
-                        OcclusionFilter(plan, OcclusionRule()))
+    recovery = Recovery(
+        plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate(), OcclusionFilter(plan, OcclusionRule())
+    )
     assert not recovery._contradicted(scan, truth)
     shifted = (truth[0] + 2.0, truth[1] + 1.0, truth[2] + 0.5)
     assert recovery._contradicted(scan, shifted)
-    assert not Recovery(plan, RecoveryConfig(max_beyond=1.0), IcpConfig.for_tracking(), AcceptanceGate(),
-                        OcclusionFilter(plan, OcclusionRule()))._contradicted(scan, shifted)
+    assert not Recovery(
+        plan,
+        RecoveryConfig(max_beyond=1.0),
+        IcpConfig.for_tracking(),
+        AcceptanceGate(),
+        OcclusionFilter(plan, OcclusionRule()),
+    )._contradicted(scan, shifted)
     for bad in (0.0, 1.5, math.nan):
         with pytest.raises(ValueError, match="max_beyond must be in"):
             RecoveryConfig(max_beyond=bad)
@@ -488,8 +519,10 @@ def test_clutter_is_not_mistaken_for_a_kidnap() -> None:
         error = np.hypot(*(recording.estimate[:, :2] - recording.truth[:, :2]).T)
         assert error.max() < 0.05, (seed, error.max())
         # The clutter is there: at the true pose the plan explains less than a quarter of some scans.
-        explained = [localize(s, plan, tuple(t), IcpConfig.for_tracking()).inlier_ratio
-                     for s, t in zip(recording.scans[::10], recording.truth[::10])]
+        explained = [
+            localize(s, plan, tuple(t), IcpConfig.for_tracking()).inlier_ratio
+            for s, t in zip(recording.scans[::10], recording.truth[::10])
+        ]
         assert min(explained) < 0.25, min(explained)
 
 
@@ -527,8 +560,9 @@ def test_a_views_ranges_classify_returns_almost_as_an_exact_cast_does() -> None:
     occlusion = OcclusionFilter(plan, rule)
     raster = plan.raster
     assert raster is not None
-    exact_grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
-                                     (raster.origin[0], raster.origin[1]))
+    exact_grid = _core.OccupancyGrid(
+        np.ascontiguousarray(raster.walls[::-1]), raster.resolution, (raster.origin[0], raster.origin[1])
+    )
     step = 2 * math.pi / rule.beams
     cell, slack = 0.075 * math.sqrt(2), 0.08
     rng = np.random.default_rng(5)

@@ -114,30 +114,37 @@ class LiveRun:
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
     missing = _missing()
     if missing is not None:
-        message = (f"the live ROS test needs ROS 1 for this interpreter: {missing} (.ci/run runs it under "
-                   f"Debian's /usr/bin/python3 with PLANICP_REQUIRE_ROS=1)")
+        message = (
+            f"the live ROS test needs ROS 1 for this interpreter: {missing} (.ci/run runs it under "
+            f"Debian's /usr/bin/python3 with PLANICP_REQUIRE_ROS=1)"
+        )
         if os.environ.get("PLANICP_REQUIRE_ROS") == "1":
             pytest.fail(f"{message} (PLANICP_REQUIRE_ROS=1)")
         pytest.skip(message)
     work = tmp_path_factory.mktemp("ros")
     port = _free_port()
     env = dict(os.environ)
-    env.update({
-        "ROS_MASTER_URI": f"http://127.0.0.1:{port}", "ROS_IP": "127.0.0.1", "ROS_HOME": str(work),
-        "ROS_LOG_DIR": str(work / "log"),
-        "ROS_PACKAGE_PATH": os.pathsep.join(filter(None, [str(ros_package_path()), env.get("ROS_PACKAGE_PATH")])),
-        # The nodes' `#!/usr/bin/env python3` must find this interpreter (the one with planicp).
-        "PATH": os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")]),
-        "PYTHONUNBUFFERED": "1",
-    })
+    env.update(
+        {
+            "ROS_MASTER_URI": f"http://127.0.0.1:{port}",
+            "ROS_IP": "127.0.0.1",
+            "ROS_HOME": str(work),
+            "ROS_LOG_DIR": str(work / "log"),
+            "ROS_PACKAGE_PATH": os.pathsep.join(filter(None, [str(ros_package_path()), env.get("ROS_PACKAGE_PATH")])),
+            # The nodes' `#!/usr/bin/env python3` must find this interpreter (the one with planicp).
+            "PATH": os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")]),
+            "PYTHONUNBUFFERED": "1",
+        }
+    )
     env.pop("ROS_HOSTNAME", None)
     os.environ.update({k: env[k] for k in ("ROS_MASTER_URI", "ROS_IP", "ROS_HOME", "ROS_LOG_DIR")})
     processes: list[subprocess.Popen[bytes]] = []
     logs = {name: open(work / f"{name}.log", "wb") for name in ("roscore", "node", "sim")}  # noqa: SIM115
 
     def start(name: str, argv: list[str]) -> subprocess.Popen[bytes]:
-        p = subprocess.Popen(argv, env=env, stdout=logs[name], stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                             start_new_session=True)
+        p = subprocess.Popen(
+            argv, env=env, stdout=logs[name], stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True
+        )
         processes.append(p)
         return p
 
@@ -234,10 +241,23 @@ def _drive(env: dict[str, str], master: Any, node: subprocess.Popen[bytes], star
     scan_pub = rospy.Publisher("/scan", LaserScan, queue_size=10)
     initial_pub = rospy.Publisher("/initialpose", PoseWithCovarianceStamped, queue_size=1)
     # The node is up once it subscribes to the scans.
-    _wait(lambda: any("/planicp_node" in n for t, n in master.getSystemState()[1] if t == "/scan"), 60.0,
-          "planicp_node did not subscribe to /scan")
-    sim = start("sim", [sys.executable, "-m", "planicp.ros.sim_drive", "__name:=planicp_sim_drive",
-                        f"_duration:={DRIVE_S}", "_seed:=3", "_start_delay:=1.0"])
+    _wait(
+        lambda: any("/planicp_node" in n for t, n in master.getSystemState()[1] if t == "/scan"),
+        60.0,
+        "planicp_node did not subscribe to /scan",
+    )
+    sim = start(
+        "sim",
+        [
+            sys.executable,
+            "-m",
+            "planicp.ros.sim_drive",
+            "__name:=planicp_sim_drive",
+            f"_duration:={DRIVE_S}",
+            "_seed:=3",
+            "_start_delay:=1.0",
+        ],
+    )
     _wait(lambda: len(run.truth) > 0, 60.0, "the simulated drive did not start")
     run.drive_start = time.monotonic()
 
@@ -253,8 +273,11 @@ def _drive(env: dict[str, str], master: Any, node: subprocess.Popen[bytes], star
 
     at(MALFORMED_AT_S)
     first = rospy.Time.now().to_sec()
-    for ranges, increment, angle_max in (([], 0.0043633, 2.3562), ([5.0] * 100, 0.0043633, 2.3562),
-                                          ([5.0] * 1081, math.nan, 2.3562)):
+    for ranges, increment, angle_max in (
+        ([], 0.0043633, 2.3562),
+        ([5.0] * 100, 0.0043633, 2.3562),
+        ([5.0] * 1081, math.nan, 2.3562),
+    ):
         scan = LaserScan()
         scan.header.stamp = rospy.Time.now()
         scan.header.frame_id = "laser"
@@ -287,8 +310,9 @@ def _drive(env: dict[str, str], master: Any, node: subprocess.Popen[bytes], star
     return run
 
 
-def _initial_pose(rospy: Any, cls: Any, key: Stamp, pose: tuple[float, float, float],
-                  variances: tuple[float, float, float]) -> Any:
+def _initial_pose(
+    rospy: Any, cls: Any, key: Stamp, pose: tuple[float, float, float], variances: tuple[float, float, float]
+) -> Any:
     msg = cls()
     msg.header.stamp = rospy.Time(key[0], key[1])
     msg.header.frame_id = "map"
@@ -302,8 +326,9 @@ def _initial_pose(rospy: Any, cls: Any, key: Stamp, pose: tuple[float, float, fl
 
 
 def _errors(run: LiveRun, keys: list[Stamp]) -> np.ndarray:
-    return np.array([math.hypot(run.poses[k][0][0] - run.truth[k][0], run.poses[k][0][1] - run.truth[k][1])
-                     for k in keys])
+    return np.array(
+        [math.hypot(run.poses[k][0][0] - run.truth[k][0], run.poses[k][0][1] - run.truth[k][1]) for k in keys]
+    )
 
 
 def test_poses_match_the_ground_truth(live: LiveRun) -> None:
@@ -314,9 +339,11 @@ def test_poses_match_the_ground_truth(live: LiveRun) -> None:
     errors = _errors(live, keys)
     headings = np.array([abs(math.remainder(live.poses[k][0][2] - live.truth[k][2], 2 * math.pi)) for k in keys])
     rms, worst = float(np.sqrt(np.mean(errors**2))), float(errors.max())
-    print(f"\nlive drive: {len(keys)} poses for {len(truth_keys)} scans before the reset, position RMS "
-          f"{100 * rms:.2f} cm, max {100 * worst:.2f} cm, heading RMS "
-          f"{math.degrees(float(np.sqrt(np.mean(headings**2)))):.3f} deg")
+    print(
+        f"\nlive drive: {len(keys)} poses for {len(truth_keys)} scans before the reset, position RMS "
+        f"{100 * rms:.2f} cm, max {100 * worst:.2f} cm, heading RMS "
+        f"{math.degrees(float(np.sqrt(np.mean(headings**2)))):.3f} deg"
+    )
     assert rms < 0.03 and worst < 0.10
 
 
@@ -377,8 +404,9 @@ def test_malformed_scans_do_not_move_the_pose_or_kill_the_node(live: LiveRun) ->
 def test_plan_eog_and_diagnostics_are_published(live: LiveRun) -> None:
     assert live.plans, "no plan on /map (latched)"
     plan = live.plans[-1]
-    assert plan.info.width * plan.info.height == len(plan.data) and math.isclose(plan.info.resolution, 0.05,
-                                                                                 rel_tol=1e-6)
+    assert plan.info.width * plan.info.height == len(plan.data) and math.isclose(
+        plan.info.resolution, 0.05, rel_tol=1e-6
+    )
     assert set(plan.data) == {0, 100}
     assert live.eogs, "no enhanced occupancy grid on /planicp/eog"
     eog = np.array(live.eogs[-1].data)

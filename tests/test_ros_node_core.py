@@ -17,7 +17,6 @@ import pytest
 from planicp import _core
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
-from planicp.ros import odometry_buffer
 from planicp.ros import (
     NodeSettings,
     OdometryBuffer,
@@ -26,6 +25,7 @@ from planicp.ros import (
     ScanInput,
     covariance_from_6x6,
     covariance_to_6x6,
+    odometry_buffer,
     plan_occupancy_grid,
     quaternion_to_yaw,
     ros_package_path,
@@ -54,9 +54,16 @@ def make_core(plan: PlanMap, drive: Recording, **settings: object) -> PlanicpNod
 def scan_fields(drive: Recording, k: int) -> dict[str, object]:
     lidar = drive.lidar
     assert lidar is not None and drive.ranges is not None
-    return {"stamp": float(drive.times[k]), "ranges": drive.ranges[k], "angle_min": lidar.angle_min,
-            "angle_increment": lidar.angle_increment, "range_min": lidar.range_min, "range_max": lidar.range_max,
-            "angle_max": lidar.angle_min + lidar.angle_increment * (lidar.beams - 1), "laser_pose": lidar.mount}
+    return {
+        "stamp": float(drive.times[k]),
+        "ranges": drive.ranges[k],
+        "angle_min": lidar.angle_min,
+        "angle_increment": lidar.angle_increment,
+        "range_min": lidar.range_min,
+        "range_max": lidar.range_max,
+        "angle_max": lidar.angle_min + lidar.angle_increment * (lidar.beams - 1),
+        "laser_pose": lidar.mount,
+    }
 
 
 def messages(drive: Recording, first: int = 0, last: int | None = None) -> Iterator[tuple[str, int]]:
@@ -92,6 +99,7 @@ def position_error(a: tuple[float, float, float], b: np.ndarray) -> float:
 
 
 # --- message layouts -------------------------------------------------------------------------------
+
 
 def test_covariance_goes_to_rows_and_columns_0_1_5_of_the_6x6() -> None:
     cov = np.array([[1.0, 2.0, 3.0], [2.0, 5.0, 6.0], [3.0, 6.0, 9.0]])
@@ -133,6 +141,7 @@ def test_an_upside_down_laser_mirrors_its_beams() -> None:
 
 
 # --- the core on a drive ---------------------------------------------------------------------------
+
 
 def test_tracks_the_drive_and_map_to_odom_composes_with_odometry(plan: PlanMap, drive: Recording) -> None:
     core = make_core(plan, drive)
@@ -219,8 +228,12 @@ def test_initial_pose_covariance_forms(plan: PlanMap, drive: Recording) -> None:
     core.set_initial_pose(float(drive.times[1]), tuple(drive.truth[1]), [0.0] * 36)  # zeros: the default
     feed(core, drive, 2, 3)
     assert core.diagnostics().malformed_initial_poses == 0
-    for bad, error in (([1.0] * 35, ValueError), (np.full((3, 3), math.nan), ValueError),
-                       (-np.eye(3), ValueError), ("wide", ValueError)):
+    for bad, error in (
+        ([1.0] * 35, ValueError),
+        (np.full((3, 3), math.nan), ValueError),
+        (-np.eye(3), ValueError),
+        ("wide", ValueError),
+    ):
         with pytest.raises(error):
             core.set_initial_pose(1.0, (0.0, 0.0, 0.0), bad)
     with pytest.raises(ValueError, match="initial pose must be finite"):
@@ -245,8 +258,9 @@ MALFORMED = [
 
 
 @pytest.mark.parametrize(("change", "error", "message"), MALFORMED)
-def test_a_malformed_scan_is_refused_and_changes_nothing(plan: PlanMap, drive: Recording, change: dict[str, object],
-                                                         error: type[Exception], message: str) -> None:
+def test_a_malformed_scan_is_refused_and_changes_nothing(
+    plan: PlanMap, drive: Recording, change: dict[str, object], error: type[Exception], message: str
+) -> None:
     core = make_core(plan, drive)
     feed(core, drive, 0, 10)
     before = (core.localizer.pose, core.localizer.covariance, core.diagnostics())
@@ -303,6 +317,7 @@ def test_a_scan_without_a_laser_transform_is_counted(plan: PlanMap, drive: Recor
 
 # --- grids -----------------------------------------------------------------------------------------
 
+
 def test_plan_grid_is_the_plan_raster_bottom_row_first(plan: PlanMap) -> None:
     grid = plan_occupancy_grid(plan)
     raster = plan.raster
@@ -330,9 +345,17 @@ def test_enhanced_occupancy_grid_on_request(plan: PlanMap, drive: Recording) -> 
 
 # --- settings --------------------------------------------------------------------------------------
 
+
 def test_settings_from_parameters() -> None:
-    s = NodeSettings.from_params({"plan": "default", "initial_pose": [1, 2, 0.5], "icp": {"subsample": 2},
-                                  "gate": {"min_inlier_ratio": 0.3}, "laser_pose": [0.1, 0.0, 0.0]})
+    s = NodeSettings.from_params(
+        {
+            "plan": "default",
+            "initial_pose": [1, 2, 0.5],
+            "icp": {"subsample": 2},
+            "gate": {"min_inlier_ratio": 0.3},
+            "laser_pose": [0.1, 0.0, 0.0],
+        }
+    )
     assert s.initial_pose == (1.0, 2.0, 0.5) and s.laser_pose == (0.1, 0.0, 0.0)
     assert s.icp_config().subsample == 2 and s.icp_config().auto_trim  # on top of the tracking defaults
     assert s.acceptance_gate().min_inlier_ratio == 0.3
@@ -398,8 +421,9 @@ def test_odometry_far_beyond_any_building_is_refused_and_tracking_goes_on(plan: 
     assert len(out) == 20 and all(position_error(o.pose, drive.truth[k]) < 0.05 for k, o in out.items())
 
 
-def test_a_scan_the_localizer_refuses_is_counted_and_reported(plan: PlanMap, drive: Recording,
-                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_scan_the_localizer_refuses_is_counted_and_reported(
+    plan: PlanMap, drive: Recording, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """A well-formed scan the localizer still refuses (a `PlanicpError` from the core, which
     changes nothing) raises, and is counted as a failed update with a WARN naming it; the
     diagnostics said OK before, and the next scan is tracked."""

@@ -66,7 +66,7 @@ def test_people_walk_in_free_space_and_keep_clear_of_the_robot(raster: PlanRaste
     robot = (float(start[0, 0]) + 2.0, float(start[0, 1]))
     for _ in range(200):
         world.advance(0.1, rng, keep_clear=robot)
-        for x, y, r in world.discs():
+        for x, y, _radius in world.discs():
             c, rr = int((x - ox) / res), int((y - oy) / res)
             assert not occupied[rr, c]
     moved = np.hypot(*(world.discs()[:, :2] - start[:, :2]).T)

@@ -69,8 +69,11 @@ def comparable(table: list[dict[str, str]]) -> list[dict[str, str]]:
 def test_study_round_trips_through_yaml(tmp_path: Path) -> None:
     data = {
         **SMALL,
-        "plans": ["default", {"path": "house.json", "resolution": 0.1},
-                  {"path": "floor.png", "resolution": 0.05, "origin": [1.0, 2.0, 0.5]}],
+        "plans": [
+            "default",
+            {"path": "house.json", "resolution": 0.1},
+            {"path": "floor.png", "resolution": 0.05, "origin": [1.0, 2.0, 0.5]},
+        ],
         "seeds": {"start": 5, "count": 3},
         "odometry": {"thesis": {}, "double": {"translation_per_message": "1e-4", "rotation_per_message": 1.0e-4}},
         "icp": {"tracking": {}, "no-trim": {"auto_trim": False}, "coarse": {"correspondence_schedule": [1, 0.5]}},
@@ -92,31 +95,37 @@ def test_study_round_trips_through_yaml(tmp_path: Path) -> None:
     assert Study.from_dict(yaml.safe_load(minimal.to_yaml())) == minimal
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    ({"plans": None}, "key 'plans' must be a list"),
-    ({"colour": "red"}, r"unknown key\(s\) \['colour'\]"),
-    ({"name": ""}, "key 'name' must be a non-empty string"),
-    ({"plans": []}, "key 'plans' must list at least one plan"),
-    ({"plans": [{"resolution": 0.05}]}, r"key 'plans\[0\]' has no 'path'"),
-    ({"plans": [{"path": "a.png", "resolution": -1}]}, r"key 'plans\[0\]'.*resolution must be a positive"),
-    ({"plans": [{"path": "a.png", "scale": 2}]}, r"unknown key\(s\) \['plans\[0\].scale'\]"),
-    ({"seeds": ["one"]}, "key 'seeds' must hold integers"),
-    ({"seeds": {"count": 0}}, "key 'seeds.count' must be an integer >= 1"),
-    ({"seeds": [1, 1]}, "key 'seeds' lists a value twice"),
-    ({"furniture": [-1]}, "key 'furniture' must hold finite numbers >= 0"),
-    ({"people": ["many"]}, r"key 'people\[0\]': people must be a number"),
-    ({"duration_s": 0}, "key 'duration_s' must be a positive number"),
-    ({"sensors": {"x": {"beems": 100}}}, r"unknown key\(s\) \['sensors.x.beems'\]"),
-    ({"sensors": {"x": {"beams": 1}}}, "key 'sensors.x': beams must be at least 2"),
-    ({"sensors": {"x": {"beams": 100.5}}}, "key 'sensors.x': beams must be an integer"),
-    ({"sensors": {"x": {"fov_deg": 400}}}, "key 'sensors.x': fov must be at most 2 pi"),
-    ({"sensors": {}}, "key 'sensors' must name at least one setting"),
-    ({"odometry": {"slow": {"rate_hz": 5}}}, r"key 'odometry.slow.rate_hz' \(5.0\) is below the scan rate"),
-    ({"odometry": {"x": {"rotation_fraction": -1}}}, "key 'odometry.x': rotation_fraction must be a finite number >= 0"),
-    ({"icp": {"x": {"trim_ratio": 2}}}, r"key 'icp.x': trim_ratio must be in \(0, 1\]"),
-    ({"icp": {"x": {"max_distance": 2}}}, r"unknown key\(s\) \['icp.x.max_distance'\]; known: .*'max_iterations'"),
-    ({"success": {"max_position_error_m": 0}}, "key 'success': max_position_error_m must be a positive"),
-])
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"plans": None}, "key 'plans' must be a list"),
+        ({"colour": "red"}, r"unknown key\(s\) \['colour'\]"),
+        ({"name": ""}, "key 'name' must be a non-empty string"),
+        ({"plans": []}, "key 'plans' must list at least one plan"),
+        ({"plans": [{"resolution": 0.05}]}, r"key 'plans\[0\]' has no 'path'"),
+        ({"plans": [{"path": "a.png", "resolution": -1}]}, r"key 'plans\[0\]'.*resolution must be a positive"),
+        ({"plans": [{"path": "a.png", "scale": 2}]}, r"unknown key\(s\) \['plans\[0\].scale'\]"),
+        ({"seeds": ["one"]}, "key 'seeds' must hold integers"),
+        ({"seeds": {"count": 0}}, "key 'seeds.count' must be an integer >= 1"),
+        ({"seeds": [1, 1]}, "key 'seeds' lists a value twice"),
+        ({"furniture": [-1]}, "key 'furniture' must hold finite numbers >= 0"),
+        ({"people": ["many"]}, r"key 'people\[0\]': people must be a number"),
+        ({"duration_s": 0}, "key 'duration_s' must be a positive number"),
+        ({"sensors": {"x": {"beems": 100}}}, r"unknown key\(s\) \['sensors.x.beems'\]"),
+        ({"sensors": {"x": {"beams": 1}}}, "key 'sensors.x': beams must be at least 2"),
+        ({"sensors": {"x": {"beams": 100.5}}}, "key 'sensors.x': beams must be an integer"),
+        ({"sensors": {"x": {"fov_deg": 400}}}, "key 'sensors.x': fov must be at most 2 pi"),
+        ({"sensors": {}}, "key 'sensors' must name at least one setting"),
+        ({"odometry": {"slow": {"rate_hz": 5}}}, r"key 'odometry.slow.rate_hz' \(5.0\) is below the scan rate"),
+        (
+            {"odometry": {"x": {"rotation_fraction": -1}}},
+            "key 'odometry.x': rotation_fraction must be a finite number >= 0",
+        ),
+        ({"icp": {"x": {"trim_ratio": 2}}}, r"key 'icp.x': trim_ratio must be in \(0, 1\]"),
+        ({"icp": {"x": {"max_distance": 2}}}, r"unknown key\(s\) \['icp.x.max_distance'\]; known: .*'max_iterations'"),
+        ({"success": {"max_position_error_m": 0}}, "key 'success': max_position_error_m must be a positive"),
+    ],
+)
 def test_study_errors_name_the_key(tmp_path: Path, change: dict[str, Any], message: str) -> None:
     path = write_study(tmp_path, {**SMALL, **change})
     with pytest.raises(StudyError, match=message) as info:
@@ -151,13 +160,22 @@ def test_expansion_ids_and_plan_folders(tmp_path: Path) -> None:
     folder.mkdir()
     for name in ("b.json", "a.json"):
         shutil.copy(DATA / "house_expo_room_0000.json", folder / name)
-    study = Study.from_dict({**SMALL, "plans": ["default", "houses/", {"path": "houses", "resolution": 0.1}],
-                             "odometry": {"thesis": {}, "none": {"translation_per_message": 0,
-                                                                 "rotation_per_message": 0}}})
+    study = Study.from_dict(
+        {
+            **SMALL,
+            "plans": ["default", "houses/", {"path": "houses", "resolution": 0.1}],
+            "odometry": {"thesis": {}, "none": {"translation_per_message": 0, "rotation_per_message": 0}},
+        }
+    )
     runs = expand_runs(study, tmp_path)
     assert len(runs) == 5 * 3 * 2 * 2
-    assert [r.plan for r in runs[::12]] == ["default", "houses/a.json", "houses/b.json", "houses/a.json",
-                                             "houses/b.json"]
+    assert [r.plan for r in runs[::12]] == [
+        "default",
+        "houses/a.json",
+        "houses/b.json",
+        "houses/a.json",
+        "houses/b.json",
+    ]
     assert {r.plan_resolution for r in runs if r.plan.startswith("houses")} == {0.05, 0.1}
     ids = [r.run_id for r in runs]
     assert len(set(ids)) == len(ids) and all(len(i) == 16 for i in ids)
@@ -238,8 +256,17 @@ def test_interrupted_study_resumes_without_rerunning(tmp_path: Path) -> None:
     data = {**SMALL, "seeds": [0, 1, 2], "furniture": [0], "plans": ["default", "house.json"]}
     config = write_study(tmp_path, data)
     out = tmp_path / "out"
-    command = [sys.executable, "-c", "import sys; from planicp.cli import main; sys.exit(main())",
-               "sweep", str(config), "--out", str(out), "--workers", "1"]
+    command = [
+        sys.executable,
+        "-c",
+        "import sys; from planicp.cli import main; sys.exit(main())",
+        "sweep",
+        str(config),
+        "--out",
+        str(out),
+        "--workers",
+        "1",
+    ]
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
     runs_file = out / "runs.jsonl"
     deadline = time.monotonic() + 120
@@ -269,8 +296,12 @@ def test_interrupted_study_resumes_without_rerunning(tmp_path: Path) -> None:
 
 def test_failed_runs_are_recorded_and_do_not_stop_the_study(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     (tmp_path / "blank.png").write_bytes(b"not an image")
-    data = {**SMALL, "seeds": [0], "furniture": [0],
-            "plans": ["default", "missing.json", "blank.png", {"path": "house.json", "resolution": 50.0}]}
+    data = {
+        **SMALL,
+        "seeds": [0],
+        "furniture": [0],
+        "plans": ["default", "missing.json", "blank.png", {"path": "house.json", "resolution": 50.0}],
+    }
     config = write_study(tmp_path, data)
     out = tmp_path / "out"
     # The study goes on past the failed runs, and the exit status says they failed (it said 0).
@@ -296,8 +327,9 @@ def test_failed_runs_are_recorded_and_do_not_stop_the_study(tmp_path: Path, caps
     assert (retried.executed, retried.skipped, retried.failed) == (3, 1, 3)
 
 
-def test_ray_missing_names_the_extra(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                                     capsys: pytest.CaptureFixture[str]) -> None:
+def test_ray_missing_names_the_extra(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
     with pytest.raises(ImportError, match=r"pip install 'planicp\[cluster\]'"):
         import_ray()
@@ -308,14 +340,37 @@ def test_ray_missing_names_the_extra(monkeypatch: pytest.MonkeyPatch, tmp_path: 
 
 def test_summary_figures_of_a_table() -> None:
     rows = []
-    for i, (furniture, drift, error) in enumerate([(0.0, 0.29, 0.01), (0.0, 0.57, 0.4), (2.0, 0.29, 0.02),
-                                                   (2.0, 0.57, 0.5), (2.0, 0.57, 0.03)]):
-        rows.append({"run_id": f"{i:016x}", "status": "ok", "success": error < 0.3, "plan": "default",
-                     "furniture": furniture, "people": 1.0, "sensor": "s", "icp": "tracking",
-                     "odometry": "thesis" if drift < 0.3 else "double", "odometry_drift_deg_per_s": drift,
-                     "planicp_position_max_m": error, "odometry_position_max_m": 10 * error, "lost_scans": 0.0})
-    rows.append({**rows[0], "run_id": "f" * 16, "status": "failed", "success": False,
-                 "planicp_position_max_m": None, "odometry_position_max_m": None, "lost_scans": None})
+    for i, (furniture, drift, error) in enumerate(
+        [(0.0, 0.29, 0.01), (0.0, 0.57, 0.4), (2.0, 0.29, 0.02), (2.0, 0.57, 0.5), (2.0, 0.57, 0.03)]
+    ):
+        rows.append(
+            {
+                "run_id": f"{i:016x}",
+                "status": "ok",
+                "success": error < 0.3,
+                "plan": "default",
+                "furniture": furniture,
+                "people": 1.0,
+                "sensor": "s",
+                "icp": "tracking",
+                "odometry": "thesis" if drift < 0.3 else "double",
+                "odometry_drift_deg_per_s": drift,
+                "planicp_position_max_m": error,
+                "odometry_position_max_m": 10 * error,
+                "lost_scans": 0.0,
+            }
+        )
+    rows.append(
+        {
+            **rows[0],
+            "run_id": "f" * 16,
+            "status": "failed",
+            "success": False,
+            "planicp_position_max_m": None,
+            "odometry_position_max_m": None,
+            "lost_scans": None,
+        }
+    )
     fig = plot_error_distributions(rows, 0.3)
     assert [ax.get_xlabel() for ax in fig.axes] == ["furniture density (x demo)", "odometry errors"]
     fig = plot_success_rates(rows)

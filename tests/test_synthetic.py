@@ -1,4 +1,5 @@
-"""Tests of the synthetic floors and LIDAR of planicp.sim: floor generation, wall points, pose sampling and ray casting."""
+"""Tests of the synthetic floors and LIDAR of planicp.sim: floor generation, wall points, pose sampling and
+ray casting."""
 
 from __future__ import annotations
 
@@ -263,9 +264,7 @@ def test_wall_points_lie_between_wall_and_free_cells(layout: str) -> None:
     # clutter never produces points
     all_clutter = Floor(walls=f.walls, clutter=~f.walls, resolution=f.resolution, origin=f.origin)
     assert np.array_equal(all_clutter.wall_points(), pts)
-    no_walls = Floor(
-        walls=np.zeros_like(f.walls), clutter=f.clutter, resolution=f.resolution, origin=f.origin
-    )
+    no_walls = Floor(walls=np.zeros_like(f.walls), clutter=f.clutter, resolution=f.resolution, origin=f.origin)
     assert no_walls.wall_points().shape == (0, 2)
 
 
@@ -660,9 +659,7 @@ def test_pose_and_floor_errors() -> None:
     with pytest.raises(ValueError, match="boolean"):
         Floor(walls=walls.astype(np.uint8), clutter=walls, resolution=0.1, origin=(0.0, 0.0))
     with pytest.raises(ValueError, match="2-D"):
-        Floor(
-            walls=np.zeros(3, dtype=bool), clutter=np.zeros(3, dtype=bool), resolution=0.1, origin=(0.0, 0.0)
-        )
+        Floor(walls=np.zeros(3, dtype=bool), clutter=np.zeros(3, dtype=bool), resolution=0.1, origin=(0.0, 0.0))
     with pytest.raises(ValueError, match="resolution must be > 0"):
         Floor(walls=walls, clutter=walls, resolution=0.0, origin=(0.0, 0.0))
     with pytest.raises(ValueError, match="origin"):

@@ -25,6 +25,7 @@ from planicp.tracking.decisions import (
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
 from planicp.tracking.recovery import Recovery, SearchBudget
+
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
 from test_localizer import DEG, error, office, path, plan, scans  # noqa: F401
 
@@ -44,8 +45,9 @@ def prediction_at(pose: Pose, covariance: np.ndarray = SMALL) -> Prediction:
 def test_the_prediction_composes_the_odometry_motion_and_grows_the_covariance() -> None:
     a, b = 0.01, 0.002
     covariance = np.diag([a, a, b])
-    prediction = stages.predict((2.0, 3.0, math.pi / 2), covariance, (5.0, 5.0, 0.0), (6.0, 5.0, math.pi / 2),
-                                MotionNoise())
+    prediction = stages.predict(
+        (2.0, 3.0, math.pi / 2), covariance, (5.0, 5.0, 0.0), (6.0, 5.0, math.pi / 2), MotionNoise()
+    )
     assert not prediction.first
     np.testing.assert_allclose(prediction.motion, (1.0, 0.0, math.pi / 2), atol=1e-15)
     np.testing.assert_allclose(prediction.pose, (2.0, 4.0, math.pi), atol=1e-12)
@@ -85,8 +87,9 @@ def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained
     fit = stages.fit_from_prediction(points, prediction_at(truth), the_rules, False)
     assert fit.passed and fit.kept is not None and fit.beyond is not None and fit.result is not None
     assert not fit.kept[-100:].any()  # the person is left out
-    search = stages.search_near_prediction(points, prediction_at(truth), fit, PendingDecision(None, None),
-                                           the_rules, False, SearchBudget(None))
+    search = stages.search_near_prediction(
+        points, prediction_at(truth), fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+    )
     assert search.cause is None and search.result is fit.result and not search.searched
     score = stages.judge_score(points, prediction_at(truth), fit, search, the_rules, False, None)
     inliers = np.zeros(len(points), dtype=bool)
@@ -104,8 +107,9 @@ def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
     wide = np.diag([0.05**2, 0.05**2, (2 * DEG) ** 2])
     prediction = prediction_at(se2.compose(path[2], (0.04, -0.03, 1 * DEG)), wide)
     fit = stages.fit_from_prediction(scans[2], prediction, the_rules, False)
-    search = stages.search_near_prediction(scans[2], prediction, fit, PendingDecision(None, None), the_rules, False,
-                                           SearchBudget(None))
+    search = stages.search_near_prediction(
+        scans[2], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+    )
     score = stages.judge_score(scans[2], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(prediction, search, score, the_rules)
     assert correction.accepted and correction.kind == "fused" and correction.degeneracy is None
@@ -125,14 +129,18 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
     detector = LostDetector(the_rules.lost)
     prediction = prediction_at(se2.compose(path[1], (0.25, 0.0, 0.0)))
     fit = stages.fit_from_prediction(scans[1], prediction, the_rules, False)
-    search = stages.search_near_prediction(scans[1], prediction, fit, PendingDecision(None, None), the_rules, False,
-                                           SearchBudget(None))
+    search = stages.search_near_prediction(
+        scans[1], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+    )
     score = stages.judge_score(scans[1], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(prediction, search, score, the_rules)
     assert not correction.accepted and search.cause == "jump" and search.pending is not None
     verdicts = [stages.judge_lost(detector, score, correction, search, False, the_rules) for _ in range(3)]
     assert [(v.lost, v.rejections, v.held, v.counted_accepted) for v in verdicts] == [
-        (False, 1, False, False), (False, 2, False, False), (True, 3, False, False)]
+        (False, 1, False, False),
+        (False, 2, False, False),
+        (True, 3, False, False),
+    ]
     # Lost for the rejections alone: the score is above the rule's 0.35.
     assert verdicts[-1].window_score == pytest.approx(score.score) and score.score > 0.5
     clutter = ScoreDecision(0.1, True, True, "")
@@ -170,11 +178,19 @@ def test_the_recovery_stage_reports_the_place_it_adopts(
     assert error(path[1], adopted.pose)[0] < 0.05 and error(path[1], adopted.pose)[1] < 1 * DEG
     assert decisions[-1].covariance is not None and np.isfinite(decisions[-1].covariance).all()
     assert decisions[-1].hypotheses == () and detector.rejections == 0 and not detector.lost
-    coasting = stages.recover(recovery, detector, scans[2], prediction,
-                              FitDecision(None, None, None, False, "x", usable=False), idle_pose(prediction), lost)
+    coasting = stages.recover(
+        recovery,
+        detector,
+        scans[2],
+        prediction,
+        FitDecision(None, None, None, False, "x", usable=False),
+        idle_pose(prediction),
+        lost,
+    )
     assert coasting.action == "coast" and coasting.adopted is None
-    idle = stages.recover(recovery, detector, scans[2], prediction, fit, idle_pose(prediction),
-                          LostDecision(False, False, True, 1.0, 0))
+    idle = stages.recover(
+        recovery, detector, scans[2], prediction, fit, idle_pose(prediction), LostDecision(False, False, True, 1.0, 0)
+    )
     assert idle.action == "clear" and idle.hypotheses == ()
 
 
@@ -184,9 +200,17 @@ def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
     loc = Localizer(plan, path[0])
     loc.update(scans[0], (0.0, 0.0, 0.0))
     est = loc.update(scans[1], se2.between(path[0], path[1]))
-    assert [type(d) for d in est.decisions] == [Prediction, FitDecision, PendingDecision, SearchDecision,
-                                                 ScoreDecision, Correction, LostDecision, RecoveryDecision,
-                                                 Bookkeeping]
+    assert [type(d) for d in est.decisions] == [
+        Prediction,
+        FitDecision,
+        PendingDecision,
+        SearchDecision,
+        ScoreDecision,
+        Correction,
+        LostDecision,
+        RecoveryDecision,
+        Bookkeeping,
+    ]
     prediction, fit, pending, search, score, correction, lost, recovery, records = est.decisions
     assert isinstance(prediction, Prediction) and prediction.pose == est.predicted_pose and not prediction.first
     assert isinstance(fit, FitDecision) and fit.passed and fit.result is est.result

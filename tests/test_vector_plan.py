@@ -21,8 +21,8 @@ from hypothesis import strategies as st
 from numpy.typing import NDArray
 
 import planicp
-from planicp.plans.vector_plan import dxf_segments, house_expo_segments, sample_segments
 from geometry_checks import nearest_distance
+from planicp.plans.vector_plan import dxf_segments, house_expo_segments, sample_segments
 
 DATA = Path(__file__).parent / "data"
 HOUSE_EXPO = DATA / "house_expo_room_0000.json"
@@ -48,7 +48,6 @@ def segment_distance(points: Array, a: Array, b: Array) -> Array:
 def distance_to_segments(points: Array, segments: Array) -> Array:
     """Distance of each point to the nearest of the segments."""
     return np.asarray(np.min([segment_distance(points, s[0], s[1]) for s in segments], axis=0))
-
 
 
 def check_sampling(points: Array, segments: Array, spacing: float) -> None:

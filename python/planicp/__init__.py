@@ -1,6 +1,6 @@
 """planicp: localize a 2D-LIDAR robot against the architectural floor plan of its building.
 
-Quick start::
+Quick start:
 
     import planicp
     plan = planicp.PlanMap.from_points(wall_xy)                  # (N, 2) metres, map frame
@@ -45,7 +45,14 @@ from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.occlusion_rule import OcclusionRule
 from .tracking.recovery import RecoveryConfig
-from .tracking.relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion, relocalize
+from .tracking.relocalize import (
+    Candidate,
+    Relocalization,
+    RelocalizationConfig,
+    SearchInSteps,
+    SearchRegion,
+    relocalize,
+)
 
 # mapping: the enhanced occupancy grid
 from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid

@@ -60,8 +60,10 @@ def as_pose(value: Any, name: str) -> Pose:
         raise ValueError(f"{name} must be finite, got {(x, y, yaw)}")
     for v in (x, y):
         if abs(v) > MAX_COORDINATE:
-            raise ValueError(f"{name} has a coordinate of {v:e} m, beyond +-{MAX_COORDINATE:.0e} m; planicp works in "
-                             f"metres: express poses in a local frame")
+            raise ValueError(
+                f"{name} has a coordinate of {v:e} m, beyond +-{MAX_COORDINATE:.0e} m; planicp works in "
+                f"metres: express poses in a local frame"
+            )
     return (x, y, yaw)
 
 
@@ -119,4 +121,4 @@ def one_line(text: str, limit: int = 200) -> str:
     """`text` with its white space runs made single spaces, cut to at most `limit` characters: how
     a message quotes another message or a name read from a file."""
     text = " ".join(text.split())
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -34,9 +34,17 @@ def _plan(args: argparse.Namespace) -> int:
     from .plans.plan_loading import load_plan
 
     source = Path(args.image)
-    plan = load_plan(source, resolution=args.resolution, origin=args.origin, cache=not args.no_cache,
-                     spacing=args.spacing, layers=args.layer, threshold=args.threshold, open_px=args.open_px,
-                     close_px=args.close_px)
+    plan = load_plan(
+        source,
+        resolution=args.resolution,
+        origin=args.origin,
+        cache=not args.no_cache,
+        spacing=args.spacing,
+        layers=args.layer,
+        threshold=args.threshold,
+        open_px=args.open_px,
+        close_px=args.close_px,
+    )
     out: Path = args.out
     points_path, overlay_path = out / "wall_points.csv", out / "overlay.png"
     _refuse_to_overwrite(_input_files(source), [points_path, overlay_path, out / "plan.yaml", out / "plan.pgm"])
@@ -48,8 +56,10 @@ def _plan(args: argparse.Namespace) -> int:
     write_atomically(overlay_path, overlay_png.getvalue())
     yaml_path = plan.to_ros_map(out / "plan.yaml")
     xmin, ymin, xmax, ymax = plan.extent
-    print(f"{source}: {len(plan)} wall points, extent x {xmin:.2f}..{xmax:.2f} m, y {ymin:.2f}..{ymax:.2f} m "
-          f"({xmax - xmin:.2f} x {ymax - ymin:.2f} m){' (from cache)' if plan.from_cache else ''}")
+    print(
+        f"{source}: {len(plan)} wall points, extent x {xmin:.2f}..{xmax:.2f} m, y {ymin:.2f}..{ymax:.2f} m "
+        f"({xmax - xmin:.2f} x {ymax - ymin:.2f} m){' (from cache)' if plan.from_cache else ''}"
+    )
     print(f"wrote {points_path}, {overlay_path}, {yaml_path} (+ {yaml_path.with_suffix('.pgm').name})")
     return 0
 
@@ -74,8 +84,10 @@ def _refuse_to_overwrite(inputs: list[Path], outputs: list[Path]) -> None:
     sources = {p.resolve() for p in inputs if p.exists()}
     for output in outputs:
         if output.resolve() in sources:
-            raise ValueError(f"{output} is an input of this command ({output.resolve()}); it would be written "
-                             f"over: give another --out folder")
+            raise ValueError(
+                f"{output} is an input of this command ({output.resolve()}); it would be written "
+                f"over: give another --out folder"
+            )
 
 
 def _read_log(args: argparse.Namespace) -> Any:
@@ -100,20 +112,25 @@ def _icp_config(args: argparse.Namespace) -> Any:
 
 
 def _replay(args: argparse.Namespace) -> int:
-    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .evaluation.log_replay import track_log
+    from .evaluation.replay_outputs import print_summary, write_outputs
+    from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .plans.plan_loading import load_plan
     from .progress import progress_bar
-    from .evaluation.replay_outputs import print_summary, write_outputs
 
     plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
     log = _read_log(args)
     grid = None if args.no_eog else EnhancedOccupancyGrid(plan, args.eog_resolution)
-    tracked = track_log(log, plan, initial_pose=args.initial_pose, config=_icp_config(args), grid=grid,
-                        progress=progress_bar(sys.stdout, len(log), "scans"))
+    tracked = track_log(
+        log,
+        plan,
+        initial_pose=args.initial_pose,
+        config=_icp_config(args),
+        grid=grid,
+        progress=progress_bar(sys.stdout, len(log), "scans"),
+    )
     print()
-    extra = {"log": str(args.log), "plan": str(args.plan), "skipped": log.skipped,
-             "bad_lines": len(log.bad_lines)}
+    extra = {"log": str(args.log), "plan": str(args.plan), "skipped": log.skipped, "bad_lines": len(log.bad_lines)}
     metrics = write_outputs(tracked, plan, grid, args.out, extra)
     print_summary(metrics, args.out, sys.stdout)
     return 0
@@ -121,25 +138,41 @@ def _replay(args: argparse.Namespace) -> int:
 
 def _evaluate_log(args: argparse.Namespace) -> int:
     from .evaluation.log_evaluation import evaluate_log
-    from .progress import progress_bar
     from .evaluation.replay_outputs import print_summary, write_outputs
+    from .progress import progress_bar
 
     log = _read_log(args)
-    evaluation = evaluate_log(log, resolution=args.resolution, min_hits=args.min_hits, odometry=args.odometry,
-                              seed=args.seed, config=_icp_config(args),
-                              progress=progress_bar(sys.stdout, (len(log) + 1) // 2, "scans"))
+    evaluation = evaluate_log(
+        log,
+        resolution=args.resolution,
+        min_hits=args.min_hits,
+        odometry=args.odometry,
+        seed=args.seed,
+        config=_icp_config(args),
+        progress=progress_bar(sys.stdout, (len(log) + 1) // 2, "scans"),
+    )
     print()
     plan = evaluation.plan
     args.out.mkdir(parents=True, exist_ok=True)
     plan.to_ros_map(args.out / "plan.yaml")
-    extra = {"log": str(args.log), "protocol": {
-        "plan_scans": evaluation.plan_scans, "tracked_scans": evaluation.tracked_scans,
-        "scans_without_reference": evaluation.skipped_scans, "plan_resolution_m": args.resolution,
-        "min_hits": args.min_hits, "odometry": args.odometry, "seed": args.seed,
-        "max_correspondence_distance_m": args.max_distance}}
+    extra = {
+        "log": str(args.log),
+        "protocol": {
+            "plan_scans": evaluation.plan_scans,
+            "tracked_scans": evaluation.tracked_scans,
+            "scans_without_reference": evaluation.skipped_scans,
+            "plan_resolution_m": args.resolution,
+            "min_hits": args.min_hits,
+            "odometry": args.odometry,
+            "seed": args.seed,
+            "max_correspondence_distance_m": args.max_distance,
+        },
+    }
     metrics = write_outputs(evaluation.tracked, plan, evaluation.grid, args.out, extra)
-    print(f"plan drawn from {evaluation.plan_scans} scans ({len(plan)} wall points, plan.yaml); "
-          f"tracked the other {evaluation.tracked_scans} with {args.odometry} odometry")
+    print(
+        f"plan drawn from {evaluation.plan_scans} scans ({len(plan)} wall points, plan.yaml); "
+        f"tracked the other {evaluation.tracked_scans} with {args.odometry} odometry"
+    )
     print_summary(metrics, args.out, sys.stdout)
     return 0
 
@@ -151,19 +184,33 @@ def _sweep(args: argparse.Namespace) -> int:
 
     study, base = load_study(args.config)
     try:
-        result = run_study(study, args.out, base_dir=base, ray=args.ray is not None, ray_address=args.ray or None,
-                           workers=args.workers, retry_failed=args.retry_failed, stream=sys.stdout,
-                           command="planicp " + shlex.join(args.argv))
+        result = run_study(
+            study,
+            args.out,
+            base_dir=base,
+            ray=args.ray is not None,
+            ray_address=args.ray or None,
+            workers=args.workers,
+            retry_failed=args.retry_failed,
+            stream=sys.stdout,
+            command="planicp " + shlex.join(args.argv),
+        )
     except KeyboardInterrupt:
-        print(f"\nplanicp sweep: interrupted; the finished runs are recorded in {args.out}: run the same "
-              "command again to finish the study", file=sys.stderr)
+        print(
+            f"\nplanicp sweep: interrupted; the finished runs are recorded in {args.out}: run the same "
+            "command again to finish the study",
+            file=sys.stderr,
+        )
         return 130
     except RuntimeError as exc:  # a worker process died
         print(f"planicp sweep: error: {exc}", file=sys.stderr)
         return 1
     if result.failed:
-        print(f"planicp sweep: {result.failed} of {result.total} runs failed (their errors are recorded in "
-              f"{args.out}); run the same command with --retry-failed to run them again", file=sys.stderr)
+        print(
+            f"planicp sweep: {result.failed} of {result.total} runs failed (their errors are recorded in "
+            f"{args.out}); run the same command with --retry-failed to run them again",
+            file=sys.stderr,
+        )
         return 1
     return 0 if result.executed + result.skipped == result.total else 1
 
@@ -172,10 +219,13 @@ def _add_log_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("log", help="CARMEN log (.log/.clf[.gz]), g2o file, ROS 1 .bag or ROS 2 bag folder")
     parser.add_argument("--scan-topic", default="/scan", help="LaserScan topic (bags)")
     parser.add_argument("--odom-topic", default="/odom", help="Odometry topic (bags; '' for none)")
-    parser.add_argument("--laser", choices=("FLASER", "RLASER", "ROBOTLASER1"), default=None,
-                        help="which laser of a CARMEN log (default: the first one found)")
-    parser.add_argument("--max-distance", type=float, default=0.25,
-                        help="ICP max correspondence distance, metres")
+    parser.add_argument(
+        "--laser",
+        choices=("FLASER", "RLASER", "ROBOTLASER1"),
+        default=None,
+        help="which laser of a CARMEN log (default: the first one found)",
+    )
+    parser.add_argument("--max-distance", type=float, default=0.25, help="ICP max correspondence distance, metres")
     parser.add_argument("--out", type=Path, required=True, help="output folder")
 
 
@@ -204,10 +254,17 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON or DXF")
-    plan.add_argument("--resolution", type=float,
-                      help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own)")
-    plan.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
-                      help="pose of the image's lower-left corner in the map frame (m, m, rad)")
+    plan.add_argument(
+        "--resolution", type=float, help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own)"
+    )
+    plan.add_argument(
+        "--origin",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.0),
+        metavar=("X", "Y", "YAW"),
+        help="pose of the image's lower-left corner in the map frame (m, m, rad)",
+    )
     plan.add_argument("--threshold", type=int, default=None, help="wall grey level 1..255 (default: Otsu)")
     plan.add_argument("--open-px", type=int, default=0, help="remove dark specks up to this many pixels")
     plan.add_argument("--close-px", type=int, default=0, help="close wall gaps up to this many pixels")
@@ -224,10 +281,22 @@ def build_parser() -> argparse.ArgumentParser:
     _add_log_options(replay)
     replay.add_argument("--plan", type=Path, required=True, help="plan image, ROS map YAML, HouseExpo JSON or DXF")
     replay.add_argument("--resolution", type=float, default=None, help="metres per pixel of a plan image")
-    replay.add_argument("--origin", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW"),
-                        help="pose of a plan image's lower-left corner in the map frame (m, m, rad)")
-    replay.add_argument("--initial-pose", type=float, nargs=3, default=None, metavar=("X", "Y", "YAW"),
-                        help="robot pose in the map at the first scan (default: the log's first reference pose)")
+    replay.add_argument(
+        "--origin",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.0),
+        metavar=("X", "Y", "YAW"),
+        help="pose of a plan image's lower-left corner in the map frame (m, m, rad)",
+    )
+    replay.add_argument(
+        "--initial-pose",
+        type=float,
+        nargs=3,
+        default=None,
+        metavar=("X", "Y", "YAW"),
+        help="robot pose in the map at the first scan (default: the log's first reference pose)",
+    )
     replay.add_argument("--eog-resolution", type=float, default=0.05, help="cell size of the EOG, metres")
     replay.add_argument("--no-eog", action="store_true", help="do not build the enhanced occupancy grid")
     replay.set_defaults(func=_replay)
@@ -239,8 +308,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_log_options(evaluate)
     evaluate.add_argument("--resolution", type=float, default=0.05, help="pixel size of the plan drawn, metres")
     evaluate.add_argument("--min-hits", type=int, default=2, help="scan end points that make a pixel a wall")
-    evaluate.add_argument("--odometry", choices=("synthetic", "log"), default="synthetic",
-                          help="synthetic: reference motion + thesis drift + noise; log: the log's own odometry")
+    evaluate.add_argument(
+        "--odometry",
+        choices=("synthetic", "log"),
+        default="synthetic",
+        help="synthetic: reference motion + thesis drift + noise; log: the log's own odometry",
+    )
     evaluate.add_argument("--seed", type=int, default=0, help="seed of the synthetic odometry noise")
     evaluate.set_defaults(func=_evaluate_log)
     sweep = sub.add_parser(
@@ -249,13 +322,18 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     sweep.add_argument("config", type=Path, help="study YAML (see planicp.sweep.study)")
-    sweep.add_argument("--out", type=Path, required=True,
-                       help="output folder; an interrupted study there is resumed")
+    sweep.add_argument("--out", type=Path, required=True, help="output folder; an interrupted study there is resumed")
     sweep.add_argument("--workers", type=int, default=None, help="local processes (default: one per CPU)")
-    sweep.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
-                       help="run on Ray: without ADDRESS Ray's default (RAY_ADDRESS, else a cluster "
-                            "started here with 'ray start', else a new local instance); or ADDRESS: "
-                            "'local', 'auto', 'ray://host:10001'; needs pip install 'planicp[cluster]'")
+    sweep.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run on Ray: without ADDRESS Ray's default (RAY_ADDRESS, else a cluster "
+        "started here with 'ray start', else a new local instance); or ADDRESS: "
+        "'local', 'auto', 'ray://host:10001'; needs pip install 'planicp[cluster]'",
+    )
     sweep.add_argument("--retry-failed", action="store_true", help="run the runs recorded as failed again")
     sweep.set_defaults(func=_sweep)
     return parser

@@ -29,15 +29,15 @@ import numpy as np
 
 from . import __version__
 from .evaluation import figures
-from .plans.default_plan import load_default_plan
 from .evaluation.grid_agreement import compare_grids
-from .tracking.icp_config import IcpConfig
-from .tracking.localize import localize
+from .plans.default_plan import load_default_plan
 from .plans.plan_figure import plot_plan_overlay
 from .plans.plan_loading import load_plan
 from .plans.plan_map import PlanMap
 from .progress import progress_bar
 from .sim.experiment import ExperimentConfig, Recording, replay, run_experiment
+from .tracking.icp_config import IcpConfig
+from .tracking.localize import localize
 
 EOG_RESOLUTION = 0.05
 """Cell size of the demo's enhanced occupancy grids, metres."""
@@ -45,8 +45,10 @@ EOG_RESOLUTION = 0.05
 ABLATIONS: dict[str, tuple[IcpConfig, dict[str, Any]]] = {
     # Every pair counts, however far, and every return: furniture and people pull the fit (the
     # thesis's fig. 5.9).
-    "without outlier rejection": (IcpConfig(max_correspondence_distance=50.0, use_visibility=False,
-                                            correspondence_schedule=(1.0,)), {"occlusion": False}),
+    "without outlier rejection": (
+        IcpConfig(max_correspondence_distance=50.0, use_visibility=False, correspondence_schedule=(1.0,)),
+        {"occlusion": False},
+    ),
     # Every in-range pair counts: no automatic trimming of the clutter near the walls.
     "without automatic trimming": (IcpConfig(correspondence_search="kd_tree"), {}),
 }
@@ -56,13 +58,27 @@ def _summary_rows(metrics: dict[str, Any]) -> list[tuple[str, str, str, str, str
     rows = [("", "position RMS", "position max", "heading RMS", "heading max")]
     m = metrics["runs"]["planicp (default)"]
     for label, key in (("odometry", "odometry"), ("planicp", "planicp")):
-        rows.append((label, f"{m[f'{key}_position_rms_m']:.3f} m", f"{m[f'{key}_position_max_m']:.3f} m",
-                     f"{m[f'{key}_heading_rms_deg']:.2f} deg", f"{m[f'{key}_heading_max_deg']:.2f} deg"))
+        rows.append(
+            (
+                label,
+                f"{m[f'{key}_position_rms_m']:.3f} m",
+                f"{m[f'{key}_position_max_m']:.3f} m",
+                f"{m[f'{key}_heading_rms_deg']:.2f} deg",
+                f"{m[f'{key}_heading_max_deg']:.2f} deg",
+            )
+        )
     for name, m in metrics["runs"].items():
         if name == "planicp (default)":
             continue
-        rows.append((f"planicp {name}", f"{m['planicp_position_rms_m']:.3f} m", f"{m['planicp_position_max_m']:.3f} m",
-                     f"{m['planicp_heading_rms_deg']:.2f} deg", f"{m['planicp_heading_max_deg']:.2f} deg"))
+        rows.append(
+            (
+                f"planicp {name}",
+                f"{m['planicp_position_rms_m']:.3f} m",
+                f"{m['planicp_position_max_m']:.3f} m",
+                f"{m['planicp_heading_rms_deg']:.2f} deg",
+                f"{m['planicp_heading_max_deg']:.2f} deg",
+            )
+        )
     return rows
 
 
@@ -95,8 +111,9 @@ def _example_scan(plan: PlanMap, recording: Recording, out: Path) -> None:
         result = localize(scan, plan, guess, config)
         error = math.hypot(result.pose[0] - truth[0], result.pose[1] - truth[1])
         mask = result.inlier_mask if name == "with outlier rejection" else None
-        fig = figures.plot_scan_match(plan, scan, result.pose, mask, initial_pose=guess,
-                                      title=f"{name}: {100 * error:.1f} cm off")
+        fig = figures.plot_scan_match(
+            plan, scan, result.pose, mask, initial_pose=guess, title=f"{name}: {100 * error:.1f} cm off"
+        )
         fig.savefig(out / file)
 
 
@@ -105,13 +122,15 @@ def _occupancy_grids(plan: PlanMap, recording: Recording, config: ExperimentConf
     of the odometry and planicp grids against the ground-truth grid."""
     resolution = EOG_RESOLUTION
     mount = config.lidar.mount
-    grids = {which: recording.occupancy_grid(plan, which, mount, resolution)
-             for which in ("truth", "odometry", "estimate")}
+    grids = {
+        which: recording.occupancy_grid(plan, which, mount, resolution) for which in ("truth", "odometry", "estimate")
+    }
     odometry, planicp = grids["odometry"], grids["estimate"]
     figures.plot_eog(odometry, title="EOG from odometry poses").savefig(out / "eog_odometry.png")
     figures.plot_eog(planicp, title="EOG from planicp poses").savefig(out / "eog_planicp.png")
     figures.plot_eog_comparison({"from odometry": odometry, "from planicp": planicp}).savefig(
-        out / "eog_comparison.png")
+        out / "eog_comparison.png"
+    )
     planicp.to_ros_map(out / "eog_planicp.yaml")
     return {
         "resolution_m": resolution,
@@ -124,13 +143,13 @@ def _grid_report(scores: dict[str, Any]) -> str:
     o, p = scores["odometry"], scores["planicp"]
     return f"""## Enhanced occupancy grid
 
-Every scan integrated at {100 * scores['resolution_m']:.0f} cm resolution, once at the odometry poses and
+Every scan integrated at {100 * scores["resolution_m"]:.0f} cm resolution, once at the odometry poses and
 once at planicp's, each scored against the grid from the ground-truth poses:
 
 | grid from | occupied cells within one cell of a reference occupied cell | free cells free in the reference |
 |---|---|---|
-| odometry | {o['occupied_near_reference']:.3f} ({o['occupied_cells']:.0f} cells) | {o['free_in_reference']:.3f} ({o['free_cells']:.0f} cells) |
-| planicp | {p['occupied_near_reference']:.3f} ({p['occupied_cells']:.0f} cells) | {p['free_in_reference']:.3f} ({p['free_cells']:.0f} cells) |"""
+| odometry | {o["occupied_near_reference"]:.3f} ({o["occupied_cells"]:.0f} cells) | {o["free_in_reference"]:.3f} ({o["free_cells"]:.0f} cells) |
+| planicp | {p["occupied_near_reference"]:.3f} ({p["occupied_cells"]:.0f} cells) | {p["free_in_reference"]:.3f} ({p["free_cells"]:.0f} cells) |"""  # noqa: E501 (Markdown table rows, one line each)
 
 
 def run_demo(
@@ -163,12 +182,13 @@ def run_demo(
     pos_p, yaw_p = recording.errors("estimate")
     figures.plot_position_error(t, {"odometry": pos_o, "planicp": pos_p}).savefig(out / "position_error.png")
     figures.plot_heading_error(t, {"odometry": yaw_o, "planicp": yaw_p}).savefig(out / "heading_error.png")
-    figures.plot_paths(plan, {"truth": recording.truth, "odometry": recording.odometry,
-                              "planicp": recording.estimate}).savefig(out / "paths.png")
+    figures.plot_paths(
+        plan, {"truth": recording.truth, "odometry": recording.odometry, "planicp": recording.estimate}
+    ).savefig(out / "paths.png")
     plot_plan_overlay(plan, title="wall points from the plan").savefig(out / "plan.png")
     _example_scan(plan, recording, out)
     grid_scores = _occupancy_grids(plan, recording, config, out)
-    furniture = float((world.floor.clutter[3:-3, 3:-3]).sum() * world.floor.resolution ** 2)
+    furniture = float((world.floor.clutter[3:-3, 3:-3]).sum() * world.floor.resolution**2)
     metrics: dict[str, Any] = {
         "planicp_version": __version__,
         "plan": plan_name,
@@ -189,14 +209,14 @@ def run_demo(
     report = f"""# planicp demo report
 
 planicp {__version__}; plan: {plan_name}; {duration:.0f} s simulated (seed {seed}), {len(t)} scans,
-{metrics['path_length_m']:.0f} m driven, {furniture:.1f} m^2 of furniture and {len(world.people)} people
+{metrics["path_length_m"]:.0f} m driven, {furniture:.1f} m^2 of furniture and {len(world.people)} people
 that the plan does not show. Odometry at 100 Hz with 1 % noise plus the thesis's error generator
 (+5e-5 m and +5e-5 rad on every message); LIDAR 270 deg, 1081 beams, 30 m, 1 cm noise at 10 Hz.
 
 {_markdown(rows)}
 
-planicp accepted {100 * default['accepted_share']:.1f} % of the scans; its largest step beyond the true
-motion between two scans was {100 * default['largest_estimate_jump_beyond_truth_m']:.1f} cm.
+planicp accepted {100 * default["accepted_share"]:.1f} % of the scans; its largest step beyond the true
+motion between two scans was {100 * default["largest_estimate_jump_beyond_truth_m"]:.1f} cm.
 
 The ablation rows replay the same scans and odometry with other settings: without outlier
 rejection every pair and every return counts, however far (furniture and people pull the fit);
@@ -207,15 +227,18 @@ furniture near the walls.
 
 Figures: position_error.png, heading_error.png, paths.png, plan.png, scan_without_rejection.png,
 scan_with_rejection.png, eog_odometry.png, eog_planicp.png, eog_comparison.png; the planicp grid as
-a ROS map: eog_planicp.yaml. All numbers: metrics.json. This run took {metrics['wall_seconds']:.1f} s.
+a ROS map: eog_planicp.yaml. All numbers: metrics.json. This run took {metrics["wall_seconds"]:.1f} s.
 """
     (out / "report.md").write_text(report)
     if stream is not None:
         print(_table(rows), file=stream)
         o, p = grid_scores["odometry"], grid_scores["planicp"]
-        print(f"\noccupancy grid vs ground truth (occupied within a cell / free agreed): odometry "
-              f"{o['occupied_near_reference']:.3f} / {o['free_in_reference']:.3f}, planicp "
-              f"{p['occupied_near_reference']:.3f} / {p['free_in_reference']:.3f}", file=stream)
+        print(
+            f"\noccupancy grid vs ground truth (occupied within a cell / free agreed): odometry "
+            f"{o['occupied_near_reference']:.3f} / {o['free_in_reference']:.3f}, planicp "
+            f"{p['occupied_near_reference']:.3f} / {p['free_in_reference']:.3f}",
+            file=stream,
+        )
         print(f"\nwrote figures, metrics.json and report.md to {out} in {metrics['wall_seconds']:.1f} s", file=stream)
     return metrics
 

@@ -30,7 +30,8 @@ def scan_to_points(
         ranges: (B,) ranges, metres.
         angle_min: angle of the first beam, radians.
         angle_increment: angle between beams, radians (negative for a laser mounted upside down).
-        range_min, range_max: valid range interval, metres.
+        range_min: lower end of the valid range interval, metres.
+        range_max: upper end of the valid range interval, metres.
         sensor_pose: (x, y, yaw) of the laser in the robot frame (its mounting pose).
 
     Returns:

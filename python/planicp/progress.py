@@ -48,7 +48,10 @@ def _plain_lines(stream: TextIO, total: float, unit: str) -> Callable[[float], N
         if tenth <= last[0]:
             return
         last[0] = tenth
-        print(f"  {10 * tenth:3d} %  {done:,.0f} / {total:,.0f} {unit}, {time.perf_counter() - started:.1f} s",
-              file=stream, flush=True)
+        print(
+            f"  {10 * tenth:3d} %  {done:,.0f} / {total:,.0f} {unit}, {time.perf_counter() - started:.1f} s",
+            file=stream,
+            flush=True,
+        )
 
     return report

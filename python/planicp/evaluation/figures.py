@@ -76,7 +76,9 @@ def _plan_background(ax: Axes, plan: PlanMap, size: float = 1.0) -> None:
 def _arrow(ax: Axes, pose: tuple[float, float, float], colour: str, label: str, length: float = 0.6) -> None:
     x, y, yaw = pose
     ax.annotate(
-        "", xy=(x + length * math.cos(yaw), y + length * math.sin(yaw)), xytext=(x, y),
+        "",
+        xy=(x + length * math.cos(yaw), y + length * math.sin(yaw)),
+        xytext=(x, y),
         arrowprops={"arrowstyle": "->", "color": colour, "linewidth": 2.0},
     )
     ax.plot([], [], color=colour, label=label)
@@ -184,14 +186,22 @@ def plot_quality(times: Any, inlier_ratio: Any, rmse: Any, accepted: Any) -> Fig
     error = np.asarray(rmse, dtype=np.float64)
     ok = np.asarray(accepted, dtype=bool)
     if not (ratio.shape == error.shape == ok.shape == t.shape):
-        raise ValueError(f"times, inlier_ratio, rmse and accepted must have one shape, got "
-                         f"{t.shape}, {ratio.shape}, {error.shape}, {ok.shape}")
+        raise ValueError(
+            f"times, inlier_ratio, rmse and accepted must have one shape, got "
+            f"{t.shape}, {ratio.shape}, {error.shape}, {ok.shape}"
+        )
     fig = Figure(figsize=(8.0, 5.0), dpi=120)
     top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(t, ratio, color="tab:green", linewidth=1.0, label="inlier ratio")
     if (~ok).any():
-        top.scatter(t[~ok], np.nan_to_num(ratio[~ok], nan=0.0), color="tab:red", s=10, zorder=3,
-                    label=f"rejected ({int((~ok).sum())})")
+        top.scatter(
+            t[~ok],
+            np.nan_to_num(ratio[~ok], nan=0.0),
+            color="tab:red",
+            s=10,
+            zorder=3,
+            label=f"rejected ({int((~ok).sum())})",
+        )
     top.set_ylabel("inlier ratio")
     top.set_ylim(0.0, 1.05)
     top.legend(loc="lower right", fontsize=8)

@@ -81,7 +81,7 @@ def _resample(states: NDArray[np.uint8], offset: list[int], shape: tuple[int, ..
     r0, r1 = max(0, -dr), min(rows, states.shape[0] - dr)
     c0, c1 = max(0, -dc), min(cols, states.shape[1] - dc)
     if r0 < r1 and c0 < c1:
-        out[r0:r1, c0:c1] = states[r0 + dr:r1 + dr, c0 + dc:c1 + dc]
+        out[r0:r1, c0:c1] = states[r0 + dr : r1 + dr, c0 + dc : c1 + dc]
     return out
 
 
@@ -92,5 +92,5 @@ def _grow_one(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     rows, cols = mask.shape
     for dr in (0, 1, 2):
         for dc in (0, 1, 2):
-            out |= padded[dr:dr + rows, dc:dc + cols]
+            out |= padded[dr : dr + rows, dc : dc + cols]
     return out

@@ -29,15 +29,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, positive, whole_number
+from ..io.scan_log import ScanFrame
 from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.image_files import MAX_IMAGE_PIXELS
-from ..tracking.icp_config import IcpConfig
-from ..io.scan_log import ScanFrame
-from .log_replay import TrackedLog, track_log
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
 from ..se2 import between, compose, transform_points, wrap_angle
 from ..sim.odometry import ErrorGenerator
+from ..tracking.icp_config import IcpConfig
+from .log_replay import TrackedLog, track_log
 
 ODOMETRY_SOURCES = ("synthetic", "log")
 
@@ -68,8 +68,9 @@ class OdometryDrift:
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
-def plan_from_scans(frames: Sequence[ScanFrame], resolution: float = 0.05, min_hits: int = 2,
-                    margin: float = 1.0) -> PlanMap:
+def plan_from_scans(
+    frames: Sequence[ScanFrame], resolution: float = 0.05, min_hits: int = 2, margin: float = 1.0
+) -> PlanMap:
     """A plan rendered from scans at their reference poses: a pixel of `resolution` metres is wall
     when at least `min_hits` end points fall in it; the image covers the end points plus `margin`.
 
@@ -93,9 +94,11 @@ def plan_from_scans(frames: Sequence[ScanFrame], resolution: float = 0.05, min_h
     pixels = float(np.prod(np.ceil(extent / resolution)))
     if pixels > MAX_IMAGE_PIXELS:
         finest = math.sqrt(float(np.prod(extent)) / MAX_IMAGE_PIXELS)
-        raise ValueError(f"the scans span {extent[0]:.1f} x {extent[1]:.1f} m: a plan of {resolution:g} m pixels "
-                         f"would have {pixels:.3g} pixels (at most {MAX_IMAGE_PIXELS:.3g}); give a resolution of "
-                         f"at least {float(f'{finest:.2g}') * 1.1:.2g} m")
+        raise ValueError(
+            f"the scans span {extent[0]:.1f} x {extent[1]:.1f} m: a plan of {resolution:g} m pixels "
+            f"would have {pixels:.3g} pixels (at most {MAX_IMAGE_PIXELS:.3g}); give a resolution of "
+            f"at least {float(f'{finest:.2g}') * 1.1:.2g} m"
+        )
     cols, rows = (int(v) for v in np.ceil(extent / resolution))
     c = np.minimum(np.floor((xy[:, 0] - lo[0]) / resolution).astype(np.int64), cols - 1)
     r = np.minimum(np.floor((xy[:, 1] - lo[1]) / resolution).astype(np.int64), rows - 1)
@@ -112,8 +115,9 @@ def plan_from_scans(frames: Sequence[ScanFrame], resolution: float = 0.05, min_h
     return PlanMap.from_raster(raster, edge_detector="centres")
 
 
-def synthesise_odometry(times: NDArray[np.float64], reference: NDArray[np.float64], drift: OdometryDrift,
-                        rng: np.random.Generator) -> NDArray[np.float64]:
+def synthesise_odometry(
+    times: NDArray[np.float64], reference: NDArray[np.float64], drift: OdometryDrift, rng: np.random.Generator
+) -> NDArray[np.float64]:
     """(N, 3) T_odom_base at the N scan times (odom frame = the first reference pose): the reference
     motion between consecutive scans split into odometry messages of `drift.message_period_s`, each
     with the error generator's constants, plus the step noise of `drift`."""

@@ -18,13 +18,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import Pose, as_pose
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
-from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.localizer import Localizer
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
+from ..tracking.localizer import Localizer
 from .trajectory_metrics import error_summary
 
 
@@ -59,7 +59,8 @@ class TrackedLog:
         out: dict[str, Any] = {
             "scans": len(self.times),
             "accepted_share": float(self.accepted.mean()) if len(self.times) else math.nan,
-            "median_inlier_ratio": float(np.nanmedian(self.inlier_ratio)) if np.isfinite(self.inlier_ratio).any()
+            "median_inlier_ratio": float(np.nanmedian(self.inlier_ratio))
+            if np.isfinite(self.inlier_ratio).any()
             else math.nan,
             "scans_per_second": len(self.times) / self.seconds if self.seconds > 0 else math.nan,
         }
@@ -86,7 +87,8 @@ def track_log(
         frames: the scans in time order.
         plan: the plan to localize in.
         initial_pose: T_map_base (x, y, yaw) at the first scan; None takes the first scan's reference.
-        config, gate: the localizer's settings (defaults when None).
+        config: the localizer's ICP settings (defaults when None).
+        gate: the localizer's acceptance gate (defaults when None).
         grid: when given, every scan is integrated into it at its estimated pose.
         progress: called with the number of scans done after each one.
 
@@ -98,8 +100,10 @@ def track_log(
     first = frames[0]
     if initial_pose is None:
         if first.reference is None:
-            raise ValueError("the log's first scan has no reference pose: give the start pose "
-                             "(initial_pose, or --initial-pose X Y YAW)")
+            raise ValueError(
+                "the log's first scan has no reference pose: give the start pose "
+                "(initial_pose, or --initial-pose X Y YAW)"
+            )
         start: Pose = first.reference
     else:
         start = as_pose(initial_pose, "initial_pose")
@@ -132,14 +136,22 @@ def track_log(
             ratio[k] = est.result.inlier_ratio
             rmse[k] = est.result.rmse
         if grid is not None:
-            grid.integrate_ranges(frame.ranges, frame.angle_min, frame.angle_increment, est.pose,
-                                  range_min=frame.range_min, range_max=frame.range_max, laser_pose=frame.laser_pose)
+            grid.integrate_ranges(
+                frame.ranges,
+                frame.angle_min,
+                frame.angle_increment,
+                est.pose,
+                range_min=frame.range_min,
+                range_max=frame.range_max,
+                laser_pose=frame.laser_pose,
+            )
         if progress is not None:
             progress(k + 1)
     has_reference = any(f.reference is not None for f in frames)
     reference = None
     if has_reference:
-        reference = np.array([f.reference if f.reference is not None else (np.nan,) * 3 for f in frames],
-                             dtype=np.float64)
+        reference = np.array(
+            [f.reference if f.reference is not None else (np.nan,) * 3 for f in frames], dtype=np.float64
+        )
     times = np.array([f.time for f in frames], dtype=np.float64)
     return TrackedLog(times, estimate, accepted, ratio, rmse, reasons, odometry, reference, spent)

@@ -9,15 +9,16 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from . import figures
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..io.trajectory_files import write_tum
-from .log_replay import TrackedLog
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
+from . import figures
+from .log_replay import TrackedLog
 
 
-def write_outputs(tracked: TrackedLog, plan: PlanMap, grid: EnhancedOccupancyGrid | None, out: Path,
-                  extra: dict[str, Any]) -> dict[str, Any]:
+def write_outputs(
+    tracked: TrackedLog, plan: PlanMap, grid: EnhancedOccupancyGrid | None, out: Path, extra: dict[str, Any]
+) -> dict[str, Any]:
     """Writes into `out`:
 
     - trajectory.tum: planicp's T_map_base per scan (TUM: `t x y z qx qy qz qw`);
@@ -46,7 +47,8 @@ def write_outputs(tracked: TrackedLog, plan: PlanMap, grid: EnhancedOccupancyGri
     paths["planicp"] = tracked.estimate
     figures.plot_paths(plan, paths).savefig(out / "paths.png")
     figures.plot_quality(tracked.times, tracked.inlier_ratio, tracked.rmse, tracked.accepted).savefig(
-        out / "quality.png")
+        out / "quality.png"
+    )
     metrics = tracked.metrics()
     if tracked.reference is not None and "planicp" in metrics:
         from .trajectory_metrics import pose_errors
@@ -76,8 +78,11 @@ def _json_default(value: Any) -> Any:
 
 def print_summary(metrics: dict[str, Any], out: Path, stream: TextIO) -> None:
     """A few lines: scans, acceptance, speed and, with a reference, the error table."""
-    print(f"{metrics['scans']} scans, {100 * metrics['accepted_share']:.1f} % accepted, "
-          f"{metrics['scans_per_second']:.0f} scans/s in the localizer", file=stream)
+    print(
+        f"{metrics['scans']} scans, {100 * metrics['accepted_share']:.1f} % accepted, "
+        f"{metrics['scans_per_second']:.0f} scans/s in the localizer",
+        file=stream,
+    )
     if "planicp" in metrics:
         header = f"{'':10s} {'ATE RMS':>9s} {'worst':>9s} {'heading RMS':>12s} {'lost (>0.3 m)':>14s}"
         print(header, file=stream)
@@ -85,8 +90,11 @@ def print_summary(metrics: dict[str, Any], out: Path, stream: TextIO) -> None:
         for label in ("odometry", "planicp"):
             if label in metrics:
                 m = metrics[label]
-                print(f"{label:10s} {_metres(m['ate_rms_m']):>9s} {_metres(m['position_max_m']):>9s} "
-                      f"{m['heading_rms_deg']:>8.2f} deg {100 * m['lost_share']:>12.1f} %", file=stream)
+                print(
+                    f"{label:10s} {_metres(m['ate_rms_m']):>9s} {_metres(m['position_max_m']):>9s} "
+                    f"{m['heading_rms_deg']:>8.2f} deg {100 * m['lost_share']:>12.1f} %",
+                    file=stream,
+                )
     print(f"wrote trajectory.tum, figures, metrics.json to {out}", file=stream)
 
 

@@ -19,8 +19,9 @@ LOST_THRESHOLD_M = 0.3
 """A pose farther than this from the reference counts as lost (metres)."""
 
 
-def pose_errors(poses: NDArray[np.float64], reference: NDArray[np.float64]) -> tuple[
-        NDArray[np.float64], NDArray[np.float64]]:
+def pose_errors(
+    poses: NDArray[np.float64], reference: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(position error in metres, signed heading error in radians) per row; NaN where the reference
     (or the pose) is NaN.
 
@@ -36,8 +37,9 @@ def pose_errors(poses: NDArray[np.float64], reference: NDArray[np.float64]) -> t
     return position, heading
 
 
-def error_summary(poses: NDArray[np.float64], reference: NDArray[np.float64],
-                  lost_threshold: float = LOST_THRESHOLD_M) -> dict[str, float]:
+def error_summary(
+    poses: NDArray[np.float64], reference: NDArray[np.float64], lost_threshold: float = LOST_THRESHOLD_M
+) -> dict[str, float]:
     """Translation ATE (RMS), worst and final position error, heading RMS and worst, and the share of
     poses farther than `lost_threshold` metres, over the rows that have a reference.
 

@@ -64,8 +64,10 @@ def open_log(path: str | Path, **options: Any) -> ScanLog:
         return read_g2o(source, **options)
     if first in ("PARAM", "ODOM", "FLASER", "RLASER", "ROBOTLASER1", "SYNC", "TRUEPOS", "RAWLASER1"):
         return read_carmen(source, **options)
-    raise ValueError(f"cannot tell the format of {source}: expected a CARMEN log (.log, .clf), a g2o file, "
-                     f"a ROS 1 .bag or a ROS 2 bag folder; its first record is {brief(first)}")
+    raise ValueError(
+        f"cannot tell the format of {source}: expected a CARMEN log (.log, .clf), a g2o file, "
+        f"a ROS 1 .bag or a ROS 2 bag folder; its first record is {brief(first)}"
+    )
 
 
 def _first_record(source: Path) -> str | None:

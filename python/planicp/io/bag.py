@@ -165,18 +165,35 @@ def read_bag(
     frames: list[ScanFrame] = []
     for k, (t, msg) in enumerate(scans):
         if odom_topic is not None and not inside[k] and outside_odometry == "drop":
-            skipped["LaserScan (outside the odometry time span)"] = skipped.get(
-                "LaserScan (outside the odometry time span)", 0) + 1
+            skipped["LaserScan (outside the odometry time span)"] = (
+                skipped.get("LaserScan (outside the odometry time span)", 0) + 1
+            )
             continue
         ranges = np.asarray(msg.ranges, dtype=np.float64).copy()
         with np.errstate(invalid="ignore"):
             ranges[ranges > float(msg.range_max)] = np.inf
-        odometry: Pose | None = (float(at_scans[k, 0]), float(at_scans[k, 1]), float(at_scans[k, 2])) if inside[
-            k] else None
-        frames.append(ScanFrame(t, ranges, float(msg.angle_min), float(msg.angle_increment), float(msg.range_min),
-                                float(msg.range_max), laser_pose=mount, odometry=odometry))
-    params = {"storage": storage, "scan_topic": scan_topic, "odom_topic": str(odom_topic), "base_frame": base,
-              "laser_frame": laser_frame}
+        odometry: Pose | None = (
+            (float(at_scans[k, 0]), float(at_scans[k, 1]), float(at_scans[k, 2])) if inside[k] else None
+        )
+        frames.append(
+            ScanFrame(
+                t,
+                ranges,
+                float(msg.angle_min),
+                float(msg.angle_increment),
+                float(msg.range_min),
+                float(msg.range_max),
+                laser_pose=mount,
+                odometry=odometry,
+            )
+        )
+    params = {
+        "storage": storage,
+        "scan_topic": scan_topic,
+        "odom_topic": str(odom_topic),
+        "base_frame": base,
+        "laser_frame": laser_frame,
+    }
     return ScanLog(source, frames, odo[:, 0].copy(), odo[:, 1:].copy(), skipped, [], params)
 
 
@@ -200,8 +217,10 @@ def _chain(tree: dict[str, tuple[str, Pose]], base: str, laser: str, source: Pat
     root_l, t_root_laser = _to_root(tree, laser)
     if root_b != root_l:
         frames = sorted(set(tree) | {p for p, _ in tree.values()})
-        raise ValueError(f"bag {source}: no /tf_static chain from base frame {base!r} to laser frame {laser!r} "
-                         f"(frames on /tf_static: {frames or 'none'}); pass laser_pose=(x, y, yaw) or base_frame")
+        raise ValueError(
+            f"bag {source}: no /tf_static chain from base frame {base!r} to laser frame {laser!r} "
+            f"(frames on /tf_static: {frames or 'none'}); pass laser_pose=(x, y, yaw) or base_frame"
+        )
     return compose(inverse(t_root_base), t_root_laser)
 
 
@@ -224,10 +243,13 @@ def write_bag(
         frames: the scans, in time order; they must share one `laser_pose`. A `ScanLog` also gives its
             odometry stream when `odometry` is None.
         version: 1 (ROS 1 Noetic message definitions) or 2 (ROS 2 Humble, sqlite3 storage).
-        scan_topic, odom_topic: topic names.
+        scan_topic: topic name of the scans.
+        odom_topic: topic name of the odometry.
         odometry: ((K,) times, (K, 3) T_odom_base) written on `odom_topic`; by default the `ScanLog`'s
             stream, or each frame's `odometry` at its scan time.
-        base_frame, laser_frame, odom_frame: the frame ids written into the headers.
+        base_frame: the robot's frame id written into the headers.
+        laser_frame: the laser's frame id written into the headers.
+        odom_frame: the odometry frame id written into the headers.
 
     Returns:
         The bag's path.
@@ -270,8 +292,7 @@ def write_bag(
     def header(t: float, frame_id: str) -> Any:
         ns = _nanoseconds(t)
         stamp = Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
-        return Header(seq=0, stamp=stamp, frame_id=frame_id) if version == 1 else Header(stamp=stamp,
-                                                                                         frame_id=frame_id)
+        return Header(seq=0, stamp=stamp, frame_id=frame_id) if version == 1 else Header(stamp=stamp, frame_id=frame_id)
 
     def quaternion(yaw: float) -> Any:
         x, y, z, w = yaw_to_quaternion(yaw)
@@ -281,33 +302,49 @@ def write_bag(
     messages: list[tuple[int, str, Any]] = []
     t0 = min(times[0], float(odo_t[0])) if len(odo_t) else times[0]
     transform = types["geometry_msgs/msg/TransformStamped"](
-        header=header(t0, base_frame), child_frame_id=laser_frame,
-        transform=types["geometry_msgs/msg/Transform"](translation=vector3(x=mount[0], y=mount[1], z=0.0),
-                                                       rotation=quaternion(mount[2])))
+        header=header(t0, base_frame),
+        child_frame_id=laser_frame,
+        transform=types["geometry_msgs/msg/Transform"](
+            translation=vector3(x=mount[0], y=mount[1], z=0.0), rotation=quaternion(mount[2])
+        ),
+    )
     messages.append((_nanoseconds(t0), "/tf_static", types[TF_MESSAGE](transforms=[transform])))
     for f in scan_list:
         scan = types[LASER_SCAN](
-            header=header(f.time, laser_frame), angle_min=f.angle_min,
-            angle_max=f.angle_min + f.angle_increment * (f.beams - 1), angle_increment=f.angle_increment,
-            time_increment=0.0, scan_time=0.0, range_min=f.range_min, range_max=f.range_max,
-            ranges=f.ranges.astype(np.float32), intensities=np.zeros(0, dtype=np.float32))
+            header=header(f.time, laser_frame),
+            angle_min=f.angle_min,
+            angle_max=f.angle_min + f.angle_increment * (f.beams - 1),
+            angle_increment=f.angle_increment,
+            time_increment=0.0,
+            scan_time=0.0,
+            range_min=f.range_min,
+            range_max=f.range_max,
+            ranges=f.ranges.astype(np.float32),
+            intensities=np.zeros(0, dtype=np.float32),
+        )
         messages.append((_nanoseconds(f.time), scan_topic, scan))
     zeros36 = np.zeros(36, dtype=np.float64)
     for t, (x, y, yaw) in zip(odo_t.tolist(), odo_p.tolist()):
         pose = types["geometry_msgs/msg/Pose"](position=point(x=x, y=y, z=0.0), orientation=quaternion(yaw))
-        twist = types["geometry_msgs/msg/Twist"](linear=vector3(x=0.0, y=0.0, z=0.0),
-                                                 angular=vector3(x=0.0, y=0.0, z=0.0))
+        twist = types["geometry_msgs/msg/Twist"](
+            linear=vector3(x=0.0, y=0.0, z=0.0), angular=vector3(x=0.0, y=0.0, z=0.0)
+        )
         msg = types[ODOMETRY](
-            header=header(t, odom_frame), child_frame_id=base_frame,
+            header=header(t, odom_frame),
+            child_frame_id=base_frame,
             pose=types["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=zeros36),
-            twist=types["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=zeros36))
+            twist=types["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=zeros36),
+        )
         messages.append((_nanoseconds(t), odom_topic, msg))
     messages.sort(key=lambda m: m[0])
     msgtypes = {"/tf_static": TF_MESSAGE, scan_topic: LASER_SCAN, odom_topic: ODOMETRY}
     writer: Any = Writer1(out) if version == 1 else _writer2(out)
     with writer:
-        conns = {topic: writer.add_connection(topic, msgtype, typestore=store) for topic, msgtype in msgtypes.items()
-                 if topic != odom_topic or len(odo_t)}
+        conns = {
+            topic: writer.add_connection(topic, msgtype, typestore=store)
+            for topic, msgtype in msgtypes.items()
+            if topic != odom_topic or len(odo_t)
+        }
         for ns, topic, msg in messages:
             writer.write(conns[topic], ns, ser(msg, msgtypes[topic]))
     return out
@@ -324,4 +361,3 @@ def _nanoseconds(t: float) -> int:
     if not (math.isfinite(t) and t >= 0.0):
         raise ValueError(f"a ROS time must be finite and >= 0 seconds, got {t!r}")
     return int(round(t * 1e9))
-

@@ -1,6 +1,6 @@
 """CARMEN logs (plain text, optionally gzip-compressed): `ODOM`, `FLASER`/`RLASER`, `ROBOTLASER1`, `PARAM`.
 
-Line formats (fields separated by white space, `#` starts a comment line)::
+Line formats (fields separated by white space, `#` starts a comment line):
 
     PARAM name value [host ts]
     ODOM x y theta tv rv accel ts host logger_ts
@@ -52,10 +52,10 @@ from numpy.typing import NDArray
 
 from .._validation import MAX_COORDINATE, Pose, as_pose, brief
 from ..se2 import between, compose, inverse
-from .pose_interpolation import interpolate_poses
-from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records, skipped_summary
 from .log_times import late_copies, repair_times
+from .pose_interpolation import interpolate_poses
+from .scan_log import ScanFrame, ScanLog
 
 LaserKind = Literal["FLASER", "RLASER", "ROBOTLASER1"]
 LASER_KINDS: tuple[LaserKind, ...] = ("FLASER", "RLASER", "ROBOTLASER1")
@@ -68,8 +68,11 @@ MAX_MOUNT_OFFSET = 100.0
 """Metres: a laser mount PARAM farther from the base than this is a bad line (a robot is not that big)."""
 
 _RANGE_PARAMS = ("robot_front_laser_max", "robot_rear_laser_max")
-_MOUNT_PARAMS = tuple(f"robot_{laser}_{part}" for laser in ("frontlaser", "rearlaser")
-                      for part in ("offset", "side_offset", "angular_offset"))
+_MOUNT_PARAMS = tuple(
+    f"robot_{laser}_{part}"
+    for laser in ("frontlaser", "rearlaser")
+    for part in ("offset", "side_offset", "angular_offset")
+)
 
 
 class _BadLine(Exception):
@@ -107,7 +110,7 @@ def _poses(fields: list[str], start: int, count: int, what: str) -> tuple[float,
     """`count` consecutive (x, y, yaw) poses: finite, and x, y within `MAX_COORDINATE` metres."""
     values = _finite(fields, start, 3 * count, what)
     for k in range(count):
-        for v in values[3 * k:3 * k + 2]:
+        for v in values[3 * k : 3 * k + 2]:
             if abs(v) > MAX_COORDINATE:
                 raise _BadLine(f"{what}: a coordinate of {v:.6g} m is beyond +-{MAX_COORDINATE:.0e} m")
     return values
@@ -131,8 +134,10 @@ def _check_param(name: str, text: str) -> None:
     if name in _RANGE_PARAMS and not (math.isfinite(value) and value > 0.0):
         raise _BadLine(f"{name} must be a positive number of metres, got {brief(text)}; the default is used")
     if name in _MOUNT_PARAMS and not (math.isfinite(value) and abs(value) <= MAX_MOUNT_OFFSET):
-        raise _BadLine(f"{name} must be a finite number within +-{MAX_MOUNT_OFFSET:g} (metres or radians), "
-                       f"got {brief(text)}; the default is used (or pass laser_pose)")
+        raise _BadLine(
+            f"{name} must be a finite number within +-{MAX_MOUNT_OFFSET:g} (metres or radians), "
+            f"got {brief(text)}; the default is used (or pass laser_pose)"
+        )
 
 
 def _expect_fields(fields: list[str], needed: int, layout: str) -> None:
@@ -144,7 +149,7 @@ def _expect_fields(fields: list[str], needed: int, layout: str) -> None:
 
 def _ranges(fields: list[str], start: int, n: int) -> NDArray[np.float64]:
     try:
-        return np.array(fields[start:start + n], dtype=np.float64)
+        return np.array(fields[start : start + n], dtype=np.float64)
     except ValueError:
         bad = next(k for k in range(start, start + n) if not _is_float(fields[k]))
         raise _BadLine(f"field {bad + 1} ({brief(fields[bad])}) is not a number") from None
@@ -177,8 +182,17 @@ def _parse_old_laser(kind: LaserKind, fields: list[str], line: int) -> _LaserRec
     ranges = _ranges(fields, 2, n)
     pose = _poses(fields, 2 + n, 2, "the laser and odometry poses")
     (t,) = _finite(fields, 8 + n, 1, "the timestamp")
-    return _LaserRecord(line, kind, t, ranges, -math.pi / 2.0, flaser_angle_increment(n), None,
-                        (pose[0], pose[1], pose[2]), (pose[3], pose[4], pose[5]))
+    return _LaserRecord(
+        line,
+        kind,
+        t,
+        ranges,
+        -math.pi / 2.0,
+        flaser_angle_increment(n),
+        None,
+        (pose[0], pose[1], pose[2]),
+        (pose[3], pose[4], pose[5]),
+    )
 
 
 def _parse_robotlaser(fields: list[str], line: int) -> _LaserRecord:
@@ -198,8 +212,9 @@ def _parse_robotlaser(fields: list[str], line: int) -> _LaserRecord:
     base = 10 + n + n_rem
     pose = _poses(fields, base, 2, "the laser and robot poses")
     (t,) = _finite(fields, base + 11, 1, "the timestamp")
-    return _LaserRecord(line, "ROBOTLASER1", t, ranges, start, res, max_range,
-                        (pose[0], pose[1], pose[2]), (pose[3], pose[4], pose[5]))
+    return _LaserRecord(
+        line, "ROBOTLASER1", t, ranges, start, res, max_range, (pose[0], pose[1], pose[2]), (pose[3], pose[4], pose[5])
+    )
 
 
 def _param_float(params: dict[str, str], name: str, default: float) -> float:
@@ -297,9 +312,11 @@ def read_carmen(
     late = late_copies(np.array([r.time for r in kept]), np.array([r.robot_world for r in kept]))
     if late.any():
         tally.skip(f"{chosen} (late copy: stamped before earlier records)", int(np.count_nonzero(late)))
-        warnings.warn(f"{source}: dropped {int(np.count_nonzero(late))} {chosen} line(s) written late (stamped "
-                      f"before earlier lines, with an old pose); first at line {kept[int(np.argmax(late))].line}",
-                      stacklevel=2)
+        warnings.warn(
+            f"{source}: dropped {int(np.count_nonzero(late))} {chosen} line(s) written late (stamped "
+            f"before earlier lines, with an old pose); first at line {kept[int(np.argmax(late))].line}",
+            stacklevel=2,
+        )
         kept = [r for r, drop in zip(kept, late) if not drop]
     times, repair = repair_times(np.array([r.time for r in kept], dtype=np.float64))
     chosen_records = [replace(r, time=float(t)) for r, t in zip(kept, times)]
@@ -330,8 +347,9 @@ def _frames(
     pose beyond the coordinate limit, say) is a malformed line of `tally`."""
     kind = records[0].kind
     param_mount = _param_mount(params, kind)
-    default_max = _param_float(params, "robot_rear_laser_max" if kind == "RLASER" else "robot_front_laser_max",
-                               NO_RETURN_RANGE)
+    default_max = _param_float(
+        params, "robot_rear_laser_max" if kind == "RLASER" else "robot_front_laser_max", NO_RETURN_RANGE
+    )
     if default_max <= 0.0:  # a maximum range of 0 or less is no range: the PARAM is ignored, as text would be
         default_max = NO_RETURN_RANGE
     odom = np.array(odom_rows, dtype=np.float64).reshape(-1, 4)
@@ -352,14 +370,26 @@ def _frames(
             ranges[ranges >= limit] = np.inf
             ranges[ranges <= 0.0] = np.nan
         if use_stream:
-            odometry: Pose | None = (float(at_scans[k, 0]), float(at_scans[k, 1]),
-                                     float(at_scans[k, 2])) if inside[k] else None
+            odometry: Pose | None = (
+                (float(at_scans[k, 0]), float(at_scans[k, 1]), float(at_scans[k, 2])) if inside[k] else None
+            )
         else:
             odometry = rec.robot_world
         try:
             ref = compose(rec.laser_world, inverse(mount)) if reference else None
-            frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0, limit,
-                                    laser_pose=mount, odometry=odometry, reference=ref))
+            frames.append(
+                ScanFrame(
+                    rec.time,
+                    ranges,
+                    rec.angle_min,
+                    rec.angle_increment,
+                    0.0,
+                    limit,
+                    laser_pose=mount,
+                    odometry=odometry,
+                    reference=ref,
+                )
+            )
         except ValueError as exc:
             tally.reject(rec.line, rec.kind, str(exc))
             continue

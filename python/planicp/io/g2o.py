@@ -1,6 +1,6 @@
 """g2o 2D pose graphs with laser scans (`VERTEX_SE2`, `EDGE_SE2`, `ROBOTLASER1`), e.g. MIT Killian Court.
 
-Line formats::
+Line formats:
 
     VERTEX_SE2 id x y theta
     EDGE_SE2 i j dx dy dtheta I11 I12 I13 I22 I23 I33      (measurement T_i_j, upper-triangular information)
@@ -30,9 +30,9 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from ..se2 import between
 from .carmen import _BadLine, _count, _expect_fields, _finite, _parse_robotlaser, _poses
-from .scan_log import ScanFrame, ScanLog
 from .line_records import LineTally, records, skipped_summary
 from .log_times import repair_times
+from .scan_log import ScanFrame, ScanLog
 
 
 @dataclass(eq=False)
@@ -103,10 +103,18 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
                     ranges[ranges >= (rec.max_range or math.inf)] = np.inf
                     ranges[ranges <= 0.0] = np.nan
                 try:
-                    frames.append(ScanFrame(rec.time, ranges, rec.angle_min, rec.angle_increment, 0.0,
-                                            rec.max_range or math.inf, laser_pose=between(rec.robot_world,
-                                                                                          rec.laser_world),
-                                            odometry=poses[-1]))
+                    frames.append(
+                        ScanFrame(
+                            rec.time,
+                            ranges,
+                            rec.angle_min,
+                            rec.angle_increment,
+                            0.0,
+                            rec.max_range or math.inf,
+                            laser_pose=between(rec.robot_world, rec.laser_world),
+                            odometry=poses[-1],
+                        )
+                    )
                 except ValueError as exc:  # e.g. a laser mount beyond the coordinate limit
                     raise _BadLine(str(exc)) from None
                 scanned.add(ids[-1])
@@ -120,9 +128,13 @@ def _read(source: Path, errors: str) -> tuple[ScanLog, G2oGraph]:
     info_m = np.zeros((len(info), 3, 3))
     for k, (i11, i12, i13, i22, i23, i33) in enumerate(info):
         info_m[k] = [[i11, i12, i13], [i12, i22, i23], [i13, i23, i33]]
-    graph = G2oGraph(np.array(ids, dtype=np.int64), np.array(poses, dtype=np.float64).reshape(-1, 3),
-                     np.array(edges, dtype=np.int64).reshape(-1, 2), np.array(meas, dtype=np.float64).reshape(-1, 3),
-                     info_m)
+    graph = G2oGraph(
+        np.array(ids, dtype=np.int64),
+        np.array(poses, dtype=np.float64).reshape(-1, 3),
+        np.array(edges, dtype=np.int64).reshape(-1, 2),
+        np.array(meas, dtype=np.float64).reshape(-1, 3),
+        info_m,
+    )
     times, repair = repair_times(np.array([f.time for f in frames], dtype=np.float64))
     if repair.message:
         warnings.warn(f"{source}: {repair.message}", stacklevel=3)

@@ -11,7 +11,6 @@ from pathlib import Path
 from .scan_log import BadLine
 from .text_source import TruncatedStream, read_lines
 
-
 _RECORD_NAME = re.compile(r"[A-Z][A-Z0-9_]{1,39}(?: \(.{1,80}\))?")
 """A record kind (FLASER, ODOM, ROBOTLASER1, ...), optionally with a note in brackets."""
 
@@ -58,8 +57,11 @@ class LineTally:
         """One warning naming the first malformed line, when there was any."""
         if self.bad:
             first = self.bad[0]
-            warnings.warn(f"{self.source}: skipped {len(self.bad)} malformed line(s); first at line {first.line} "
-                          f"({first.kind}): {first.reason}", stacklevel=stacklevel + 1)
+            warnings.warn(
+                f"{self.source}: skipped {len(self.bad)} malformed line(s); first at line {first.line} "
+                f"({first.kind}): {first.reason}",
+                stacklevel=stacklevel + 1,
+            )
 
 
 MAX_KIND_CHARS = 40
@@ -75,7 +77,7 @@ def records(tally: LineTally) -> Iterator[tuple[int, str, list[str]]]:
         for line, text in read_lines(tally.source):
             fields = text.split()
             if fields and not fields[0].startswith("#"):
-                kind = fields[0] if len(fields[0]) <= MAX_KIND_CHARS else fields[0][:MAX_KIND_CHARS - 3] + "..."
+                kind = fields[0] if len(fields[0]) <= MAX_KIND_CHARS else fields[0][: MAX_KIND_CHARS - 3] + "..."
                 yield line, kind, fields
     except TruncatedStream as exc:
         if tally.errors == "raise":

@@ -107,8 +107,9 @@ def late_copies(times: NDArray[np.float64], poses: NDArray[np.float64]) -> NDArr
     return late
 
 
-def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD
-                 ) -> tuple[NDArray[np.float64], TimeRepair]:
+def repair_times(
+    times: NDArray[np.float64], nominal_period: float = DEFAULT_SCAN_PERIOD
+) -> tuple[NDArray[np.float64], TimeRepair]:
     """(times, repair): strictly increasing times for the records stamped `times` (seconds, in
     record order), following the module's rules; every record keeps its place.
 
@@ -129,8 +130,12 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
     if backward > MAX_DISORDERED_SHARE * steps.shape[0]:
         even = t[0] + nominal_period * np.arange(t.shape[0], dtype=np.float64)
         return even, TimeRepair(
-            "disordered", 0, 0, f"{backward} of {steps.shape[0]} timestamps go back in time: they are ignored, "
-            f"and the scans are taken {nominal_period:g} s apart")
+            "disordered",
+            0,
+            0,
+            f"{backward} of {steps.shape[0]} timestamps go back in time: they are ignored, "
+            f"and the scans are taken {nominal_period:g} s apart",
+        )
     # A record whose stamp is below the latest one before it has a glitched stamp: the file's order
     # is the recording's, so the record is kept and takes the middle of its in-order neighbours.
     earlier_max = np.maximum.accumulate(np.concatenate([[-np.inf], t[:-1]]))
@@ -146,15 +151,24 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
             if u[k] <= u[k - 1]:
                 u[k] = u[k - 1] + step
     repeated = int(np.count_nonzero(np.diff(u) == 0.0))
-    restamped = (f"{out_of_order} timestamp(s) earlier than the one before replaced by the middle of their "
-               f"neighbours' (the records are kept in the log's order); ") if out_of_order else ""
+    restamped = (
+        (
+            f"{out_of_order} timestamp(s) earlier than the one before replaced by the middle of their "
+            f"neighbours' (the records are kept in the log's order); "
+        )
+        if out_of_order
+        else ""
+    )
     if repeated == 0:
         return u, TimeRepair("none", out_of_order, 0, restamped.rstrip("; "))
     if u[-1] == u[0]:
         even = u[0] + nominal_period * np.arange(u.shape[0], dtype=np.float64)
         return even, TimeRepair(
-            "missing", out_of_order, repeated, f"{restamped}every timestamp is {u[0]:g}: the scans are taken "
-            f"{nominal_period:g} s apart")
+            "missing",
+            out_of_order,
+            repeated,
+            f"{restamped}every timestamp is {u[0]:g}: the scans are taken {nominal_period:g} s apart",
+        )
     # A coarse clock ticks over between two records: from the first tick over to the last, the
     # records span exactly the stamps' difference, which gives the scan period.
     ticks = np.flatnonzero(np.diff(u) != 0.0) + 1
@@ -166,5 +180,8 @@ def repair_times(times: NDArray[np.float64], nominal_period: float = DEFAULT_SCA
         how = f"the scans are taken {period:.4g} s apart, the mean period between the stamps' changes"
     out = anchor + period * (np.arange(u.shape[0], dtype=np.float64) - start)
     return out, TimeRepair(
-        "coarse", out_of_order, repeated, f"{restamped}{repeated} of {u.shape[0]} timestamps repeat the one "
-        f"before (coarse stamps): {how}")
+        "coarse",
+        out_of_order,
+        repeated,
+        f"{restamped}{repeated} of {u.shape[0]} timestamps repeat the one before (coarse stamps): {how}",
+    )

@@ -77,8 +77,14 @@ class ScanFrame:
 
     def points(self) -> NDArray[np.float64]:
         """(M, 2) valid returns in the robot (base) frame, metres, in beam order."""
-        return scan_to_points(self.ranges, self.angle_min, self.angle_increment, self.range_min, self.range_max,
-                              sensor_pose=self.laser_pose)
+        return scan_to_points(
+            self.ranges,
+            self.angle_min,
+            self.angle_increment,
+            self.range_min,
+            self.range_max,
+            sensor_pose=self.laser_pose,
+        )
 
 
 @dataclass(frozen=True)

@@ -62,8 +62,9 @@ def read_lines(path: Path) -> Iterator[tuple[int, str]]:
             except (zipfile.BadZipFile, NotImplementedError, RuntimeError, OSError, EOFError, zlib.error) as exc:
                 # RuntimeError: an encrypted member; NotImplementedError: an unknown compression method;
                 # OSError: a member's offset before the file's start
-                raise ValueError(f"{path}: the file {brief(members[0])} in this zip archive cannot be read "
-                                 f"({one_line(str(exc))})") from None
+                raise ValueError(
+                    f"{path}: the file {brief(members[0])} in this zip archive cannot be read ({one_line(str(exc))})"
+                ) from None
             yield from _lines_of(path, member, expansion)
     else:
         yield from _lines_of(path, path.open("rb"), None)
@@ -114,6 +115,8 @@ def _lines_of(path: Path, stream: IO[bytes] | gzip.GzipFile, expansion: int | No
 
 
 def _bomb(path: Path, expansion: int) -> ValueError:
-    return ValueError(f"{path}: the compressed log expands to more than {expansion} bytes, over {MAX_EXPANSION} "
-                      f"times its size (real logs expand 3 to 5 times): refused as a decompression bomb; "
-                      f"decompress it first if it is a real log")
+    return ValueError(
+        f"{path}: the compressed log expands to more than {expansion} bytes, over {MAX_EXPANSION} "
+        f"times its size (real logs expand 3 to 5 times): refused as a decompression bomb; "
+        f"decompress it first if it is a real log"
+    )

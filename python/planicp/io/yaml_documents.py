@@ -60,8 +60,9 @@ def load_yaml(text: str, source: str) -> Any:
     import yaml
 
     if len(text) > MAX_DOCUMENT_BYTES:
-        raise ValueError(f"{source} is {len(text)} characters long; a YAML document here is at most "
-                         f"{MAX_DOCUMENT_BYTES}")
+        raise ValueError(
+            f"{source} is {len(text)} characters long; a YAML document here is at most {MAX_DOCUMENT_BYTES}"
+        )
     loader = yaml.CSafeLoader if getattr(yaml, "__with_libyaml__", False) else yaml.SafeLoader
     try:
         data = yaml.load(text, Loader=loader)
@@ -73,8 +74,10 @@ def load_yaml(text: str, source: str) -> Any:
         raise ValueError(f"{source} nests its values too deeply to be read") from None
     size = expanded_size(data)
     if size > MAX_EXPANDED_VALUES:
-        raise ValueError(f"{source} expands to more than {MAX_EXPANDED_VALUES} values through its aliases "
-                         f"(&anchor / *alias); write the values out without them")
+        raise ValueError(
+            f"{source} expands to more than {MAX_EXPANDED_VALUES} values through its aliases "
+            f"(&anchor / *alias); write the values out without them"
+        )
     return data
 
 

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import as_pose, as_points, positive, real_number, whole_number
+from .._validation import as_points, as_pose, positive, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from ..plans.ros_map import write_ros_map
 from ..se2 import compose, transform_points
@@ -131,9 +131,11 @@ class EnhancedOccupancyGrid:
             # The finest cell that fits: (w/r + 2)(h/r + 2) <= max_cells, solved for r (slightly rounded up).
             w, h = (float(v) for v in span + 2.0 * margin)
             finest = _finest_resolution(w, h, max_cells)
-            raise _core.PlanicpError(f"the occupancy grid over the plan ({w:.1f} x {h:.1f} m) at {self.resolution:g} m "
-                                     f"would need about {upper:.3g} cells (max_cells {max_cells}); give a resolution "
-                                     f"of at least {finest:.2g} m, a smaller margin or a larger max_cells")
+            raise _core.PlanicpError(
+                f"the occupancy grid over the plan ({w:.1f} x {h:.1f} m) at {self.resolution:g} m "
+                f"would need about {upper:.3g} cells (max_cells {max_cells}); give a resolution "
+                f"of at least {finest:.2g} m, a smaller margin or a larger max_cells"
+            )
         self._wall_samples = _wall_samples(plan, self.resolution)
         raster = plan.raster
         anchor = (raster.origin[0], raster.origin[1]) if raster is not None and raster.origin[2] == 0.0 else (0.0, 0.0)
@@ -150,8 +152,19 @@ class EnhancedOccupancyGrid:
         cols, rows = (int(v) for v in last - first + 1)
         origin = (anchor[0] + int(first[0]) * self.resolution, anchor[1] + int(first[1]) * self.resolution)
         m = self.model
-        self._grid = _Serialized(_core.LogOddsGrid(rows, cols, self.resolution, origin, _logit(m.p_hit),
-                                                   _logit(m.p_miss), _logit(m.p_min), _logit(m.p_max), max_cells))
+        self._grid = _Serialized(
+            _core.LogOddsGrid(
+                rows,
+                cols,
+                self.resolution,
+                origin,
+                _logit(m.p_hit),
+                _logit(m.p_miss),
+                _logit(m.p_min),
+                _logit(m.p_max),
+                max_cells,
+            )
+        )
         self._walls_for: tuple[tuple[int, int], tuple[float, float]] | None = None
         self._walls = np.zeros((rows, cols), dtype=bool)
 
@@ -220,9 +233,11 @@ class EnhancedOccupancyGrid:
 
         Args:
             ranges: (B,) metres.
-            angle_min, angle_increment: radians.
+            angle_min: angle of the first beam, radians.
+            angle_increment: angle between beams, radians.
             pose: T_map_base (x, y, yaw) at the scan's time.
-            range_min, range_max: the laser's valid interval, metres.
+            range_min: lower end of the laser's valid interval, metres.
+            range_max: upper end of the laser's valid interval, metres.
             laser_pose: (x, y, yaw) of the laser in the base frame.
         """
         r = np.asarray(ranges)
@@ -250,8 +265,9 @@ class EnhancedOccupancyGrid:
             misses = origin + directions[nothing] * self.no_return_range
         else:
             misses = np.zeros((0, 2))
-        self._grid.integrate((laser[0], laser[1]), np.ascontiguousarray(hits), np.ascontiguousarray(misses),
-                             self.max_range)
+        self._grid.integrate(
+            (laser[0], laser[1]), np.ascontiguousarray(hits), np.ascontiguousarray(misses), self.max_range
+        )
 
     # --- layers and states ----------------------------------------------------------------------
 
@@ -343,8 +359,10 @@ class EnhancedOccupancyGrid:
 
     def __repr__(self) -> str:
         rows, cols = self.shape
-        return (f"EnhancedOccupancyGrid({rows} x {cols} cells of {self.resolution:g} m, origin "
-                f"({self.origin[0]:.3f}, {self.origin[1]:.3f}), {self.scans} scans)")
+        return (
+            f"EnhancedOccupancyGrid({rows} x {cols} cells of {self.resolution:g} m, origin "
+            f"({self.origin[0]:.3f}, {self.origin[1]:.3f}), {self.scans} scans)"
+        )
 
 
 class _Serialized:
@@ -401,8 +419,9 @@ def _wall_samples(plan: PlanMap, resolution: float) -> NDArray[np.float64]:
     return raster.pixel_to_map(r, c)
 
 
-def _rasterise(points: NDArray[np.float64], origin: tuple[float, float], shape: tuple[int, int],
-               resolution: float) -> NDArray[np.bool_]:
+def _rasterise(
+    points: NDArray[np.float64], origin: tuple[float, float], shape: tuple[int, int], resolution: float
+) -> NDArray[np.bool_]:
     rows, cols = shape
     c = np.floor((points[:, 0] - origin[0]) / resolution).astype(np.int64)
     r = np.floor((points[:, 1] - origin[1]) / resolution).astype(np.int64)

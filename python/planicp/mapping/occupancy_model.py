@@ -25,7 +25,8 @@ class OccupancyModel:
         p_min, p_max: clamping bounds, so that a cell can change state after the world changes.
         free_threshold: a cell is FREE at or below this probability (default: one net miss).
         occupied_threshold: a cell is OCCUPIED at or above it (default: one net hit).
-        Defaults are OctoMap's sensor model (0.7, 0.4, clamped to [0.12, 0.97]).
+
+    Defaults are OctoMap's sensor model (0.7, 0.4, clamped to [0.12, 0.97]).
     """
 
     p_hit: float = 0.7

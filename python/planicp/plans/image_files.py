@@ -68,17 +68,21 @@ def check_image_file(path: Path, what: str) -> None:
     header gives more than `MAX_IMAGE_PIXELS` pixels; the message names the file and the fix."""
     size = path.stat().st_size
     if size > MAX_IMAGE_BYTES:
-        raise ValueError(f"{what} {path} is {size / 2**20:.0f} MiB; plan images are read up to "
-                         f"{MAX_IMAGE_BYTES >> 20} MiB: crop or scale the image down")
+        raise ValueError(
+            f"{what} {path} is {size / 2**20:.0f} MiB; plan images are read up to "
+            f"{MAX_IMAGE_BYTES >> 20} MiB: crop or scale the image down"
+        )
     dimensions = image_dimensions(path)
     if dimensions is None:
         return
     width, height = dimensions
     if width * height > MAX_IMAGE_PIXELS:
-        raise ValueError(f"{what} {path} is {_count(width)} x {_count(height)} pixels "
-                         f"({_count(width * height // 10**6)} million); plan images are read up to "
-                         f"{MAX_IMAGE_PIXELS / 1e6:.0f} million pixels: crop the image or scale it down (and its "
-                         f"resolution up by the same factor)")
+        raise ValueError(
+            f"{what} {path} is {_count(width)} x {_count(height)} pixels "
+            f"({_count(width * height // 10**6)} million); plan images are read up to "
+            f"{MAX_IMAGE_PIXELS / 1e6:.0f} million pixels: crop the image or scale it down (and its "
+            f"resolution up by the same factor)"
+        )
 
 
 def _count(n: int) -> str:
@@ -129,10 +133,10 @@ def _tiff_dimensions(data: bytes) -> tuple[int, int] | None:
     order = "<" if data[:2] == b"II" else ">"
     try:
         (offset,) = struct.unpack(order + "I", data[4:8])
-        (count,) = struct.unpack(order + "H", data[offset:offset + 2])
+        (count,) = struct.unpack(order + "H", data[offset : offset + 2])
         found: dict[int, int] = {}
         for i in range(count):
-            entry = data[offset + 2 + 12 * i: offset + 14 + 12 * i]
+            entry = data[offset + 2 + 12 * i : offset + 14 + 12 * i]
             tag, kind = struct.unpack(order + "HH", entry[:4])
             if tag in (256, 257):
                 value = struct.unpack(order + ("H" if kind == 3 else "I"), entry[8:10] if kind == 3 else entry[8:12])

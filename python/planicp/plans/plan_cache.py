@@ -78,8 +78,11 @@ def cached(folder: Path | None, key: str, build: Callable[[], Arrays]) -> tuple[
         folder.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".npz.tmp")
     except OSError as exc:
-        warnings.warn(f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared "
-                      f"without it (set PLANICP_CACHE_DIR to a writable folder, or pass cache=False)", stacklevel=3)
+        warnings.warn(
+            f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared "
+            f"without it (set PLANICP_CACHE_DIR to a writable folder, or pass cache=False)",
+            stacklevel=3,
+        )
         return arrays, False
     try:
         with os.fdopen(fd, "wb") as f:
@@ -87,8 +90,10 @@ def cached(folder: Path | None, key: str, build: Callable[[], Arrays]) -> tuple[
         os.replace(tmp, path)
     except OSError as exc:
         Path(tmp).unlink(missing_ok=True)
-        warnings.warn(f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared "
-                      f"without it", stacklevel=3)
+        warnings.warn(
+            f"plan cache {folder} cannot be written ({exc.strerror or exc}); the plan was prepared without it",
+            stacklevel=3,
+        )
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -27,6 +27,7 @@ def house_expo_files(folder: str | Path) -> list[Path]:
         raise ValueError(f"plan folder {path} holds no HouseExpo .json file")
     return files
 
+
 def load_plan(
     source: str | Path,
     *,

@@ -9,9 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import as_pose, as_points, positive, whole_number
-from .plan_cache import cache_key, cached, default_cache_dir
+from .._validation import as_points, as_pose, positive, whole_number
 from .image_files import check_image_file, require_regular_file
+from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments
@@ -57,8 +57,13 @@ class PlanMap:
 
     __slots__ = ("_native", "_points", "raster", "from_cache", "edge_detector")
 
-    def __init__(self, native: _core.PointMap, raster: PlanRaster | None = None, from_cache: bool = False,
-                 edge_detector: str | None = None) -> None:
+    def __init__(
+        self,
+        native: _core.PointMap,
+        raster: PlanRaster | None = None,
+        from_cache: bool = False,
+        edge_detector: str | None = None,
+    ) -> None:
         """Wraps a native map; use a `from_*` constructor instead."""
         if not isinstance(native, _core.PointMap):
             raise TypeError("use PlanMap.from_points(...) (or another from_* constructor) to build a PlanMap")
@@ -103,8 +108,9 @@ class PlanMap:
     def from_raster(cls, raster: PlanRaster, *, edge_detector: str = "boundary") -> PlanMap:
         """A plan from a wall raster: one point per pixel face of wall surface (see `PlanRaster`).
         The visibility raster uses 1.5 pixels."""
-        return cls._from_raster_points(raster, raster.surface_points(edge_detector), from_cache=False,
-                                       edge_detector=edge_detector)
+        return cls._from_raster_points(
+            raster, raster.surface_points(edge_detector), from_cache=False, edge_detector=edge_detector
+        )
 
     @classmethod
     def _from_raster_points(
@@ -141,8 +147,10 @@ class PlanMap:
             origin: (x, y, yaw) of the image's lower-left corner in the map frame, exactly as a
                 ROS map YAML's `origin`, so that a plan and a ROS map of it give the same points.
             threshold: grey level (1..255) below which a pixel is wall; None: Otsu's threshold.
-            open_px, close_px: morphological opening (removes specks up to that size) and closing
-                (bridges gaps up to that size) of the wall mask, in pixels; 0 = none.
+            open_px: morphological opening of the wall mask (removes specks up to that size), in
+                pixels; 0 = none.
+            close_px: morphological closing of the wall mask (bridges gaps up to that size), in
+                pixels; 0 = none.
             edge_detector: "auto", "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
             cache: True (default folder, see `planicp.plans.plan_cache`), False, or a folder.
 
@@ -160,26 +168,39 @@ class PlanMap:
         else:
             arr = np.ascontiguousarray(source)
             contents = [str(arr.dtype).encode(), str(arr.shape).encode(), arr.tobytes()]
-        params = {"resolution": res, "origin": pose, "threshold": threshold, "open_px": open_px,
-                  "close_px": close_px, "edge_detector": edge_detector}
+        params = {
+            "resolution": res,
+            "origin": pose,
+            "threshold": threshold,
+            "open_px": open_px,
+            "close_px": close_px,
+            "edge_detector": edge_detector,
+        }
 
         def build() -> dict[str, NDArray[Any]]:
             gray = load_gray(source)
-            walls = wall_mask(gray, threshold, open_px=open_px, close_px=close_px,
-                              what=f"plan image {source}" if isinstance(source, (str, Path)) else "plan image")
+            walls = wall_mask(
+                gray,
+                threshold,
+                open_px=open_px,
+                close_px=close_px,
+                what=f"plan image {source}" if isinstance(source, (str, Path)) else "plan image",
+            )
             return cls._prepared(PlanRaster(walls, res, pose), edge_detector)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("image", params, contents), build)
         return cls._from_cached(arrays, res, pose, hit, edge_detector)
 
     @classmethod
-    def _from_cached(cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool,
-                     edge_detector: str) -> PlanMap:
+    def _from_cached(
+        cls, arrays: dict[str, NDArray[Any]], resolution: float, origin: Any, hit: bool, edge_detector: str
+    ) -> PlanMap:
         rows, cols = (int(v) for v in arrays["shape"])
         walls = np.unpackbits(arrays["walls"], count=rows * cols).reshape(rows, cols).astype(bool)
         raster = PlanRaster(walls, resolution, origin)
-        return cls._from_raster_points(raster, arrays["points"], from_cache=hit, normals=arrays["normals"],
-                                       edge_detector=edge_detector)
+        return cls._from_raster_points(
+            raster, arrays["points"], from_cache=hit, normals=arrays["normals"], edge_detector=edge_detector
+        )
 
     @staticmethod
     def _prepared(raster: PlanRaster, edge_detector: str) -> dict[str, NDArray[Any]]:
@@ -187,12 +208,17 @@ class PlanMap:
         `from_points`), their wall normals (the slow part of a map build), and the packed wall
         raster."""
         native = _core.PointMap(raster.surface_points(edge_detector), 1.5 * raster.resolution)
-        return {"points": native.points, "normals": native.normals, "walls": np.packbits(raster.walls),
-                "shape": np.array(raster.walls.shape)}
+        return {
+            "points": native.points,
+            "normals": native.normals,
+            "walls": np.packbits(raster.walls),
+            "shape": np.array(raster.walls.shape),
+        }
 
     @classmethod
-    def from_ros_map(cls, yaml_path: str | Path, *, edge_detector: str | None = None,
-                     cache: CacheSetting = True) -> PlanMap:
+    def from_ros_map(
+        cls, yaml_path: str | Path, *, edge_detector: str | None = None, cache: CacheSetting = True
+    ) -> PlanMap:
         """A plan from a ROS map_server map (YAML + image), with map_server's semantics: occupied
         cells are walls; `resolution`, `origin`, `negate`, thresholds and `mode` from the YAML.
 
@@ -208,9 +234,15 @@ class PlanMap:
         `PlanRaster.surface_points` for the readings)."""
         ros_map = read_ros_map(yaml_path)
         reading = edge_detector or ros_map.edge_detector or "centres"
-        params = {"resolution": ros_map.resolution, "origin": ros_map.origin, "mode": ros_map.mode,
-                  "negate": ros_map.negate, "occupied": ros_map.occupied_thresh, "free": ros_map.free_thresh,
-                  "edge_detector": reading}
+        params = {
+            "resolution": ros_map.resolution,
+            "origin": ros_map.origin,
+            "mode": ros_map.mode,
+            "negate": ros_map.negate,
+            "occupied": ros_map.occupied_thresh,
+            "free": ros_map.free_thresh,
+            "edge_detector": reading,
+        }
         contents = [ros_map.image_path.read_bytes()]
 
         def build() -> dict[str, NDArray[Any]]:
@@ -234,14 +266,22 @@ class PlanMap:
         with np.errstate(over="ignore"):
             cells = float(np.prod(span / resolution + 3.0))  # the core's raster: a cell of margin either side
         if not cells <= VISIBILITY_RASTER_CELLS:
-            raise ValueError(f"walls spanning {span[0]:.6g} x {span[1]:.6g} m need a visibility raster of {cells:.3g} "
-                             f"cells at {resolution:g} m (limit {VISIBILITY_RASTER_CELLS}): use a larger spacing, or "
-                             f"check the plan's units")
+            raise ValueError(
+                f"walls spanning {span[0]:.6g} x {span[1]:.6g} m need a visibility raster of {cells:.3g} "
+                f"cells at {resolution:g} m (limit {VISIBILITY_RASTER_CELLS}): use a larger spacing, or "
+                f"check the plan's units"
+            )
         return cls.from_points(sample_segments(segs, step), resolution=resolution)
 
     @classmethod
-    def from_house_expo(cls, source: str | Path | dict[str, Any], spacing: float = 0.02, *,
-                        resolution: float | None = None, wall_thickness: float = 0.15) -> PlanMap:
+    def from_house_expo(
+        cls,
+        source: str | Path | dict[str, Any],
+        spacing: float = 0.02,
+        *,
+        resolution: float | None = None,
+        wall_thickness: float = 0.15,
+    ) -> PlanMap:
         """A plan from a HouseExpo JSON file (or its parsed dict), whose outline polygon `verts`
         (metres, map frame) bounds the free space.
 
@@ -336,8 +376,9 @@ class PlanMap:
         """(M, 2) wall points visible from `pose` within `max_range` (see `visible_indices`)."""
         return self._points[self.visible_indices(pose, max_range)]
 
-    def view_from(self, pose: Any, max_range: float = 30.0, directions: int = 1440,
-                  scan: Any = None, ranges: bool = True) -> _core.WallView:
+    def view_from(
+        self, pose: Any, max_range: float = 30.0, directions: int = 1440, scan: Any = None, ranges: bool = True
+    ) -> _core.WallView:
         """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
         `visible_indices`) and, in `directions` evenly spaced directions, the range to the wall
         point nearest the ray in its first wall cell of the visibility raster. (`OcclusionRule`
@@ -363,8 +404,13 @@ class PlanMap:
         """
         x, y, yaw = as_pose(pose, "pose")
         points = None if scan is None else as_points(scan, "scan", allow_empty=True)
-        return self._native.view_from((x, y, yaw), positive(max_range, "max_range", "metres"),
-                                      whole_number(directions, "directions", 8, 1 << 20), points, bool(ranges))
+        return self._native.view_from(
+            (x, y, yaw),
+            positive(max_range, "max_range", "metres"),
+            whole_number(directions, "directions", 8, 1 << 20),
+            points,
+            bool(ranges),
+        )
 
     def __len__(self) -> int:
         return len(self._native)

@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
 from .._validation import Pose, as_points, as_pose, brief, positive, whole_number
+from .image_files import MAX_IMAGE_PIXELS, check_image_file, require_regular_file
 
 
 def _cv2() -> Any:
@@ -143,10 +143,10 @@ class PlanRaster:
         walls[rows - 1 - r_up, c] = True
         return cls(walls, res, (float(lo[0]), float(lo[1]), 0.0))
 
-
     @classmethod
-    def from_free_polygon(cls, vertices: Any, resolution: float, wall_thickness: float = 0.15,
-                          margin: int = 2) -> PlanRaster:
+    def from_free_polygon(
+        cls, vertices: Any, resolution: float, wall_thickness: float = 0.15, margin: int = 2
+    ) -> PlanRaster:
         """Rasterises a floor given as the outline of its free space (a HouseExpo `verts` polygon):
         pixels inside the polygon are free; everything outside it within its bounding box grown by
         `wall_thickness` metres is wall (the outer walls, and the slits and notches an outline has
@@ -165,8 +165,10 @@ class PlanRaster:
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a too large raster, below
             span = (verts.max(axis=0) - verts.min(axis=0) + 2 * thickness) / res + 2 * margin + 2
         if not np.isfinite(span).all() or float(span[0]) * float(span[1]) > MAX_IMAGE_PIXELS:
-            raise ValueError(f"a raster of {span[0]:.3g} x {span[1]:.3g} pixels at {res} m is too large; use a "
-                             "coarser resolution or a thinner wall")
+            raise ValueError(
+                f"a raster of {span[0]:.3g} x {span[1]:.3g} pixels at {res} m is too large; use a "
+                "coarser resolution or a thinner wall"
+            )
         band = max(1, int(math.ceil(thickness / res - 1e-9)))
         pad = band + margin
         lo = verts.min(axis=0) - pad * res
@@ -183,7 +185,7 @@ class PlanRaster:
         for r0 in range(0, rows, block):
             ys = lo[1] + (np.arange(r0, min(rows, r0 + block)) + 0.5) * res
             centres = np.column_stack([np.tile(xs, len(ys)), np.repeat(ys, cols)])
-            inside[r0:r0 + len(ys)] = polygon.contains_points(centres).reshape(len(ys), cols)
+            inside[r0 : r0 + len(ys)] = polygon.contains_points(centres).reshape(len(ys), cols)
         if not inside.any():
             raise ValueError(f"the polygon covers no pixel at resolution {res} m (is it smaller than a pixel?)")
         walls = np.zeros((rows, cols), dtype=bool)
@@ -223,13 +225,13 @@ def _colour_to_gray(image: NDArray[Any]) -> NDArray[Any]:
     top = np.iinfo(image.dtype).max if image.dtype.kind in "ui" else 1.0
     rows = max(1, (1 << 22) // max(1, image.shape[1]))  # about 4 million pixels a block
     for start in range(0, image.shape[0], rows):
-        block = image[start:start + rows]
+        block = image[start : start + rows]
         gray = block[:, :, :3].astype(np.float64).mean(axis=2)
         if image.shape[2] == 4:
             alpha = block[:, :, 3]
             a = alpha.astype(np.float64) / (np.iinfo(alpha.dtype).max if alpha.dtype.kind in "ui" else 1.0)
             gray = gray * a + top * (1.0 - a)
-        out[start:start + rows] = gray  # truncated to the image's type, as astype does
+        out[start : start + rows] = gray  # truncated to the image's type, as astype does
     return out
 
 
@@ -321,9 +323,7 @@ def wall_mask(
     return np.asarray(mask, dtype=bool)
 
 
-def resolution_from_pixels(
-    pixel_a: tuple[float, float], pixel_b: tuple[float, float], distance_m: float
-) -> float:
+def resolution_from_pixels(pixel_a: tuple[float, float], pixel_b: tuple[float, float], distance_m: float) -> float:
     """Metres per pixel from two image positions (col, row; e.g. the ends of a wall or of the
     drawing's scale bar) and the real distance between them in metres."""
     a = np.asarray(pixel_a, dtype=np.float64)

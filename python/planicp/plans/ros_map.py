@@ -4,10 +4,11 @@ Keys (map_server / nav2_map_server): `image` (path, relative to the YAML), `reso
 pixel), `origin` ([x, y, yaw] of the lower-left pixel corner), `negate` (0/1), `occupied_thresh`,
 `free_thresh`, optional `mode` (trinary (default), scale, raw), and planicp's optional
 `planicp_edge_detector`: how `PlanMap.from_ros_map` reads the occupied cells by default (a plan
-drawn as walls of material and saved as a map says "boundary"; see `PlanRaster.surface_points`). A pixel value v in 0..255 becomes
-p = (255 - v) / 255 (v / 255 when negate); trinary: p > occupied_thresh -> 100, p < free_thresh
--> 0, else -1 (unknown); scale: as trinary but between the thresholds 99 * (p - free) / (occ -
-free); raw: the value v itself (0..100, anything else unknown). Image row 0 is the top of the map.
+drawn as walls of material and saved as a map says "boundary"; see `PlanRaster.surface_points`).
+A pixel value v in 0..255 becomes p = (255 - v) / 255 (v / 255 when negate); trinary:
+p > occupied_thresh -> 100, p < free_thresh -> 0, else -1 (unknown); scale: as trinary but between
+the thresholds 99 * (p - free) / (occ - free); raw: the value v itself (0..100, anything else
+unknown). Image row 0 is the top of the map.
 """
 
 from __future__ import annotations
@@ -21,9 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import MAX_COORDINATE, Pose, brief, one_line
-from .image_files import require_regular_file
 from ..io.atomic_files import write_atomically
 from ..io.yaml_documents import read_yaml_file
+from .image_files import require_regular_file
 from .plan_raster import PlanRaster, load_gray
 
 MODES = ("trinary", "scale", "raw")
@@ -116,8 +117,10 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     if not all(math.isfinite(v) for v in origin_pose):
         raise ValueError(f"ROS map {path}: origin must be finite, got {brief(origin)}")
     if max(abs(origin_pose[0]), abs(origin_pose[1])) > MAX_COORDINATE:
-        raise ValueError(f"ROS map {path}: origin {brief(origin)} is beyond +-{MAX_COORDINATE:.0e} m; planicp works "
-                         f"in metres: give the map's origin in a local frame")
+        raise ValueError(
+            f"ROS map {path}: origin {brief(origin)} is beyond +-{MAX_COORDINATE:.0e} m; planicp works "
+            f"in metres: give the map's origin in a local frame"
+        )
     occ = _number(meta, "occupied_thresh", path)
     free = _number(meta, "free_thresh", path)
     if not 0.0 <= free <= occ <= 1.0:
@@ -143,22 +146,37 @@ def read_ros_map(yaml_path: str | Path) -> RosMap:
     except OSError as exc:  # a name too long for the file system
         raise ValueError(f"ROS map {path}: image {brief(image)} cannot be opened: {exc.strerror or exc}") from None
     if absent:
-        raise FileNotFoundError(f"ROS map {path} names image {brief(image)}, which does not exist "
-                                f"({one_line(str(image_path), 300)})")
+        raise FileNotFoundError(
+            f"ROS map {path} names image {brief(image)}, which does not exist ({one_line(str(image_path), 300)})"
+        )
     require_regular_file(image_path, f"ROS map image (from {path})")
     gray = load_gray(image_path, what=f"ROS map image (from {path})")
     reach = math.hypot(*gray.shape) * resolution  # farthest a pixel corner lies from the origin, metres
     if max(abs(origin_pose[0]), abs(origin_pose[1])) + reach > MAX_COORDINATE:
-        raise ValueError(f"ROS map {path}: its {gray.shape[1]} x {gray.shape[0]} pixels at {resolution:g} m from "
-                         f"origin {brief(origin)} reach beyond +-{MAX_COORDINATE:.0e} m; check resolution (metres per "
-                         f"pixel) and origin")
+        raise ValueError(
+            f"ROS map {path}: its {gray.shape[1]} x {gray.shape[0]} pixels at {resolution:g} m from "
+            f"origin {brief(origin)} reach beyond +-{MAX_COORDINATE:.0e} m; check resolution (metres per "
+            f"pixel) and origin"
+        )
     occupancy = occupancy_from_gray(gray, mode, bool(negate), occ, free)
     edge_detector = meta.get(EDGE_DETECTOR_KEY)
     if edge_detector is not None and (not isinstance(edge_detector, str) or edge_detector not in EDGE_DETECTORS):
-        raise ValueError(f"ROS map {path}: {EDGE_DETECTOR_KEY} must be one of {EDGE_DETECTORS}, got {brief(edge_detector)} "
-                         f"(or leave it out: occupied cells are then read as an occupancy grid's)")
-    return RosMap(path, image_path, occupancy, resolution, origin_pose, mode, bool(negate), occ, free,  # type: ignore[arg-type]
-                  edge_detector)
+        raise ValueError(
+            f"ROS map {path}: {EDGE_DETECTOR_KEY} must be one of {EDGE_DETECTORS}, got {brief(edge_detector)} "
+            f"(or leave it out: occupied cells are then read as an occupancy grid's)"
+        )
+    return RosMap(
+        path,
+        image_path,
+        occupancy,
+        resolution,
+        origin_pose,  # type: ignore[arg-type]
+        mode,
+        bool(negate),
+        occ,
+        free,
+        edge_detector,
+    )
 
 
 def occupancy_from_gray(
@@ -226,4 +244,3 @@ def write_ros_map(
     write_atomically(pgm_path, header + image.tobytes())
     write_atomically(path, meta.encode())
     return path
-

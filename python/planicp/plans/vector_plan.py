@@ -3,7 +3,7 @@
 A plan arrives as line work: a HouseExpo outline polygon (JSON) or a CAD drawing (DXF). Both become
 wall segments, an (M, 2, 2) float64 array of [[x0, y0], [x1, y1]] in metres in the map frame
 (REP-103: x right/forward, y up/left), and `sample_segments` turns segments into the wall points
-the localizer aligns scans to::
+the localizer aligns scans to:
 
     segments = planicp.plans.vector_plan.dxf_segments("floor2.dxf", layers=["WALLS"])
     plan = planicp.PlanMap.from_points(planicp.plans.vector_plan.sample_segments(segments, spacing=0.02))
@@ -254,8 +254,10 @@ def dxf_segments(
         entities = [(entity, str(entity.dxf.layer), str(entity.dxftype())) for entity in msp]
         existing = {str(layer.dxf.name) for layer in doc.layers}
     except _DAMAGED as exc:
-        raise ValueError(f"{name} could not be read as DXF: its header, layers or modelspace are damaged "
-                         f"({type(exc).__name__}: {one_line(str(exc))})") from None
+        raise ValueError(
+            f"{name} could not be read as DXF: its header, layers or modelspace are damaged "
+            f"({type(exc).__name__}: {one_line(str(exc))})"
+        ) from None
     if isinstance(code, bool) or not isinstance(code, int) or code not in _METRES_PER_UNIT:
         raise ValueError(f"{name} has unknown drawing units $INSUNITS = {brief(code)}")
     scale = _METRES_PER_UNIT[code]
@@ -278,8 +280,10 @@ def dxf_segments(
             polyline = _entity_polyline(entity, tol_units)
         except _DAMAGED as exc:  # besides the ValueErrors here: a value ezdxf's recovery left unset (a None point)
             reason = str(exc) if type(exc) is ValueError else f"damaged ({type(exc).__name__}: {exc})"
-            raise ValueError(f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
-                             f"{one_line(layer, 60)}: {one_line(reason)}") from None
+            raise ValueError(
+                f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
+                f"{one_line(layer, 60)}: {one_line(reason)}"
+            ) from None
         if polyline is not None:
             pieces.append(np.stack([polyline[:-1], polyline[1:]], axis=1))
     if not pieces:
@@ -446,8 +450,10 @@ def _arc_points(
     max_step = max(2.0 * math.acos(max(-1.0, 1.0 - tol / radius)), 2.0 * math.sqrt(2.0 * tol / radius))
     n = max(1, math.ceil(abs(sweep) / max_step))
     if n > MAX_ARC_POINTS:
-        raise ValueError(f"an arc of radius {radius:.3g} drawing units would take {n} points to follow within "
-                         f"{tol:.3g}; check the drawing's units (or the entity: a circle that large is no wall)")
+        raise ValueError(
+            f"an arc of radius {radius:.3g} drawing units would take {n} points to follow within "
+            f"{tol:.3g}; check the drawing's units (or the entity: a circle that large is no wall)"
+        )
     if abs(sweep) >= 2.0 * math.pi:
         n = max(n, 3)
     angles = math.atan2(start[1] - center[1], start[0] - center[0]) + sweep * np.arange(n + 1) / n

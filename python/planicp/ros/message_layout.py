@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..se2 import quaternion_to_yaw, yaw_to_quaternion
+from ..se2 import quaternion_to_yaw
 
 PLANAR_INDICES = (0, 1, 5)
 """Rows/columns of x, y and yaw in the 6x6 covariance of geometry_msgs."""

@@ -71,8 +71,9 @@ class ScanInput:
         if self.angle_increment == 0.0:
             raise ValueError("angle_increment must not be 0 (every beam would point the same way)")
         if not 0.0 <= self.range_min < self.range_max:
-            raise ValueError(f"need 0 <= range_min < range_max, got range_min={self.range_min}, "
-                             f"range_max={self.range_max}")
+            raise ValueError(
+                f"need 0 <= range_min < range_max, got range_min={self.range_min}, range_max={self.range_max}"
+            )
         object.__setattr__(self, "laser_pose", as_pose(self.laser_pose, "laser_pose"))
         if self.angle_max is not None:
             angle_max = real_number(self.angle_max, "angle_max")
@@ -83,7 +84,8 @@ class ScanInput:
             if expected < 1.0 - BEAM_COUNT_SLACK or abs(len(ranges) - expected) > BEAM_COUNT_SLACK + 1e-6:
                 raise ValueError(
                     f"ranges has {len(ranges)} beams but angle_min {self.angle_min:.6f} to angle_max "
-                    f"{angle_max:.6f} rad at angle_increment {self.angle_increment:.6g} rad makes {expected:.1f}")
+                    f"{angle_max:.6f} rad at angle_increment {self.angle_increment:.6g} rad makes {expected:.1f}"
+                )
 
 
 @dataclass(frozen=True, eq=False)

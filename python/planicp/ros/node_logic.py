@@ -21,13 +21,13 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose
+from ..laser_scan import scan_to_points
 from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..mapping.occupancy_grid_message import OccupancyGridMessage
-from ..laser_scan import scan_to_points
-from ..tracking.localizer import Localizer
-from ..tracking.localizer import _covariance as validated_covariance
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, matrix_to_pose
+from ..tracking.localizer import Localizer
+from ..tracking.localizer import _covariance as validated_covariance
 from .message_layout import covariance_from_6x6
 from .node_diagnostics import ERROR, OK, WARN, NodeDiagnostics
 from .node_io import PoseOutput, ScanInput, as_stamp
@@ -70,8 +70,9 @@ class PlanicpNodeCore:
             raise TypeError(f"settings must be NodeSettings, got {type(self.settings).__name__}")
         s = self.settings
         self.plan = plan
-        self.localizer = Localizer(plan, s.initial_pose, s.icp_config(), gate=s.acceptance_gate(),
-                                   initial_covariance=s.initial_covariance())
+        self.localizer = Localizer(
+            plan, s.initial_pose, s.icp_config(), gate=s.acceptance_gate(), initial_covariance=s.initial_covariance()
+        )
         self._odometry = OdometryBuffer(s.odometry_span)
         self._eog = EnhancedOccupancyGrid(plan, s.eog_resolution) if s.eog_topic else None
         self._pending: ScanInput | None = None
@@ -79,9 +80,22 @@ class PlanicpNodeCore:
         self._last_stamp: float | None = None
         self._last: PoseOutput | None = None
         self._recent: deque[tuple[bool, float]] = deque(maxlen=DIAGNOSTIC_WINDOW)
-        self._counts = dict.fromkeys(("scans_received", "scans_processed", "accepted", "rejected", "malformed_scans",
-                                      "malformed_odometry", "malformed_initial_poses", "scans_without_odometry",
-                                      "scans_without_laser_pose", "out_of_order", "failed_updates"), 0)
+        self._counts = dict.fromkeys(
+            (
+                "scans_received",
+                "scans_processed",
+                "accepted",
+                "rejected",
+                "malformed_scans",
+                "malformed_odometry",
+                "malformed_initial_poses",
+                "scans_without_odometry",
+                "scans_without_laser_pose",
+                "out_of_order",
+                "failed_updates",
+            ),
+            0,
+        )
         self._last_reason = ""
         self._last_problem = ""
         self._last_failed = False  # the localizer refused the last scan it was given
@@ -145,25 +159,29 @@ class PlanicpNodeCore:
         with self._lock:
             self._counts["scans_received"] += 1
             try:
-                scan = ScanInput(stamp, ranges, angle_min, angle_increment, range_min, range_max, laser_pose,
-                                 angle_max)
+                scan = ScanInput(stamp, ranges, angle_min, angle_increment, range_min, range_max, laser_pose, angle_max)
             except (TypeError, ValueError) as exc:
                 self._problem("malformed_scans", f"scan refused: {exc}")
                 raise
             if self._last_stamp is not None and scan.stamp <= self._last_stamp:
-                self._problem("out_of_order", f"scan at {scan.stamp:.3f} s is not newer than the last one "
-                                              f"({self._last_stamp:.3f} s): dropped")
+                self._problem(
+                    "out_of_order",
+                    f"scan at {scan.stamp:.3f} s is not newer than the last one ({self._last_stamp:.3f} s): dropped",
+                )
                 return []
             oldest, newest = self._odometry.oldest, self._odometry.newest
             if oldest is not None and scan.stamp < oldest:
-                self._problem("scans_without_odometry", f"scan at {scan.stamp:.3f} s is older than the odometry "
-                                                        f"kept (from {oldest:.3f} s): dropped")
+                self._problem(
+                    "scans_without_odometry",
+                    f"scan at {scan.stamp:.3f} s is older than the odometry kept (from {oldest:.3f} s): dropped",
+                )
                 return []
             if newest is None or scan.stamp > newest:
                 if self._pending is not None:
-                    self._problem("scans_without_odometry", f"no odometry reached the scan at "
-                                                            f"{self._pending.stamp:.3f} s before the next scan: "
-                                                            f"dropped")
+                    self._problem(
+                        "scans_without_odometry",
+                        f"no odometry reached the scan at {self._pending.stamp:.3f} s before the next scan: dropped",
+                    )
                 self._pending = scan
                 return []
             return [self._process(scan)]
@@ -230,24 +248,52 @@ class PlanicpNodeCore:
             if lost:
                 level, message = ERROR, "lost: the plan no longer explains the scans; searching the plan"
             elif provisional:
-                level, message = WARN, ("provisional: tracking a place found near where track was lost, "
-                                        "while the search of the whole plan goes on")
+                level, message = (
+                    WARN,
+                    (
+                        "provisional: tracking a place found near where track was lost, "
+                        "while the search of the whole plan goes on"
+                    ),
+                )
             elif self._last_failed:
                 level, message = WARN, f"the last scan was refused: {self._last_problem}"
             elif last is None:
                 level, message = WARN, "waiting for scans and odometry"
             elif share < MIN_ACCEPTED_SHARE:
-                level, message = WARN, (f"only {100 * share:.0f} % of the last {len(recent)} scans accepted "
-                                        f"(last: {self._last_reason})")
+                level, message = (
+                    WARN,
+                    (f"only {100 * share:.0f} % of the last {len(recent)} scans accepted (last: {self._last_reason})"),
+                )
             else:
-                level, message = OK, (f"tracking: {100 * share:.0f} % of the last {len(recent)} scans "
-                                      f"accepted, inlier ratio {mean_ratio:.2f}")
+                level, message = (
+                    OK,
+                    (
+                        f"tracking: {100 * share:.0f} % of the last {len(recent)} scans "
+                        f"accepted, inlier ratio {mean_ratio:.2f}"
+                    ),
+                )
             return NodeDiagnostics(
-                level, message, c["scans_received"], c["scans_processed"], c["accepted"], c["rejected"],
-                c["malformed_scans"], c["malformed_odometry"], c["malformed_initial_poses"],
-                c["scans_without_odometry"], c["scans_without_laser_pose"], c["out_of_order"],
-                last.inlier_ratio if last is not None else math.nan, share, mean_ratio, lost, provisional,
-                self._last_reason, self._last_problem, c["failed_updates"])
+                level,
+                message,
+                c["scans_received"],
+                c["scans_processed"],
+                c["accepted"],
+                c["rejected"],
+                c["malformed_scans"],
+                c["malformed_odometry"],
+                c["malformed_initial_poses"],
+                c["scans_without_odometry"],
+                c["scans_without_laser_pose"],
+                c["out_of_order"],
+                last.inlier_ratio if last is not None else math.nan,
+                share,
+                mean_ratio,
+                lost,
+                provisional,
+                self._last_reason,
+                self._last_problem,
+                c["failed_updates"],
+            )
 
     # --- internals -------------------------------------------------------------------------------
 
@@ -255,8 +301,14 @@ class PlanicpNodeCore:
         """Localizes one scan whose stamp the odometry covers."""
         odom = self._odometry.at(scan.stamp)
         assert odom is not None, "the caller checked that the odometry covers the scan"
-        points = scan_to_points(scan.ranges, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max,
-                                sensor_pose=scan.laser_pose)
+        points = scan_to_points(
+            scan.ranges,
+            scan.angle_min,
+            scan.angle_increment,
+            scan.range_min,
+            scan.range_max,
+            sensor_pose=scan.laser_pose,
+        )
         if self._reset is not None:
             start, cov, odom_ref = self._reset
             self._reset = None
@@ -274,15 +326,22 @@ class PlanicpNodeCore:
         self._counts["accepted" if estimate.accepted else "rejected"] += 1
         if not estimate.accepted:
             self._last_reason = estimate.reason
-        output = PoseOutput(scan.stamp, estimate.pose, estimate.covariance, matrix_to_pose(estimate.T_map_odom),
-                            odom, estimate)
+        output = PoseOutput(
+            scan.stamp, estimate.pose, estimate.covariance, matrix_to_pose(estimate.T_map_odom), odom, estimate
+        )
         self._recent.append((estimate.accepted, output.inlier_ratio))
         self._last = output
         if self._eog is not None and not estimate.lost:
             try:
-                self._eog.integrate_ranges(scan.ranges, scan.angle_min, scan.angle_increment, estimate.pose,
-                                           range_min=scan.range_min, range_max=scan.range_max,
-                                           laser_pose=scan.laser_pose)
+                self._eog.integrate_ranges(
+                    scan.ranges,
+                    scan.angle_min,
+                    scan.angle_increment,
+                    estimate.pose,
+                    range_min=scan.range_min,
+                    range_max=scan.range_max,
+                    laser_pose=scan.laser_pose,
+                )
             except _core.PlanicpError as exc:  # the grid would outgrow its cell limit
                 self._last_problem = f"scan not added to the enhanced occupancy grid: {exc}"
         return output

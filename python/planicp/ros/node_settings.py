@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .._validation import Pose, as_pose, positive, real_number, unknown_fields
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.icp_config import IcpConfig
 from ..plans.plan_loading import load_plan
 from ..plans.plan_map import PlanMap
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
 
 DEFAULT_PLAN = "default"
 """The `plan` value that selects the office plan shipped with planicp (`planicp.plans.default_plan`)."""
@@ -85,8 +85,15 @@ class NodeSettings:
         if self.resolution is not None:
             object.__setattr__(self, "resolution", positive(self.resolution, "resolution", "metres per pixel"))
         object.__setattr__(self, "origin", as_pose(self.origin, "origin"))
-        for name in ("scan_topic", "odom_topic", "initial_pose_topic", "pose_topic", "map_frame", "odom_frame",
-                     "base_frame"):
+        for name in (
+            "scan_topic",
+            "odom_topic",
+            "initial_pose_topic",
+            "pose_topic",
+            "map_frame",
+            "odom_frame",
+            "base_frame",
+        ):
             value = getattr(self, name)
             if not isinstance(value, str) or not value.strip():
                 raise ValueError(f"{name} must be a non-empty name, got {value!r}")
@@ -94,8 +101,10 @@ class NodeSettings:
             if not isinstance(getattr(self, name), str):
                 raise TypeError(f"{name} must be a topic name or '', got {getattr(self, name)!r}")
         if len({self.map_frame, self.odom_frame, self.base_frame}) != 3:
-            raise ValueError(f"map_frame, odom_frame and base_frame must differ, got {self.map_frame!r}, "
-                             f"{self.odom_frame!r}, {self.base_frame!r}")
+            raise ValueError(
+                f"map_frame, odom_frame and base_frame must differ, got {self.map_frame!r}, "
+                f"{self.odom_frame!r}, {self.base_frame!r}"
+            )
         object.__setattr__(self, "initial_pose", as_pose(self.initial_pose, "initial_pose"))
         std = as_pose(self.initial_std, "initial_std")
         if min(std) < 0.0:

@@ -11,7 +11,6 @@ import numpy as np
 from .._validation import Pose, as_pose, real_number
 from ..io.pose_interpolation import interpolate_poses
 
-
 MAX_SAMPLES = 20_000
 """Most samples kept whatever their stamps (5 s of odometry at 4 kHz); the oldest go first."""
 
@@ -93,8 +92,11 @@ class OdometryBuffer:
         """T_odom_base at `stamp`, interpolated; None outside the kept samples."""
         if not self.covers(stamp):
             return None
-        poses, inside = interpolate_poses(np.fromiter(self._times, dtype=np.float64, count=len(self._times)),
-                                          np.array(self._poses, dtype=np.float64), np.array([stamp]))
+        poses, inside = interpolate_poses(
+            np.fromiter(self._times, dtype=np.float64, count=len(self._times)),
+            np.array(self._poses, dtype=np.float64),
+            np.array([stamp]),
+        )
         if not inside[0]:
             return None
         row = poses[0]

@@ -87,18 +87,23 @@ class PlanicpRosNode:
             self.eog_pub = rospy.Publisher(settings.eog_topic, nav.OccupancyGrid, queue_size=1, latch=True)
             self._eog_timer = rospy.Timer(rospy.Duration(1.0 / settings.eog_rate), self._publish_eog)
         if settings.diagnostics_rate > 0.0:
-            self._diagnostics_timer = rospy.Timer(rospy.Duration(1.0 / settings.diagnostics_rate),
-                                                  self._publish_diagnostics)
+            self._diagnostics_timer = rospy.Timer(
+                rospy.Duration(1.0 / settings.diagnostics_rate), self._publish_diagnostics
+            )
 
         self._odom_sub = rospy.Subscriber(settings.odom_topic, nav.Odometry, self._on_odometry, queue_size=200)
-        self._scan_sub = rospy.Subscriber(settings.scan_topic, self.sensor_msgs.LaserScan, self._on_scan,
-                                          queue_size=5, buff_size=1 << 20)
-        self._initial_sub = rospy.Subscriber(settings.initial_pose_topic, g.PoseWithCovarianceStamped,
-                                             self._on_initial_pose, queue_size=2)
-        rospy.loginfo(f"{NODE_NAME}: plan {settings.plan} ({len(self.core.plan)} wall points), scans from "
-                      f"{self._scan_sub.resolved_name}, odometry from {self._odom_sub.resolved_name}, "
-                      f"publishing {self.pose_pub.resolved_name}"
-                      + (f" and tf {settings.map_frame} -> {settings.odom_frame}" if settings.publish_tf else ""))
+        self._scan_sub = rospy.Subscriber(
+            settings.scan_topic, self.sensor_msgs.LaserScan, self._on_scan, queue_size=5, buff_size=1 << 20
+        )
+        self._initial_sub = rospy.Subscriber(
+            settings.initial_pose_topic, g.PoseWithCovarianceStamped, self._on_initial_pose, queue_size=2
+        )
+        rospy.loginfo(
+            f"{NODE_NAME}: plan {settings.plan} ({len(self.core.plan)} wall points), scans from "
+            f"{self._scan_sub.resolved_name}, odometry from {self._odom_sub.resolved_name}, "
+            f"publishing {self.pose_pub.resolved_name}"
+            + (f" and tf {settings.map_frame} -> {settings.odom_frame}" if settings.publish_tf else "")
+        )
 
     # --- callbacks -------------------------------------------------------------------------------
 
@@ -112,9 +117,16 @@ class PlanicpRosNode:
             sign = -1.0 if flipped else 1.0
             stamp = msg.header.stamp.to_sec()
             self._remember(stamp, msg.header.stamp)
-            outputs = self.core.add_scan(stamp, msg.ranges, sign * msg.angle_min, sign * msg.angle_increment,
-                                         msg.range_min, msg.range_max, angle_max=sign * msg.angle_max,
-                                         laser_pose=laser_pose)
+            outputs = self.core.add_scan(
+                stamp,
+                msg.ranges,
+                sign * msg.angle_min,
+                sign * msg.angle_increment,
+                msg.range_min,
+                msg.range_max,
+                angle_max=sign * msg.angle_max,
+                laser_pose=laser_pose,
+            )
         except (TypeError, ValueError) as exc:
             self.rospy.logwarn_throttle_identical(5.0, f"{NODE_NAME}: {exc}")
             return
@@ -142,13 +154,15 @@ class PlanicpRosNode:
         try:
             frame = msg.header.frame_id.lstrip("/")
             if frame not in ("", self.settings.map_frame):
-                raise ValueError(f"initial pose is in frame {frame!r}, not the map frame "
-                                 f"{self.settings.map_frame!r}: ignored")
+                raise ValueError(
+                    f"initial pose is in frame {frame!r}, not the map frame {self.settings.map_frame!r}: ignored"
+                )
             p, q = msg.pose.pose.position, msg.pose.pose.orientation
             pose = (p.x, p.y, quaternion_to_yaw(q.x, q.y, q.z, q.w))
             self.core.set_initial_pose(msg.header.stamp.to_sec(), pose, list(msg.pose.covariance))
-            self.rospy.loginfo(f"{NODE_NAME}: initial pose x={pose[0]:.3f} m y={pose[1]:.3f} m "
-                               f"yaw={math.degrees(pose[2]):.1f} deg")
+            self.rospy.loginfo(
+                f"{NODE_NAME}: initial pose x={pose[0]:.3f} m y={pose[1]:.3f} m yaw={math.degrees(pose[2]):.1f} deg"
+            )
         except (TypeError, ValueError) as exc:
             self.rospy.logwarn(f"{NODE_NAME}: {exc}")
         except Exception:
@@ -206,8 +220,7 @@ class PlanicpRosNode:
             if grid is not None and self.eog_pub is not None:
                 self.eog_pub.publish(self._grid_message(grid, self.rospy.Time.now()))
         except Exception:
-            self.rospy.logerr(f"{NODE_NAME}: publishing the enhanced occupancy grid failed:\n"
-                              f"{traceback.format_exc()}")
+            self.rospy.logerr(f"{NODE_NAME}: publishing the enhanced occupancy grid failed:\n{traceback.format_exc()}")
 
     def _publish_diagnostics(self, _event: Any = None) -> None:
         try:
@@ -240,19 +253,25 @@ class PlanicpRosNode:
         if known is not None:
             return known
         try:
-            t = self.tf_buffer.lookup_transform(self.settings.base_frame, frame, self.rospy.Time(0),
-                                                self.rospy.Duration.from_sec(LASER_LOOKUP_TIMEOUT))
+            t = self.tf_buffer.lookup_transform(
+                self.settings.base_frame, frame, self.rospy.Time(0), self.rospy.Duration.from_sec(LASER_LOOKUP_TIMEOUT)
+            )
         except Exception as exc:  # tf2 raises its own LookupException, ExtrapolationException, ...
             self.core.drop_scan_without_laser_pose(frame, f"no tf {self.settings.base_frame} -> {frame}: {exc}")
-            self.rospy.logwarn_throttle(5.0, f"{NODE_NAME}: no transform {self.settings.base_frame} -> {frame} "
-                                             f"({exc}); set the laser_pose parameter or publish it")
+            self.rospy.logwarn_throttle(
+                5.0,
+                f"{NODE_NAME}: no transform {self.settings.base_frame} -> {frame} "
+                f"({exc}); set the laser_pose parameter or publish it",
+            )
             return None
         tr, q = t.transform.translation, t.transform.rotation
         mount = planar_mount((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
         self._laser_mounts[frame] = mount
-        self.rospy.loginfo(f"{NODE_NAME}: laser {frame} at x={mount[0][0]:.3f} y={mount[0][1]:.3f} "
-                           f"yaw={math.degrees(mount[0][2]):.1f} deg in {self.settings.base_frame}"
-                           + (" (upside down)" if mount[1] else ""))
+        self.rospy.loginfo(
+            f"{NODE_NAME}: laser {frame} at x={mount[0][0]:.3f} y={mount[0][1]:.3f} "
+            f"yaw={math.degrees(mount[0][2]):.1f} deg in {self.settings.base_frame}"
+            + (" (upside down)" if mount[1] else "")
+        )
         return mount
 
     def _remember(self, stamp: float, ros_stamp: Any) -> None:
@@ -267,8 +286,10 @@ class PlanicpRosNode:
             key = f"{what}:{frame}:{child}"
             if key not in self._warned:
                 self._warned.add(key)
-                self.rospy.logwarn(f"{NODE_NAME}: {what} is {frame} -> {child}, the parameters say {expected} -> "
-                                   f"{expected_child}; using it as {expected} -> {expected_child}")
+                self.rospy.logwarn(
+                    f"{NODE_NAME}: {what} is {frame} -> {child}, the parameters say {expected} -> "
+                    f"{expected_child}; using it as {expected} -> {expected_child}"
+                )
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -39,10 +39,20 @@ from .ros_imports import import_ros, start_node
 NODE_NAME = "planicp_sim_drive"
 
 DEFAULTS: dict[str, Any] = {
-    "plan": "default", "resolution": None, "origin": (0.0, 0.0, 0.0), "duration": 60.0, "seed": 0,
-    "start_delay": 1.0, "scan_topic": "scan", "odom_topic": "odom", "truth_topic": "sim/ground_truth",
+    "plan": "default",
+    "resolution": None,
+    "origin": (0.0, 0.0, 0.0),
+    "duration": 60.0,
+    "seed": 0,
+    "start_delay": 1.0,
+    "scan_topic": "scan",
+    "odom_topic": "odom",
+    "truth_topic": "sim/ground_truth",
     "initial_pose_topic": "initialpose",
-    "map_frame": "map", "odom_frame": "odom", "base_frame": "base_link", "laser_frame": "laser",
+    "map_frame": "map",
+    "odom_frame": "odom",
+    "base_frame": "base_link",
+    "laser_frame": "laser",
 }
 
 
@@ -170,8 +180,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TypeError, ValueError, FileNotFoundError) as exc:
         rospy.logfatal(f"{NODE_NAME}: {exc}")
         return 2
-    rospy.loginfo(f"{NODE_NAME}: simulated {recording.times[-1]:.1f} s of drive ({len(recording.times)} scans) "
-                  f"in {time.monotonic() - began:.1f} s; playing it")
+    rospy.loginfo(
+        f"{NODE_NAME}: simulated {recording.times[-1]:.1f} s of drive ({len(recording.times)} scans) "
+        f"in {time.monotonic() - began:.1f} s; playing it"
+    )
     play(recording, params)
     if not rospy.is_shutdown():
         rospy.loginfo(f"{NODE_NAME}: drive finished")

@@ -4,21 +4,21 @@ Reproduces the thesis set-up: an EtaBot-class differential-drive robot with 100 
 through a furnished floor; an error generator adds +5e-5 m and +5e-5 rad to every odometry message, so
 odometry drifts while plan-based localization does not. Which file holds what:
 
-* :mod:`.floor` -- :class:`Floor`, a raster of walls (the plan) and clutter (what the plan does not show);
-* :mod:`.floor_generation` -- :func:`generate_floor`: seeded furnished floors in the :data:`LAYOUTS`
-  ``"office"``, ``"hall"`` and ``"diagonal"``, drawn on the rasteriser of :mod:`.floor_canvas`;
-* :mod:`.simulated_lidar` -- :func:`simulate_ranges` / :func:`simulate_scan`: LaserScan ranges in a floor
-  (the native ray caster, ``planicp._core.OccupancyGrid``) and :func:`ranges_to_points`;
-* :mod:`.pose_perturbation` -- :func:`perturb_pose`, a guess a given distance and angle off;
-* :mod:`.world` -- :class:`World`: a plan raster furnished with seeded furniture and walking people;
-* :mod:`.crowd` -- people standing around the robot, placed anew for every scan;
-* :mod:`.diff_drive` -- :class:`DiffDriveLimits`, :class:`DiffDriveState`, exact arc integration :func:`step`;
-* :mod:`.route_planner` -- clearance-inflated A* routes (:func:`plan_route`) and random tours (:func:`tour`);
-* :mod:`.waypoint_follower` -- the pure-pursuit :class:`WaypointFollower`;
-* :mod:`.odometry` -- :class:`Odometry` with :class:`OdometryNoise` and the thesis' :class:`ErrorGenerator`;
-* :mod:`.drive` -- :func:`simulate_drive` returning a ground-truth :class:`Trajectory`;
-* :mod:`.experiment` -- :func:`run_experiment`: the drive, its scans and odometry fed to a ``Localizer``;
-  :func:`replay` runs the recorded scans through other settings.
+* `floor` -- `Floor`, a raster of walls (the plan) and clutter (what the plan does not show);
+* `floor_generation` -- `generate_floor`: seeded furnished floors in the `LAYOUTS`
+  ``"office"``, ``"hall"`` and ``"diagonal"``, drawn on the rasteriser of `floor_canvas`;
+* `simulated_lidar` -- `simulate_ranges` / `simulate_scan`: LaserScan ranges in a floor
+  (the native ray caster, ``planicp._core.OccupancyGrid``) and `ranges_to_points`;
+* `pose_perturbation` -- `perturb_pose`, a guess a given distance and angle off;
+* `world` -- `World`: a plan raster furnished with seeded furniture and walking people;
+* `crowd` -- people standing around the robot, placed anew for every scan;
+* `diff_drive` -- `DiffDriveLimits`, `DiffDriveState`, exact arc integration `step`;
+* `route_planner` -- clearance-inflated A* routes (`plan_route`) and random tours (`tour`);
+* `waypoint_follower` -- the pure-pursuit `WaypointFollower`;
+* `odometry` -- `Odometry` with `OdometryNoise` and the thesis' `ErrorGenerator`;
+* `drive` -- `simulate_drive` returning a ground-truth `Trajectory`;
+* `experiment` -- `run_experiment`: the drive, its scans and odometry fed to a ``Localizer``;
+  `replay` runs the recorded scans through other settings.
 
 ``planicp.synthetic`` is this package under the name the floors and the LIDAR had before they moved here.
 

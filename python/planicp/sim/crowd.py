@@ -18,8 +18,8 @@ from .. import _core
 from .._validation import positive, whole_number
 from ..laser_scan import scan_to_points
 from ..se2 import compose
-from .floor import Floor
 from .experiment import LidarModel, Recording
+from .floor import Floor
 
 
 @dataclass(frozen=True)
@@ -67,8 +67,9 @@ class Crowd:
         return discs
 
 
-def crowded_scans(recording: Recording, floor: Floor, lidar: LidarModel, crowd: Crowd,
-                  seed: int = 0) -> tuple[list[NDArray[np.float64]], NDArray[np.float64]]:
+def crowded_scans(
+    recording: Recording, floor: Floor, lidar: LidarModel, crowd: Crowd, seed: int = 0
+) -> tuple[list[NDArray[np.float64]], NDArray[np.float64]]:
     """The scans of `recording` cast again from its true poses through `floor` (the world's walls
     and clutter) with `crowd` around the robot, seeded by `seed`. Returns the scans (base-frame
     points, metres, as `Recording.scans`) and, per scan, the share of beams a person blocked."""
@@ -84,6 +85,14 @@ def crowded_scans(recording: Recording, floor: Floor, lidar: LidarModel, crowd: 
         discs = crowd.place(rng, (float(truth[0]), float(truth[1])), floor) if crowd.people else None
         ranges = grid.cast(*args, lidar.range_sigma, 0.0, noise_seed, discs)
         blocked[k] = np.mean(ranges < clear - 0.05)
-        scans.append(scan_to_points(ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max,
-                                    sensor_pose=lidar.mount))
+        scans.append(
+            scan_to_points(
+                ranges,
+                lidar.angle_min,
+                lidar.angle_increment,
+                lidar.range_min,
+                lidar.range_max,
+                sensor_pose=lidar.mount,
+            )
+        )
     return scans, blocked

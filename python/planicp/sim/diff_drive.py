@@ -28,7 +28,7 @@ class DiffDriveLimits:
         max_angular_speed: largest ``|w|``, rad/s (1.0).
         max_linear_accel: largest ``|dv/dt|``, m/s^2 (0.5); applies to braking too.
         max_angular_accel: largest ``|dw/dt|``, rad/s^2 (2.0).
-        wheel_base: distance between the two wheel contact points, m (0.4); used by :meth:`wheel_speeds`.
+        wheel_base: distance between the two wheel contact points, m (0.4); used by `wheel_speeds`.
         radius: radius of the circular footprint about the base origin, m (0.3); planning keeps the base
             origin at least this far from walls and furniture.
 
@@ -67,7 +67,7 @@ class DiffDriveState:
     Attributes:
         x, y: position of the base origin in the map frame, metres.
         yaw: heading in the map frame, radians, counter-clockwise from +x (kept in ``(-pi, pi]`` by
-            :func:`step`).
+            `step`).
         v: forward speed along the base x axis, m/s.
         w: yaw rate, rad/s (counter-clockwise positive).
     """
@@ -121,14 +121,15 @@ def step(state: DiffDriveState, cmd_v: float, cmd_w: float, dt: float, limits: D
     ``|w| <= max_angular_speed``), then the change from the current velocities is clamped to the acceleration
     limits (``|v_new - v| <= max_linear_accel * dt``, same for ``w``). The resulting ``(v_new, w_new)`` is held
     constant for the whole step and the pose is integrated EXACTLY along the resulting circular arc (unicycle
-    model; a straight line when ``w_new == 0``)::
+    model; a straight line when ``w_new == 0``):
 
         yaw' = yaw + w dt
         x'   = x + v/w (sin(yaw') - sin(yaw)),   y' = y - v/w (cos(yaw') - cos(yaw))
 
     Args:
         state: current pose and velocities.
-        cmd_v, cmd_w: commanded forward speed (m/s) and yaw rate (rad/s), finite.
+        cmd_v: commanded forward speed (m/s), finite.
+        cmd_w: commanded yaw rate (rad/s), finite.
         dt: step length in seconds, > 0.
         limits: the robot's limits.
 

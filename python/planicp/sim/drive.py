@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import positive, real_number
-from .floor import Floor
 from .diff_drive import DiffDriveLimits, DiffDriveState, step
+from .floor import Floor
 from .route_planner import reachable, tour
 from .waypoint_follower import WaypointFollower
 
@@ -87,11 +87,11 @@ def simulate_drive(
     """Drive the robot around ``floor`` for ``duration_s`` seconds and return its ground-truth trajectory.
 
     The start position is drawn with ``floor.sample_pose(rng, clearance)`` (uniform yaw); of
-    8 candidates the one whose reachable free space (:func:`~planicp.sim.route_planner.reachable`) is
+    8 candidates the one whose reachable free space (`reachable`) is
     largest is used, so the robot does not start in a room whose doors are too narrow for the clearance.
-    The robot then follows tours of 3 random legs of at least 5 m (:func:`~planicp.sim.route_planner.tour`)
-    with a :class:`~planicp.sim.waypoint_follower.WaypointFollower`, integrating
-    :func:`~planicp.sim.diff_drive.step` at ``control_rate_hz``; when a tour is done a new one starts from
+    The robot then follows tours of 3 random legs of at least 5 m (`tour`)
+    with a `WaypointFollower`, integrating
+    `step` at ``control_rate_hz``; when a tour is done a new one starts from
     its last goal, until the duration is reached. The robot starts at rest.
 
     The routes keep ``clearance`` from walls and clutter; the follower stays close to them (no corner
@@ -107,7 +107,7 @@ def simulate_drive(
         clearance: route clearance in metres, >= ``limits.radius``.
 
     Returns:
-        A :class:`Trajectory` with samples at ``k / control_rate_hz`` for
+        A `Trajectory` with samples at ``k / control_rate_hz`` for
         ``k = 0 .. floor(duration_s * control_rate_hz)``.
 
     Raises:

@@ -23,14 +23,14 @@ from numpy.typing import NDArray
 
 from .. import _core
 from .._validation import Pose, as_pose, positive, whole_number
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
-from ..tracking.icp_config import IcpConfig
 from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
-from ..tracking.acceptance_gate import AcceptanceGate
-from ..tracking.localizer import Localizer
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
+from ..tracking.acceptance_gate import AcceptanceGate
+from ..tracking.icp_config import IcpConfig
+from ..tracking.localizer import Localizer
 from .diff_drive import DiffDriveLimits
 from .drive import simulate_drive
 from .odometry import ErrorGenerator, Odometry, OdometryNoise
@@ -167,8 +167,17 @@ class Recording:
             raise ValueError("this recording has no ranges and LIDAR model (record it with run_experiment)")
         lidar = self.lidar
         return [
-            ScanFrame(float(t), r, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max,
-                      lidar.mount, _pose(odom), _pose(truth))
+            ScanFrame(
+                float(t),
+                r,
+                lidar.angle_min,
+                lidar.angle_increment,
+                lidar.range_min,
+                lidar.range_max,
+                lidar.mount,
+                _pose(odom),
+                _pose(truth),
+            )
             for t, r, odom, truth in zip(self.times, self.ranges, self.odometry_in_odom, self.truth)
         ]
 
@@ -179,8 +188,9 @@ class Recording:
             raise ValueError(f"which must be one of {sorted(table)}, got {which!r}")
         return table[which]
 
-    def occupancy_grid(self, plan: PlanMap, which: str, sensor_offset: Pose, resolution: float = 0.05,
-                       **options: Any) -> EnhancedOccupancyGrid:
+    def occupancy_grid(
+        self, plan: PlanMap, which: str, sensor_offset: Pose, resolution: float = 0.05, **options: Any
+    ) -> EnhancedOccupancyGrid:
         """The enhanced occupancy grid of every scan placed at the poses of `which` ("truth",
         "odometry" or "estimate"); `sensor_offset` is the laser's mount in the base frame (the
         LIDAR model's `mount`), `options` go to `EnhancedOccupancyGrid`."""
@@ -218,19 +228,34 @@ def _pose(row: NDArray[np.float64]) -> Pose:
     return (float(row[0]), float(row[1]), float(row[2]))
 
 
-def replay(plan: PlanMap, recording: Recording, icp: IcpConfig, gate: AcceptanceGate | None = None,
-           **options: Any) -> Recording:
+def replay(
+    plan: PlanMap, recording: Recording, icp: IcpConfig, gate: AcceptanceGate | None = None, **options: Any
+) -> Recording:
     """The same scans and odometry through a Localizer with other settings (for ablations);
     `options` go to the `Localizer` (e.g. `occlusion=False`)."""
     localizer = Localizer(plan, tuple(recording.truth[0]), icp, gate=gate, **options)
     estimate, accepted, ratio, rmse, lost = _track(localizer, recording.scans, recording.odometry_in_odom)
-    return Recording(recording.times, recording.truth, recording.odometry, estimate, accepted, ratio, rmse,
-                     recording.scans, recording.odometry_in_odom, recording.ranges, recording.lidar,
-                     recording.odometry_stream_times, recording.odometry_stream, lost)
+    return Recording(
+        recording.times,
+        recording.truth,
+        recording.odometry,
+        estimate,
+        accepted,
+        ratio,
+        rmse,
+        recording.scans,
+        recording.odometry_in_odom,
+        recording.ranges,
+        recording.lidar,
+        recording.odometry_stream_times,
+        recording.odometry_stream,
+        lost,
+    )
 
 
-def _track(localizer: Localizer, scans: list[NDArray[np.float64]], odometry: NDArray[np.float64]) -> tuple[
-        NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+def _track(
+    localizer: Localizer, scans: list[NDArray[np.float64]], odometry: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     estimate = np.zeros((len(scans), 3))
     accepted = np.zeros(len(scans), dtype=bool)
     lost = np.zeros(len(scans), dtype=bool)
@@ -263,11 +288,11 @@ def run_experiment(
     rng = np.random.default_rng(config.seed)
     world = World.from_raster(plan.raster, rng, config.furnishing)
     clearance = config.limits.radius + 0.15
-    trajectory = simulate_drive(world.floor, rng, config.duration_s, config.limits,
-                                control_rate_hz=config.odometry_rate_hz, clearance=clearance)
+    trajectory = simulate_drive(
+        world.floor, rng, config.duration_s, config.limits, control_rate_hz=config.odometry_rate_hz, clearance=clearance
+    )
     odometry = Odometry(config.odometry_rate_hz, config.odometry_noise, config.error_generator, rng)
-    grid = _core.OccupancyGrid(np.ascontiguousarray(world.floor.occupied()), world.floor.resolution,
-                               world.floor.origin)
+    grid = _core.OccupancyGrid(np.ascontiguousarray(world.floor.occupied()), world.floor.resolution, world.floor.origin)
     lidar = config.lidar
     every = max(1, int(round(config.odometry_rate_hz / lidar.rate_hz)))
     start: Pose = tuple(float(v) for v in trajectory.poses[0])  # type: ignore[assignment]
@@ -283,10 +308,21 @@ def run_experiment(
         true_pose: Pose = (float(pose[0]), float(pose[1]), float(pose[2]))
         world.advance(1.0 / lidar.rate_hz, rng, keep_clear=(true_pose[0], true_pose[1]))
         sensor = compose(true_pose, lidar.mount)
-        ranges = grid.cast(sensor, lidar.angle_min, lidar.angle_increment, lidar.beams, lidar.range_min,
-                           lidar.range_max, lidar.range_sigma, lidar.dropout, int(rng.integers(2**63)), world.discs())
-        scan = scan_to_points(ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max,
-                              sensor_pose=lidar.mount)
+        ranges = grid.cast(
+            sensor,
+            lidar.angle_min,
+            lidar.angle_increment,
+            lidar.beams,
+            lidar.range_min,
+            lidar.range_max,
+            lidar.range_sigma,
+            lidar.dropout,
+            int(rng.integers(2**63)),
+            world.discs(),
+        )
+        scan = scan_to_points(
+            ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max, sensor_pose=lidar.mount
+        )
         est = localizer.update(scan, odom_pose)
         times.append(float(t))
         truth.append(true_pose)
@@ -302,8 +338,19 @@ def run_experiment(
         if progress is not None:
             progress(float(t))
     recording = Recording(
-        np.array(times), np.array(truth), np.array(odom_map), np.array(estimate), np.array(accepted),
-        np.array(ratio), np.array(rmse), scans, np.array(odom_odom), measured, lidar,
-        np.array(trajectory.times, dtype=np.float64), stream, np.array(lost, dtype=bool),
+        np.array(times),
+        np.array(truth),
+        np.array(odom_map),
+        np.array(estimate),
+        np.array(accepted),
+        np.array(ratio),
+        np.array(rmse),
+        scans,
+        np.array(odom_odom),
+        measured,
+        lidar,
+        np.array(trajectory.times, dtype=np.float64),
+        stream,
+        np.array(lost, dtype=bool),
     )
     return recording, world

@@ -4,7 +4,7 @@
 Conventions: metres and radians; frames follow ROS REP-103 (x forward, y left, yaw counter-clockwise).
 Rasters are indexed ``[row, col]`` with the row index growing with +y (row 0 is the LOWEST y, i.e. NOT
 image order); cell ``(r, c)`` covers ``x in [ox + c*res, ox + (c+1)*res)`` and
-``y in [oy + r*res, oy + (r+1)*res)`` where ``(ox, oy) = origin``. Use :meth:`Floor.to_image` to get an
+``y in [oy + r*res, oy + (r+1)*res)`` where ``(ox, oy) = origin``. Use `Floor.to_image` to get an
 image in ROS ``map_server`` (top row = highest y) order.
 """
 
@@ -21,6 +21,7 @@ from .. import _core
 from .argument_checks import Pose, finite_float
 
 __all__ = ["Floor"]
+
 
 @dataclass(frozen=True, eq=False, repr=False)
 class Floor:
@@ -56,9 +57,7 @@ class Floor:
         try:
             ox, oy = (float(v) for v in self.origin)
         except (TypeError, ValueError):
-            raise ValueError(
-                f"origin must be a pair of floats (x, y) in metres, got {self.origin!r}"
-            ) from None
+            raise ValueError(f"origin must be a pair of floats (x, y) in metres, got {self.origin!r}") from None
         if not (math.isfinite(ox) and math.isfinite(oy)):
             raise ValueError(f"origin must be finite, got {(ox, oy)}")
         object.__setattr__(self, "walls", walls)
@@ -139,9 +138,7 @@ class Floor:
             raise ValueError(f"clearance must be >= 0 metres, got {clearance}")
         cells = self._pose_cells(clearance)
         if cells.size == 0:
-            raise ValueError(
-                f"no free cell inside the building has {clearance} m clearance from walls and clutter"
-            )
+            raise ValueError(f"no free cell inside the building has {clearance} m clearance from walls and clutter")
         k = int(rng.integers(cells.size))
         cols = self.shape[1]
         r, c = divmod(int(cells[k]), cols)

@@ -1,5 +1,5 @@
 """Seeded, furnished synthetic floors in three layouts (``"office"``, ``"hall"``, ``"diagonal"``):
-:func:`generate_floor` returns a :class:`~planicp.sim.floor.Floor` whose walls are the plan and whose
+`generate_floor` returns a `Floor` whose walls are the plan and whose
 clutter is furniture the plan does not show. All randomness comes from ``np.random.default_rng(seed)``.
 """
 
@@ -18,7 +18,7 @@ from .floor_canvas import Canvas, Placement
 
 __all__ = ["LAYOUTS", "generate_floor"]
 
-#: Layout names accepted by :func:`generate_floor`.
+#: Layout names accepted by `generate_floor`.
 LAYOUTS: Final[tuple[str, ...]] = ("office", "hall", "diagonal")
 
 # Generator constants (metres).
@@ -79,9 +79,7 @@ def _furniture_item(
     return [("disc", (cx, cy, rng.uniform(0.15, 0.35)))]
 
 
-def _to_map(
-    shapes: list[tuple[str, tuple[float, ...]]], placement: Placement
-) -> list[tuple[str, tuple[float, ...]]]:
+def _to_map(shapes: list[tuple[str, tuple[float, ...]]], placement: Placement) -> list[tuple[str, tuple[float, ...]]]:
     out: list[tuple[str, tuple[float, ...]]] = []
     for kind, p in shapes:
         x, y = placement.point(p[0], p[1])
@@ -358,8 +356,9 @@ def generate_floor(
 
     Args:
         seed: non-negative integer seed.
-        layout: one of :data:`LAYOUTS`.
-        width, height: size in metres of the map-frame box the building occupies.
+        layout: one of `LAYOUTS`.
+        width: width (x) in metres of the map-frame box the building occupies.
+        height: height (y) in metres of that box.
         resolution: metres per cell, in ``(0, 0.25]``.
         rooms: number of rooms (office/diagonal) or furniture zones (hall), >= 1.
         furniture_per_room: furniture items per room, >= 0.
@@ -382,8 +381,7 @@ def generate_floor(
         raise ValueError(f"resolution must be > 0 metres per cell, got {resolution}")
     if resolution > _MAX_RESOLUTION:
         raise ValueError(
-            f"resolution {resolution} m is too coarse for 0.15 m walls and 0.8 m doors; "
-            f"use <= {_MAX_RESOLUTION}"
+            f"resolution {resolution} m is too coarse for 0.15 m walls and 0.8 m doors; use <= {_MAX_RESOLUTION}"
         )
     rooms = int_arg(rooms, "rooms", 1)
     furniture_per_room = int_arg(furniture_per_room, "furniture_per_room", 0)
@@ -397,11 +395,7 @@ def generate_floor(
             )
     elif layout == "hall":
         inner_w, inner_h = width - 2 * _T_OUTER, height - 2 * _T_OUTER
-        if (
-            inner_w < _HALL_MIN_SIDE
-            or inner_h < _HALL_MIN_SIDE
-            or inner_w * inner_h < _HALL_AREA_PER_ROOM * rooms
-        ):
+        if inner_w < _HALL_MIN_SIDE or inner_h < _HALL_MIN_SIDE or inner_w * inner_h < _HALL_AREA_PER_ROOM * rooms:
             raise ValueError(
                 f"a hall with {rooms} rooms needs an interior of at least {_HALL_MIN_SIDE} m per side and "
                 f"{_HALL_AREA_PER_ROOM * rooms:.0f} m^2 (width/height include {_T_OUTER} m outer walls), "
@@ -442,8 +436,6 @@ def generate_floor(
         c, s = math.cos(theta), math.sin(theta)
         hx, hy = 0.5 * length, 0.5 * depth
         shift = (0.5 * width - (c * hx - s * hy), 0.5 * height - (s * hx + c * hy))
-        _build_office(
-            rng, canvas, Placement(theta, shift), length, depth, rooms, furniture_per_room, chamfers
-        )
+        _build_office(rng, canvas, Placement(theta, shift), length, depth, rooms, furniture_per_room, chamfers)
     clutter = canvas.clutter & ~canvas.walls
     return Floor(walls=canvas.walls, clutter=clutter, resolution=resolution, origin=origin)

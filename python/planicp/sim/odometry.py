@@ -1,15 +1,15 @@
 """Wheel-odometry simulation: per-message Gaussian noise and the thesis' systematic error generator.
 
 Frames (REP-105): the odometry pose is T_odom_base. The odom frame is the robot's base frame at the FIRST
-truth pose given to :class:`Odometry`, so odometry starts at the identity ``(0, 0, 0)``. Each message
+truth pose given to `Odometry`, so odometry starts at the identity ``(0, 0, 0)``. Each message
 carries one increment: the motion ``(dx, dy, dyaw)`` between two successive truth poses, expressed in the
 base frame at the earlier of them (x forward, y left, yaw counter-clockwise; metres, radians). The measured
-increment is composed onto the previous odometry pose::
+increment is composed onto the previous odometry pose:
 
     odom_k = odom_{k-1} * (dx + n_x + c_t,  dy + n_y,  dyaw + n_yaw + c_r)
 
-with ``n_*`` the Gaussian noise of :class:`OdometryNoise` and ``(c_t, c_r)`` the constants of
-:class:`ErrorGenerator`.
+with ``n_*`` the Gaussian noise of `OdometryNoise` and ``(c_t, c_r)`` the constants of
+`ErrorGenerator`.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ class OdometryNoise:
         rotation_fraction: dimensionless, >= 0.
         rotation_sigma_min: radians per message, >= 0.
 
-    Every field must be finite and >= 0 (``ValueError`` naming the field). Use :meth:`none` for noiseless
+    Every field must be finite and >= 0 (``ValueError`` naming the field). Use `none` for noiseless
     odometry.
     """
 
@@ -122,8 +122,8 @@ class ErrorGenerator:
 class Odometry:
     """Simulated wheel odometry that integrates true motion with noise and the error generator.
 
-    Feed it the truth: :meth:`update` once per message with the true pose (map frame) at that message, or
-    :meth:`run` with a whole trajectory, which samples it at ``rate_hz``. The first truth pose defines the odom
+    Feed it the truth: `update` once per message with the true pose (map frame) at that message, or
+    `run` with a whole trajectory, which samples it at ``rate_hz``. The first truth pose defines the odom
     frame (identity, REP-105); every later one is one message whose increment is the true relative motion
     since the previous truth pose, perturbed as described in the module docstring (noise first, computed from
     the true increment, then the generator's constants).
@@ -138,7 +138,7 @@ class Odometry:
     ) -> None:
         """
         Args:
-            rate_hz: message rate in Hz, > 0 (used by :meth:`run`).
+            rate_hz: message rate in Hz, > 0 (used by `run`).
             noise: per-message noise (None: no noise).
             error_generator: systematic error (None: off).
             rng: seeded generator, required when ``noise`` is enabled (3 normal draws per message).

@@ -12,6 +12,7 @@ from .argument_checks import finite_float, pose_arg
 
 __all__ = ["perturb_pose"]
 
+
 def perturb_pose(
     pose: tuple[float, float, float], rng: np.random.Generator, translation: float, rotation: float
 ) -> tuple[float, float, float]:

@@ -1,12 +1,12 @@
 """Collision-free routes on a synthetic floor: exact clearance inflation, A*, line-of-sight shortening, tours.
 
-Everything is in the map frame of the :class:`~planicp.sim.floor.Floor` (metres). Walls AND clutter are
+Everything is in the map frame of the `Floor` (metres). Walls AND clutter are
 obstacles. A cell is *traversable* for a clearance ``c`` when EVERY point of its square is at least ``c``
 metres (Euclidean) from every point of every occupied cell square; the route is a polyline whose every point
 lies in the closure of a traversable cell, so every point of it keeps the clearance exactly (with respect to
 the floor's grid). Cells outside the raster count as free.
 
-numpy, :mod:`heapq` and OpenCV (distance transform, connected components); no scipy.
+numpy, `heapq` and OpenCV (distance transform, connected components); no scipy.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def clearance_distance(occupied: NDArray[np.bool_], resolution: float, max_dista
     when the true gap is larger still, and only says that the true gap is above ``max_distance``.
 
     Args:
-        occupied: ``(rows, cols)`` bool grid (row index growing with +y, as in :class:`Floor`).
+        occupied: ``(rows, cols)`` bool grid (row index growing with +y, as in `Floor`).
         resolution: metres per cell, > 0.
         max_distance: metres, >= 0.
     """
@@ -64,8 +64,9 @@ def clearance_distance(occupied: NDArray[np.bool_], resolution: float, max_dista
     if not occ.any():
         best = np.full(occ.shape, cap)
     else:
-        grown = cv2.dilate(occ.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT,
-                           borderValue=0)
+        grown = cv2.dilate(
+            occ.astype(np.uint8), np.ones((3, 3), dtype=np.uint8), borderType=cv2.BORDER_CONSTANT, borderValue=0
+        )
         centres = cv2.distanceTransform((grown == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         # The transform's float32 distances are square roots of whole numbers: recover those exactly.
         best = np.minimum(np.rint(centres.astype(np.float64) ** 2), cap)
@@ -124,7 +125,7 @@ def plan_route(floor: Floor, start_xy: Any, goal_xy: Any, clearance: float) -> l
     and clutter, as a short list of waypoints.
 
     Method: the occupied cells (walls | clutter) are inflated by ``clearance`` with an exact distance
-    transform (:func:`traversable`); A* (8-connected, move costs 1 and sqrt(2) cells; heuristic the exact
+    transform (`traversable`); A* (8-connected, move costs 1 and sqrt(2) cells; heuristic the exact
     cost-to-go from a vectorised wavefront out of the goal, admissible and consistent, so the grid path is
     optimal and A* expands few cells) runs from the cell of ``start_xy`` to the cell of ``goal_xy``;
     the polyline ``start_xy -> cell centres -> goal_xy`` is then shortened greedily: from each kept waypoint
@@ -133,7 +134,8 @@ def plan_route(floor: Floor, start_xy: Any, goal_xy: Any, clearance: float) -> l
 
     Args:
         floor: the floor (map frame, metres).
-        start_xy, goal_xy: ``(x, y)`` in metres; each must lie in a traversable cell.
+        start_xy: ``(x, y)`` in metres; must lie in a traversable cell.
+        goal_xy: ``(x, y)`` in metres; must lie in a traversable cell.
         clearance: metres, >= 0; typically the robot radius plus a margin.
 
     Returns:
@@ -190,13 +192,13 @@ def tour(
     is at least ``min_leg_length`` metres (straight line) from the current position -- in an office floor
     that sends the robot through doorways into different rooms and along the corridor; when no reachable cell
     is that far, the goal is drawn among the farthest 10 % of the reachable cells. The position inside the
-    cell is uniform. Consecutive routes (:func:`plan_route`) are chained without repeating the joints.
+    cell is uniform. Consecutive routes (`plan_route`) are chained without repeating the joints.
 
     Args:
         floor: the floor.
         rng: seeded generator for the start (when ``start_xy`` is None) and the goals.
         legs: number of goals, >= 1.
-        clearance: metres, >= 0 (see :func:`plan_route`).
+        clearance: metres, >= 0 (see `plan_route`).
         min_leg_length: metres, >= 0.
         start_xy: ``(x, y)`` start in metres; None draws it with ``floor.sample_pose(rng, clearance)``.
 

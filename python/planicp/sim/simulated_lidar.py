@@ -1,6 +1,6 @@
-"""A simulated 2D LIDAR in a :class:`~planicp.sim.floor.Floor`: ROS ``LaserScan``-style ranges
-(:func:`simulate_ranges`), sensor-frame points with their source (:func:`simulate_scan`), and ranges
-back to points (:func:`ranges_to_points`).
+"""A simulated 2D LIDAR in a `Floor`: ROS ``LaserScan``-style ranges
+(`simulate_ranges`), sensor-frame points with their source (`simulate_scan`), and ranges
+back to points (`ranges_to_points`).
 
 Walls and clutter occlude, and so do optional moving discs (people). The beams are cast by the native
 ray caster (``planicp._core.OccupancyGrid.cast``, the one the simulator's drives use); noise and dropouts
@@ -81,8 +81,15 @@ def _simulate(
     # Noise-free ranges from the native caster (range_min 0: a sensor inside an occupied cell reads 0);
     # the noise, dropouts and REP-117 limits below are applied here, with the caller's generator.
     pose3 = (x, y, yaw)
-    dist = floor._native_grid("occupied").cast(pose3, angle_min, angle_increment, beams, 0.0, max_range,
-                                               discs=discs if discs is not None and discs.shape[0] else None)
+    dist = floor._native_grid("occupied").cast(
+        pose3,
+        angle_min,
+        angle_increment,
+        beams,
+        0.0,
+        max_range,
+        discs=discs if discs is not None and discs.shape[0] else None,
+    )
     from_wall: NDArray[np.bool_] | None = None
     if want_sources:
         from_wall = _from_wall(floor, pose3, angle_min, angle_increment, beams, max_range, dist)
@@ -95,8 +102,15 @@ def _simulate(
     return ranges, angle_min, angle_increment, from_wall
 
 
-def _from_wall(floor: Floor, pose: tuple[float, float, float], angle_min: float, angle_increment: float,
-               beams: int, max_range: float, dist: NDArray[np.float64]) -> NDArray[np.bool_]:
+def _from_wall(
+    floor: Floor,
+    pose: tuple[float, float, float],
+    angle_min: float,
+    angle_increment: float,
+    beams: int,
+    max_range: float,
+    dist: NDArray[np.float64],
+) -> NDArray[np.bool_]:
     """Per beam, whether its return (at ``dist``) ends on a plan wall rather than on clutter or a disc.
 
     A beam stops at the first occupied cell it enters; cast through the walls alone, it stops at the same
@@ -141,7 +155,8 @@ def simulate_ranges(
             ``angle_min + i * angle_increment`` in the sensor frame with ``angle_min = -fov/2``; for a full
             circle ``angle_increment = fov/beams`` (the last beam does not duplicate the first), otherwise
             ``fov/(beams-1)`` (the last beam is at ``+fov/2``).
-        max_range, min_range: metres, ``0 <= min_range < max_range``.
+        max_range: metres, ``> min_range``.
+        min_range: metres, ``0 <= min_range < max_range``.
         range_sigma: standard deviation (metres) of the additive Gaussian range noise, >= 0.
         dropout: probability in ``[0, 1]`` that a beam returns nothing (``+inf``).
         dynamic_discs: optional ``(K, 3)`` array of ``(x, y, radius)`` (map frame, metres) moving obstacles
@@ -185,7 +200,7 @@ def ranges_to_points(
 def simulate_scan(
     floor: Floor, pose: tuple[float, float, float], rng: np.random.Generator, **kwargs: Any
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Convenience wrapper of :func:`simulate_ranges` (same keyword arguments and random draws).
+    """Convenience wrapper of `simulate_ranges` (same keyword arguments and random draws).
 
     Returns:
         ``(points, is_clutter)``: ``points`` ``(M, 2)`` float64 in metres in the sensor frame (valid returns

@@ -1,7 +1,7 @@
 """Pure-pursuit waypoint follower for a differential-drive robot.
 
 Map frame, metres, seconds, radians (REP-103: x forward, y left, yaw counter-clockwise). The follower turns a
-polyline of waypoints into velocity commands ``(v, w)`` for :func:`planicp.sim.diff_drive.step`.
+polyline of waypoints into velocity commands ``(v, w)`` for `planicp.sim.diff_drive.step`.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ class WaypointFollower:
     """Follows ``waypoints`` with a pure-pursuit controller that does not cut corners.
 
     The path is the polyline through the waypoints (the robot first drives to ``waypoints[0]`` unless it is
-    within ``goal_tolerance`` of it at the first :meth:`command`). Each command:
+    within ``goal_tolerance`` of it at the first `command`). Each command:
 
     1. Advances to the next segment once the robot is within ``goal_tolerance / 2`` of the current segment's
        end or has passed it (its projection lies beyond the end).
@@ -62,7 +62,7 @@ class WaypointFollower:
 
        Braking profiles use half of ``max_linear_accel``.
 
-    :attr:`done` becomes True (and the commands ``(0, 0)``) once the robot is within ``goal_tolerance`` of
+    `done` becomes True (and the commands ``(0, 0)``) once the robot is within ``goal_tolerance`` of
     the last waypoint.
     """
 
@@ -195,7 +195,7 @@ class WaypointFollower:
     def _lookahead_for(self, psi: float) -> float:
         """Carrot distance (metres) whose arc bulges ``_MAX_BULGE`` for a robot ON the line heading ``psi``
         radians from it (``(L / 2) tan(|psi| / 2)`` is the bulge); a continuous version of
-        :meth:`_choose_lookahead` used to predict the speed after a corner."""
+        `_choose_lookahead` used to predict the speed after a corner."""
         half = 0.5 * abs(psi)
         if half < 1e-9:
             return self.lookahead

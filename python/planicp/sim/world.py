@@ -39,7 +39,11 @@ class Furnishing:
     def __post_init__(self) -> None:
         for name in ("cabinets", "blocks", "tables", "people"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value) and value >= 0):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not (math.isfinite(value) and value >= 0)
+            ):
                 raise ValueError(f"Furnishing.{name} must be a finite number >= 0, got {value!r}")
 
 
@@ -131,8 +135,9 @@ def _inside(free_mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
     return np.asarray(labels == max(sizes)[1], dtype=bool)
 
 
-def _disc_free(occ: NDArray[np.bool_], x: float, y: float, r: float, res: float, ox: float, oy: float,
-               rows: int, cols: int) -> bool:
+def _disc_free(
+    occ: NDArray[np.bool_], x: float, y: float, r: float, res: float, ox: float, oy: float, rows: int, cols: int
+) -> bool:
     c0, c1 = int((x - r - ox) / res), int((x + r - ox) / res)
     r0, r1 = int((y - r - oy) / res), int((y + r - oy) / res)
     if c0 < 0 or r0 < 0 or c1 >= cols or r1 >= rows:
@@ -143,8 +148,14 @@ def _disc_free(occ: NDArray[np.bool_], x: float, y: float, r: float, res: float,
 class _Placer:
     """Places furniture into `clutter` while the inside stays one connected region."""
 
-    def __init__(self, walls: NDArray[np.bool_], clutter: NDArray[np.bool_], inside: NDArray[np.bool_],
-                 res: float, rng: np.random.Generator) -> None:
+    def __init__(
+        self,
+        walls: NDArray[np.bool_],
+        clutter: NDArray[np.bool_],
+        inside: NDArray[np.bool_],
+        res: float,
+        rng: np.random.Generator,
+    ) -> None:
         self.walls, self.clutter, self.inside, self.res, self.rng = walls, clutter, inside, res, rng
         self.cells = int(inside.sum())
 

@@ -4,7 +4,7 @@ A study (YAML, `Study`) lists plans, seeds, furniture densities, people, sensor 
 error settings and ICP settings; every combination is one run of the simulation loop
 (`planicp.sim.run_experiment`). Runs execute in a local process pool or on a Ray cluster
 (`pip install 'planicp[cluster]'`), each finished run is recorded at once (resumable), and the
-results become one table (`results.csv`), summary figures and a Markdown report::
+results become one table (`results.csv`), summary figures and a Markdown report:
 
     from planicp.sweep import load_study, run_study
     study, base = load_study("study.yaml")

@@ -46,16 +46,18 @@ def run_local(
     count = workers if workers is not None else (os.cpu_count() or 1)
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
-    pool = concurrent.futures.ProcessPoolExecutor(max_workers=min(count, len(runs)),
-                                                  mp_context=multiprocessing.get_context("spawn"))
+    pool = concurrent.futures.ProcessPoolExecutor(
+        max_workers=min(count, len(runs)), mp_context=multiprocessing.get_context("spawn")
+    )
     try:
         futures = [pool.submit(run, spec) for spec in runs]
         for future in concurrent.futures.as_completed(futures):
             try:
                 record = future.result()
             except BrokenProcessPool as exc:
-                raise RuntimeError(f"a worker process died ({exc}); finished runs are kept, rerun the study "
-                                   "to do the others") from None
+                raise RuntimeError(
+                    f"a worker process died ({exc}); finished runs are kept, rerun the study to do the others"
+                ) from None
             on_result(record)
     except BaseException:
         pool.shutdown(wait=False, cancel_futures=True)
@@ -87,8 +89,8 @@ def run_ray(
     (then that instance is used and left running). None is Ray's default: the cluster in
     `RAY_ADDRESS`, else one started on this machine with `ray start`, else a new local instance;
     "local" always starts a new local instance, "auto" joins the cluster this machine belongs to,
-    "ray://host:10001" a remote one through Ray Client. Every node needs planicp installed and the plan files at the same paths (a shared
-    folder), or only the shipped `default` plan.
+    "ray://host:10001" a remote one through Ray Client. Every node needs planicp installed and the
+    plan files at the same paths (a shared folder), or only the shipped `default` plan.
 
     A task that fails in Ray itself (its worker died after Ray's retries) is recorded as a failed
     run with Ray's error. On an interruption, the tasks not finished are cancelled.

@@ -60,8 +60,9 @@ def _label(value: Any) -> str:
 
 
 def summary_by_setting(rows: Sequence[dict[str, Any]], column: str, order: Order | None = None) -> list[dict[str, Any]]:
-    """Per value of `column` (in the study's `order`): runs, failed runs, success rate, and the median and 95th percentile of
-    planicp's largest position error (metres) and the median of odometry's, over finished runs."""
+    """Per value of `column` (in the study's `order`): runs, failed runs, success rate, and the median
+    and 95th percentile of planicp's largest position error (metres) and the median of odometry's,
+    over finished runs."""
     out = []
     for value in _values(rows, column, order):
         group = [r for r in rows if r[column] == value]
@@ -69,21 +70,24 @@ def summary_by_setting(rows: Sequence[dict[str, Any]], column: str, order: Order
         p = np.array([r["planicp_position_max_m"] for r in finished], dtype=float)
         o = np.array([r["odometry_position_max_m"] for r in finished], dtype=float)
         lost = np.array([r["lost_scans"] for r in finished], dtype=float)
-        out.append({
-            "value": value,
-            "runs": len(group),
-            "failed": len(group) - len(finished),
-            "success_rate": sum(bool(r["success"]) for r in group) / len(group),
-            "planicp_max_median_m": float(np.median(p)) if len(p) else math.nan,
-            "planicp_max_p95_m": float(np.percentile(p, 95)) if len(p) else math.nan,
-            "odometry_max_median_m": float(np.median(o)) if len(o) else math.nan,
-            "lost_scans_mean": float(lost.mean()) if len(lost) else math.nan,
-        })
+        out.append(
+            {
+                "value": value,
+                "runs": len(group),
+                "failed": len(group) - len(finished),
+                "success_rate": sum(bool(r["success"]) for r in group) / len(group),
+                "planicp_max_median_m": float(np.median(p)) if len(p) else math.nan,
+                "planicp_max_p95_m": float(np.percentile(p, 95)) if len(p) else math.nan,
+                "odometry_max_median_m": float(np.median(o)) if len(o) else math.nan,
+                "lost_scans_mean": float(lost.mean()) if len(lost) else math.nan,
+            }
+        )
     return out
 
 
-def plot_error_distributions(rows: Sequence[dict[str, Any]], threshold_m: float | None = None,
-                             order: Order | None = None) -> Figure:
+def plot_error_distributions(
+    rows: Sequence[dict[str, Any]], threshold_m: float | None = None, order: Order | None = None
+) -> Figure:
     """Box plots of planicp's largest position error per run (metres, log scale) for each setting of
     every axis that varies, odometry's beside them in grey; the success threshold as a dashed line.
     Failed runs have no error and are left out."""
@@ -97,13 +101,27 @@ def plot_error_distributions(rows: Sequence[dict[str, Any]], threshold_m: float 
         data_o = [[max(r["odometry_position_max_m"], 1e-4) for r in finished if r[column] == v] for v in values]
         positions = np.arange(len(values), dtype=float)
         if any(data_o):
-            ax.boxplot([d or [math.nan] for d in data_o], positions=positions + 0.2, widths=0.3, patch_artist=True,
-                       boxprops={"facecolor": "0.85", "color": "0.5"}, medianprops={"color": "0.3"},
-                       whiskerprops={"color": "0.5"}, capprops={"color": "0.5"}, flierprops={"markersize": 3})
+            ax.boxplot(
+                [d or [math.nan] for d in data_o],
+                positions=positions + 0.2,
+                widths=0.3,
+                patch_artist=True,
+                boxprops={"facecolor": "0.85", "color": "0.5"},
+                medianprops={"color": "0.3"},
+                whiskerprops={"color": "0.5"},
+                capprops={"color": "0.5"},
+                flierprops={"markersize": 3},
+            )
         if any(data_p):
-            ax.boxplot([d or [math.nan] for d in data_p], positions=positions - 0.2, widths=0.3, patch_artist=True,
-                       boxprops={"facecolor": "tab:blue", "alpha": 0.6}, medianprops={"color": "navy"},
-                       flierprops={"markersize": 3})
+            ax.boxplot(
+                [d or [math.nan] for d in data_p],
+                positions=positions - 0.2,
+                widths=0.3,
+                patch_artist=True,
+                boxprops={"facecolor": "tab:blue", "alpha": 0.6},
+                medianprops={"color": "navy"},
+                flierprops={"markersize": 3},
+            )
         if threshold_m is not None:
             ax.axhline(threshold_m, color="tab:red", linestyle="--", linewidth=1)
         ax.set_xticks(positions, [_label(v) for v in values], rotation=20 if column == "plan" else 0)
@@ -161,8 +179,16 @@ def _rate_line(ax: Any, group: Sequence[dict[str, Any]], column: str, xs: list[A
         ax.annotate(f"{n}", (x, rate), textcoords="offset points", xytext=(0, 5), fontsize=7, ha="center")
 
 
-def markdown_report(study: Study, rows: Sequence[dict[str, Any]], *, expected_runs: int, figures: Sequence[str],
-                    command: str = "", version: str = "", order: Order | None = None) -> str:
+def markdown_report(
+    study: Study,
+    rows: Sequence[dict[str, Any]],
+    *,
+    expected_runs: int,
+    figures: Sequence[str],
+    command: str = "",
+    version: str = "",
+    order: Order | None = None,
+) -> str:
     """The study's report: what ran, overall success, a table per axis, the failed runs, figures."""
     done = len(rows)
     failed = [r for r in rows if r["status"] != "ok"]
@@ -188,15 +214,21 @@ def markdown_report(study: Study, rows: Sequence[dict[str, Any]], *, expected_ru
         summary = summary_by_setting(rows, column, order) if rows else []
         if not summary:
             continue
-        lines += ["", f"## By {title.replace('$^2$', '²')}", "",
-                  "| setting | runs | failed | success | planicp max error, median | planicp max error, 95th pct "
-                  "| odometry max error, median | lost scans, mean |",
-                  "|---|---:|---:|---:|---:|---:|---:|---:|"]
+        lines += [
+            "",
+            f"## By {title.replace('$^2$', '²')}",
+            "",
+            "| setting | runs | failed | success | planicp max error, median | planicp max error, 95th pct "
+            "| odometry max error, median | lost scans, mean |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|",
+        ]
         for s in summary:
-            lines.append(f"| {_label(s['value']) if column != 'plan' else s['value']} | {s['runs']} | {s['failed']} | "
-                         f"{100 * s['success_rate']:.0f} % | {_m(s['planicp_max_median_m'])} | "
-                         f"{_m(s['planicp_max_p95_m'])} | {_m(s['odometry_max_median_m'])} | "
-                         f"{_n(s['lost_scans_mean'])} |")
+            lines.append(
+                f"| {_label(s['value']) if column != 'plan' else s['value']} | {s['runs']} | {s['failed']} | "
+                f"{100 * s['success_rate']:.0f} % | {_m(s['planicp_max_median_m'])} | "
+                f"{_m(s['planicp_max_p95_m'])} | {_m(s['odometry_max_median_m'])} | "
+                f"{_n(s['lost_scans_mean'])} |"
+            )
     if failed:
         lines += ["", "## Failed runs", "", "| run | plan | seed | error |", "|---|---|---:|---|"]
         shown = failed[:MAX_FAILED_SHOWN]
@@ -204,7 +236,7 @@ def markdown_report(study: Study, rows: Sequence[dict[str, Any]], *, expected_ru
             error = str(r["error"]).replace("|", "\\|").replace("\n", " ")
             lines.append(f"| {r['run_id']} | {r['plan']} | {r['seed']} | {error} |")
         if len(failed) > len(shown):
-            lines += ["", f"... and {len(failed) - len(shown)} more (status \"failed\" in results.csv)."]
+            lines += ["", f'... and {len(failed) - len(shown)} more (status "failed" in results.csv).']
     if figures:
         lines += ["", "## Figures", ""] + [f"![{name}]({name})" for name in figures]
     lines += ["", "All numbers per run: results.csv (one row per run, sorted by run id).", ""]

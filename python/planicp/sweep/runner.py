@@ -94,8 +94,11 @@ def run_study(
     todo = [r for r in runs if r.run_id not in done]
     where = "Ray" + (f" at {ray_address}" if ray_address else "") if ray else f"{workers or 'all'} local processes"
     if stream is not None:
-        print(f"study {study.name!r}: {len(runs)} runs, {len(done)} already recorded in {folder}, "
-              f"{len(todo)} to run on {where}", file=stream)
+        print(
+            f"study {study.name!r}: {len(runs)} runs, {len(done)} already recorded in {folder}, "
+            f"{len(todo)} to run on {where}",
+            file=stream,
+        )
     bar = progress_bar(stream, len(todo), "runs")
     finished = [0]
 
@@ -119,20 +122,25 @@ def run_study(
     result = StudyResult(rows, len(runs), len(done), finished[0], failed, files, time.perf_counter() - started)
     if stream is not None:
         successes = sum(bool(r["success"]) for r in rows)
-        print(f"{len(rows)} runs recorded ({failed} failed), {successes} successes; ran {finished[0]} in "
-              f"{result.wall_s:.1f} s; wrote {', '.join(p.name for p in files)} to {folder}", file=stream)
+        print(
+            f"{len(rows)} runs recorded ({failed} failed), {successes} successes; ran {finished[0]} in "
+            f"{result.wall_s:.1f} s; wrote {', '.join(p.name for p in files)} to {folder}",
+            file=stream,
+        )
     return result
 
 
-def _summaries(study: Study, runs: Sequence[RunSpec], rows: list[dict[str, Any]], folder: Path,
-               command: str) -> list[Path]:
+def _summaries(
+    study: Study, runs: Sequence[RunSpec], rows: list[dict[str, Any]], folder: Path, command: str
+) -> list[Path]:
     figures = []
     order = {"plan": list(dict.fromkeys(r.plan for r in runs)), **study_axes(study)}
     if rows:
         plot_error_distributions(rows, study.success.max_position_error_m, order).savefig(folder / "errors.png")
         plot_success_rates(rows, order).savefig(folder / "success.png")
         figures = ["errors.png", "success.png"]
-    report = markdown_report(study, rows, expected_runs=len(runs), figures=figures, command=command,
-                             version=__version__, order=order)
+    report = markdown_report(
+        study, rows, expected_runs=len(runs), figures=figures, command=command, version=__version__, order=order
+    )
     (folder / "report.md").write_text(report, encoding="utf-8")
     return [folder / name for name in figures] + [folder / "report.md"]

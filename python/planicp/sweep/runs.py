@@ -36,11 +36,25 @@ HOUSE_EXPO_RESOLUTION = 0.05
 """Metres per pixel at which a HouseExpo plan is rasterised when its entry gives no resolution."""
 
 METRIC_COLUMNS = (
-    "planicp_position_rms_m", "planicp_position_max_m", "planicp_position_final_m",
-    "planicp_heading_rms_deg", "planicp_heading_max_deg", "planicp_heading_final_deg",
-    "odometry_position_rms_m", "odometry_position_max_m", "odometry_position_final_m",
-    "odometry_heading_rms_deg", "odometry_heading_max_deg", "odometry_heading_final_deg",
-    "scans", "accepted_share", "lost_scans", "lost_at_end", "path_length_m", "furniture_m2", "people_count",
+    "planicp_position_rms_m",
+    "planicp_position_max_m",
+    "planicp_position_final_m",
+    "planicp_heading_rms_deg",
+    "planicp_heading_max_deg",
+    "planicp_heading_final_deg",
+    "odometry_position_rms_m",
+    "odometry_position_max_m",
+    "odometry_position_final_m",
+    "odometry_heading_rms_deg",
+    "odometry_heading_max_deg",
+    "odometry_heading_final_deg",
+    "scans",
+    "accepted_share",
+    "lost_scans",
+    "lost_at_end",
+    "path_length_m",
+    "furniture_m2",
+    "people_count",
 )
 """The metrics of a finished run (see `Recording.metrics`): errors against ground truth in metres
 and degrees, scan counts, metres driven, square metres of furniture, people placed."""
@@ -113,13 +127,23 @@ class RunSpec:
 
     def experiment_config(self) -> ExperimentConfig:
         """The simulation's configuration of this run."""
-        furnishing = Furnishing(cabinets=FURNITURE_UNIT.cabinets * self.furniture,
-                                blocks=FURNITURE_UNIT.blocks * self.furniture,
-                                tables=FURNITURE_UNIT.tables * self.furniture, people=self.people)
+        furnishing = Furnishing(
+            cabinets=FURNITURE_UNIT.cabinets * self.furniture,
+            blocks=FURNITURE_UNIT.blocks * self.furniture,
+            tables=FURNITURE_UNIT.tables * self.furniture,
+            people=self.people,
+        )
         odom = self.odometry_setting
-        return ExperimentConfig(duration_s=self.duration_s, seed=self.seed, lidar=self.sensor_setting.lidar(),
-                                furnishing=furnishing, odometry_rate_hz=odom.rate_hz, odometry_noise=odom.noise(),
-                                error_generator=odom.error_generator(), icp=IcpConfig.for_tracking(**dict(self.icp_changes)))
+        return ExperimentConfig(
+            duration_s=self.duration_s,
+            seed=self.seed,
+            lidar=self.sensor_setting.lidar(),
+            furnishing=furnishing,
+            odometry_rate_hz=odom.rate_hz,
+            odometry_noise=odom.noise(),
+            error_generator=odom.error_generator(),
+            icp=IcpConfig.for_tracking(**dict(self.icp_changes)),
+        )
 
 
 def expand_runs(study: Study, base_dir: str | Path = ".") -> list[RunSpec]:
@@ -147,20 +171,45 @@ def expand_runs(study: Study, base_dir: str | Path = ".") -> list[RunSpec]:
         else:
             plans.append((source.path, str(full), source))
     runs: list[RunSpec] = []
-    for (label, file, source), seed, furniture, people, (sname, sensor), (oname, odom), (iname, icp) in itertools.product(
-            plans, study.seeds, study.furniture, study.people, study.sensors.items(), study.odometry.items(),
-            study.icp.items()):
+    for (label, file, source), seed, furniture, people, (sname, sensor), (oname, odom), (
+        iname,
+        icp,
+    ) in itertools.product(
+        plans,
+        study.seeds,
+        study.furniture,
+        study.people,
+        study.sensors.items(),
+        study.odometry.items(),
+        study.icp.items(),
+    ):
         resolution = source.resolution
         if resolution is None and file.lower().endswith(".json"):
             resolution = HOUSE_EXPO_RESOLUTION
-        runs.append(RunSpec(label, resolution, source.origin, int(seed), float(study.duration_s), float(furniture),
-                            float(people), sname, sensor, oname, odom, iname, tuple(sorted(dict(icp).items())),
-                            plan_file=file))
+        runs.append(
+            RunSpec(
+                label,
+                resolution,
+                source.origin,
+                int(seed),
+                float(study.duration_s),
+                float(furniture),
+                float(people),
+                sname,
+                sensor,
+                oname,
+                odom,
+                iname,
+                tuple(sorted(dict(icp).items())),
+                plan_file=file,
+            )
+        )
     seen: dict[str, RunSpec] = {}
     for run in runs:
         if run.run_id in seen:
-            raise StudyError(f"the study gives the same run twice (plan {run.plan!r}, seed {run.seed}): "
-                             "is a plan listed twice?")
+            raise StudyError(
+                f"the study gives the same run twice (plan {run.plan!r}, seed {run.seed}): is a plan listed twice?"
+            )
         seen[run.run_id] = run
     return runs
 
@@ -194,7 +243,7 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
         metrics = recording.metrics()
         truth = recording.truth[:, :2]
         metrics["path_length_m"] = float(np.sum(np.hypot(*np.diff(truth, axis=0).T))) if len(truth) > 1 else 0.0
-        metrics["furniture_m2"] = float(world.floor.clutter[3:-3, 3:-3].sum() * world.floor.resolution ** 2)
+        metrics["furniture_m2"] = float(world.floor.clutter[3:-3, 3:-3].sum() * world.floor.resolution**2)
         metrics["people_count"] = float(len(world.people))
         record.update({k: _finite_or_none(metrics.get(k)) for k in METRIC_COLUMNS})
     except Exception as exc:  # noqa: BLE001 - a failed run is a result, not the end of the study
@@ -208,8 +257,15 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
 
 def failed_record(spec: RunSpec, error: str) -> dict[str, Any]:
     """The record of a run that could not report itself (its worker died): status "failed"."""
-    return {"run_id": spec.run_id, **spec.parameters(), "status": "failed", "error": error,
-            "run_time_s": None, "finished_at": time.time(), "worker": ""}
+    return {
+        "run_id": spec.run_id,
+        **spec.parameters(),
+        "status": "failed",
+        "error": error,
+        "run_time_s": None,
+        "finished_at": time.time(),
+        "worker": "",
+    }
 
 
 def _finite_or_none(value: Any) -> float | None:
@@ -221,5 +277,10 @@ def _finite_or_none(value: Any) -> float | None:
 
 def study_axes(study: Study) -> Mapping[str, list[Any]]:
     """The values of each axis of the study, in study order (for plots and the report)."""
-    return {"furniture": list(study.furniture), "people": list(study.people), "sensor": list(study.sensors),
-            "odometry": list(study.odometry), "icp": list(study.icp)}
+    return {
+        "furniture": list(study.furniture),
+        "people": list(study.people),
+        "sensor": list(study.sensors),
+        "odometry": list(study.odometry),
+        "icp": list(study.icp),
+    }

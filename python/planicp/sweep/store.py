@@ -85,10 +85,18 @@ def table_rows(study: Study, runs: Sequence[RunSpec], records: dict[str, dict[st
         ok = record.get("status") == "ok"
         max_error = record.get("planicp_position_max_m")
         lost_at_end = record.get("lost_at_end")
-        success = bool(ok and max_error is not None and max_error < criterion.max_position_error_m
-                       and (criterion.allow_lost_at_end or not lost_at_end))
-        row: dict[str, Any] = {"run_id": run.run_id, "status": record.get("status", "failed"),
-                               "error": record.get("error", ""), "success": success}
+        success = bool(
+            ok
+            and max_error is not None
+            and max_error < criterion.max_position_error_m
+            and (criterion.allow_lost_at_end or not lost_at_end)
+        )
+        row: dict[str, Any] = {
+            "run_id": run.run_id,
+            "status": record.get("status", "failed"),
+            "error": record.get("error", ""),
+            "success": success,
+        }
         row.update(run.parameters())
         row["odometry_drift_deg_per_s"] = run.odometry_setting.drift_deg_per_s
         row["odometry_drift_mm_per_s"] = run.odometry_setting.drift_mm_per_s

@@ -1,7 +1,7 @@
 """A study: the settings a sweep varies, as typed frozen dataclasses that round-trip through YAML.
 
 A study file (YAML) names the plans, seeds and settings; `planicp.sweep.runs.expand_runs` turns it
-into one run of the simulation loop (`planicp.sim.run_experiment`) per combination::
+into one run of the simulation loop (`planicp.sim.run_experiment`) per combination:
 
     name: clutter-and-drift
     duration_s: 40              # simulated seconds per run
@@ -43,10 +43,10 @@ from typing import Any
 
 from .._validation import brief, one_line, unknown_fields
 from ..io.yaml_documents import read_yaml_file
-from ..tracking.icp_config import IcpConfig
 from ..sim.experiment import LidarModel
 from ..sim.odometry import ErrorGenerator, OdometryNoise
 from ..sim.world import Furnishing
+from ..tracking.icp_config import IcpConfig
 
 __all__ = [
     "DEFAULT_PLAN",
@@ -94,8 +94,9 @@ class PlanSource:
         if self.resolution is not None:
             value = _number(self.resolution, "resolution")
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"resolution must be a positive number of metres per pixel, got "
-                                 f"{brief(self.resolution)}")
+                raise ValueError(
+                    f"resolution must be a positive number of metres per pixel, got {brief(self.resolution)}"
+                )
             object.__setattr__(self, "resolution", value)
         origin = self.origin
         if isinstance(origin, (str, bytes)) or not isinstance(origin, (list, tuple)) or len(origin) != 3:
@@ -154,9 +155,16 @@ class SensorSetting:
 
     def lidar(self) -> LidarModel:
         """The simulation's LIDAR model."""
-        return LidarModel(fov=math.radians(self.fov_deg), beams=self.beams, range_min=self.range_min,
-                          range_max=self.range_max, range_sigma=self.range_sigma, dropout=self.dropout,
-                          rate_hz=self.rate_hz, mount=self.mount)
+        return LidarModel(
+            fov=math.radians(self.fov_deg),
+            beams=self.beams,
+            range_min=self.range_min,
+            range_max=self.range_max,
+            range_sigma=self.range_sigma,
+            dropout=self.dropout,
+            rate_hz=self.rate_hz,
+            mount=self.mount,
+        )
 
 
 @dataclass(frozen=True)
@@ -306,9 +314,11 @@ class Study:
         for name, sensor in self.sensors.items():
             for oname, odom in self.odometry.items():
                 if odom.rate_hz < sensor.rate_hz:
-                    raise StudyError(f"key {brief(f'odometry.{oname}.rate_hz')} ({odom.rate_hz}) is below the scan "
-                                     f"rate of {brief(f'sensors.{name}')} ({sensor.rate_hz}): odometry must be at "
-                                     f"least as fast")
+                    raise StudyError(
+                        f"key {brief(f'odometry.{oname}.rate_hz')} ({odom.rate_hz}) is below the scan "
+                        f"rate of {brief(f'sensors.{name}')} ({sensor.rate_hz}): odometry must be at "
+                        f"least as fast"
+                    )
 
     def icp_config(self, name: str) -> IcpConfig:
         """The ICP settings named `name`."""

@@ -53,8 +53,12 @@ class ContinuityRule:
         reference = PlanMap.from_points(previous)
         # A KD-tree: the nearest-wall index (the same pairs) would be built for this one alignment,
         # 11 ms for a 287-point outdoor scan.
-        config = IcpConfig(max_correspondence_distance=2 * self.max_distance, use_visibility=False,
-                           correspondence_schedule=(1.0, 0.5), correspondence_search="kd_tree")
+        config = IcpConfig(
+            max_correspondence_distance=2 * self.max_distance,
+            use_visibility=False,
+            correspondence_schedule=(1.0, 0.5),
+            correspondence_search="kd_tree",
+        )
         result = localize(scan, reference, motion, config)
         dx, dy, _ = between(motion, result.pose)
         return result.inlier_ratio >= self.min_overlap and math.hypot(dx, dy) <= self.max_correction

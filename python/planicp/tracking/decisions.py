@@ -121,7 +121,10 @@ class FitDecision:
             return f"not aligned: {self.reason}"
         how = " (KD-tree retry)" if self.retried else (" (every return, again)" if self.realigned else "")
         verdict = "passed the gate" if self.reason == "" else f"rejected: {self.reason}"
-        return f"fit from the prediction{how} explains {100 * self.result.inlier_ratio:.0f} % of the aligned points, {verdict}"
+        return (
+            f"fit from the prediction{how} explains {100 * self.result.inlier_ratio:.0f} % of the aligned points, "
+            f"{verdict}"
+        )
 
 
 @dataclass(frozen=True)
@@ -186,8 +189,11 @@ class SearchDecision:
         if self.cause is None:
             return "the place a pending jump led to was confirmed" if self.searched else "no search"
         if self.cause == "uncertain":
-            return ("uncertain prediction: the search found a place, taken" if self.found is not None
-                    else "uncertain prediction: the search found no place that passes")
+            return (
+                "uncertain prediction: the search found a place, taken"
+                if self.found is not None
+                else "uncertain prediction: the search found no place that passes"
+            )
         return f"jump rejected: {self.reason}"
 
 
@@ -219,7 +225,10 @@ class ScoreDecision:
         """One sentence on this decision."""
         text = f"the plan explains {100 * self.score:.0f} % of the scan"
         if self.continues is True:
-            text += ", poorly, but the scan is clutter (it continues the last well explained scan or a crowd hides the walls)"
+            text += (
+                ", poorly, but the scan is clutter (it continues the last well explained scan or a crowd hides "
+                "the walls)"
+            )
         elif self.continues is False:
             text += ", poorly, and the scan does not continue the last well explained one"
         elif self.poor:
@@ -311,14 +320,18 @@ class RecoveryDecision:
     def why(self) -> str:
         """One sentence on this decision."""
         if self.adopted is not None:
-            trial = (", on trial while the search of the whole plan goes on" if self.on_trial else "")
+            trial = ", on trial while the search of the whole plan goes on" if self.on_trial else ""
             if self.action == "verify":
-                return (f"a place the search of the whole plan found explained {self.adopted.streak} scans "
-                        f"better than the one on trial: adopted")
+                return (
+                    f"a place the search of the whole plan found explained {self.adopted.streak} scans "
+                    f"better than the one on trial: adopted"
+                )
             return f"the recovery confirmed a place over {self.adopted.streak} scans: adopted{trial}"
         if self.action == "verify":
-            return (f"the pose is on trial: the search of the whole plan goes on, "
-                    f"{len(self.hypotheses)} rival place(s) followed")
+            return (
+                f"the pose is on trial: the search of the whole plan goes on, "
+                f"{len(self.hypotheses)} rival place(s) followed"
+            )
         if self.action == "clear":
             return "not lost: the recovery is idle"
         if self.action == "coast":
@@ -355,6 +368,15 @@ class Bookkeeping:
         return "; ".join(parts)
 
 
-Decision = (Prediction | FitDecision | PendingDecision | SearchDecision | ScoreDecision | Correction | LostDecision
-            | RecoveryDecision | Bookkeeping)
+Decision = (
+    Prediction
+    | FitDecision
+    | PendingDecision
+    | SearchDecision
+    | ScoreDecision
+    | Correction
+    | LostDecision
+    | RecoveryDecision
+    | Bookkeeping
+)
 """Any stage's decision (the items of `Estimate.decisions`)."""

@@ -19,8 +19,8 @@ from numpy.typing import NDArray
 
 from .._validation import Pose, real_number
 from ..se2 import wrap_angle
-from .icp_result import IcpResult
 from .fusion_rule import finite_covariance
+from .icp_result import IcpResult
 
 
 @dataclass(frozen=True)
@@ -61,8 +61,9 @@ class DegeneracyRule:
         return Degeneracy(axis, weak, strong) if weak < self.min_constraint else None
 
 
-def fuse_along_weak_axis(degeneracy: Degeneracy, result: IcpResult, predicted: Pose,
-                         predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+def fuse_along_weak_axis(
+    degeneracy: Degeneracy, result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]
+) -> tuple[Pose, NDArray[np.float64]]:
     """ICP's pose and heading across the weak axis; along it, the odometry prediction corrected by
     ICP only in proportion to their variances (a one-dimensional Kalman update): with no wall
     normal along the axis ICP's variance there is unbounded and the prediction is kept exactly;

@@ -62,8 +62,9 @@ class FusionRule:
         innovation = _difference(result.pose, predicted)
         return float(innovation @ inverse @ innovation)
 
-    def fuse(self, result: IcpResult, predicted: Pose,
-             predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]] | None:
+    def fuse(
+        self, result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]
+    ) -> tuple[Pose, NDArray[np.float64]] | None:
         """`fuse_with_prediction`, or None when the innovation exceeds `max_innovation` (the
         odometry faulted) or the summed covariance is singular."""
         inverse = _summed_inverse(result, predicted_covariance)
@@ -75,8 +76,9 @@ class FusionRule:
         return _update(predicted, predicted_covariance, finite_covariance(result), innovation, inverse)
 
 
-def fuse_with_prediction(result: IcpResult, predicted: Pose,
-                         predicted_covariance: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+def fuse_with_prediction(
+    result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]
+) -> tuple[Pose, NDArray[np.float64]]:
     """The Kalman update of the prediction (covariance `predicted_covariance`, 3x3 over map-frame
     x, y, yaw in m and rad) by the fit's pose (covariance `result.covariance`, with a direction the
     fit does not constrain at all given `UNCONSTRAINED_VARIANCE`). Returns the fused pose and its
@@ -86,8 +88,9 @@ def fuse_with_prediction(result: IcpResult, predicted: Pose,
         numpy.linalg.LinAlgError: the summed covariance is singular.
     """
     inverse = np.asarray(np.linalg.inv(predicted_covariance + finite_covariance(result)), dtype=np.float64)
-    return _update(predicted, predicted_covariance, finite_covariance(result), _difference(result.pose, predicted),
-                   inverse)
+    return _update(
+        predicted, predicted_covariance, finite_covariance(result), _difference(result.pose, predicted), inverse
+    )
 
 
 def _summed_inverse(result: IcpResult, predicted_covariance: NDArray[np.float64]) -> NDArray[np.float64] | None:
@@ -99,8 +102,13 @@ def _summed_inverse(result: IcpResult, predicted_covariance: NDArray[np.float64]
     return inverse
 
 
-def _update(predicted: Pose, predicted_covariance: NDArray[np.float64], fit_covariance: NDArray[np.float64],
-            innovation: NDArray[np.float64], summed_inverse: NDArray[np.float64]) -> tuple[Pose, NDArray[np.float64]]:
+def _update(
+    predicted: Pose,
+    predicted_covariance: NDArray[np.float64],
+    fit_covariance: NDArray[np.float64],
+    innovation: NDArray[np.float64],
+    summed_inverse: NDArray[np.float64],
+) -> tuple[Pose, NDArray[np.float64]]:
     """The Kalman update: gain K = P S^-1, pose = predicted + K innovation, covariance in Joseph
     form (I - K) P (I - K)^T + K R K^T, symmetric and positive semi-definite however far apart P
     and R are (the short form (I - K) P, with a start prior of 1e12 m^2 against a fit's 1e-5,

@@ -8,10 +8,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-CorrespondenceSearch = Literal["wall_index", "kd_tree"]
-
 from .. import _core
 from .._validation import positive, real_number, unknown_fields, whole_number
+
+CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
 
 @dataclass(frozen=True)

@@ -4,16 +4,21 @@ from __future__ import annotations
 
 from typing import Any
 
-
 from .. import _core
-from .._validation import as_pose, as_points
+from .._validation import as_points, as_pose
 from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 
 
-def localize(scan_xy: Any, plan: PlanMap, initial_pose: Any, config: IcpConfig | None = None, *,
-             view: _core.WallView | None = None) -> IcpResult:
+def localize(
+    scan_xy: Any,
+    plan: PlanMap,
+    initial_pose: Any,
+    config: IcpConfig | None = None,
+    *,
+    view: _core.WallView | None = None,
+) -> IcpResult:
     """Aligns a scan to the plan by trimmed, coarse-to-fine point-to-point ICP.
 
     Args:

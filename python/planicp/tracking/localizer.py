@@ -10,7 +10,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import Pose, as_pose, as_points
+from .._validation import Pose, as_points, as_pose
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate
@@ -38,6 +38,7 @@ from .stages import (
     recover,
     search_near_prediction,
 )
+
 
 @dataclass(frozen=True)
 class Estimate:
@@ -203,8 +204,14 @@ class Localizer:
         # step, a candidate place): fits it cannot make are tried again with the KD-tree, and the
         # recovery refines its candidates with it.
         self._wide_config = self.config.replace(correspondence_search="kd_tree")
-        self._recovery = Recovery(plan, recovery if recovery is not None else RecoveryConfig(), self._wide_config,
-                                  self.gate, self._occlusion, self.motion_noise)
+        self._recovery = Recovery(
+            plan,
+            recovery if recovery is not None else RecoveryConfig(),
+            self._wide_config,
+            self.gate,
+            self._occlusion,
+            self.motion_noise,
+        )
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.
         prepare_search(plan, self._recovery.config.search)
@@ -267,8 +274,11 @@ class Localizer:
                 self._covariance = finite_or(best.result.covariance, self._covariance)
                 self._detector.reset()
             else:
-                self._recovery.hypotheses = [Hypothesis(c.pose, c.result, 1, c.inlier_ratio) for c in found.candidates
-                                             if c.inlier_ratio >= config.min_inlier_ratio]
+                self._recovery.hypotheses = [
+                    Hypothesis(c.pose, c.result, 1, c.inlier_ratio)
+                    for c in found.candidates
+                    if c.inlier_ratio >= config.min_inlier_ratio
+                ]
                 self._detector.declare_lost()
             return found
 
@@ -326,16 +336,40 @@ class Localizer:
             kept = fit.kept
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan
-            return Estimate(pose, accepted, result, prediction.pose, odom, reason, covariance.copy(),
-                            correction.degeneracy, now_lost, self._detector.score, relocalized, recovery.hypotheses,
-                            kept, recovery.on_trial, decisions=(prediction, fit, confirmation, search, score, correction, lost, recovery,
-                                             records))
+            return Estimate(
+                pose,
+                accepted,
+                result,
+                prediction.pose,
+                odom,
+                reason,
+                covariance.copy(),
+                correction.degeneracy,
+                now_lost,
+                self._detector.score,
+                relocalized,
+                recovery.hypotheses,
+                kept,
+                recovery.on_trial,
+                decisions=(prediction, fit, confirmation, search, score, correction, lost, recovery, records),
+            )
 
     def _rules(self) -> Rules:
         """The plan and rules as this update reads them (a caller may replace `gate` and the
         others between updates)."""
-        return Rules(self.plan, self.config, self._wide_config, self.gate, self.motion_noise, self.degeneracy,
-                     self.continuity, self.fusion, self._occlusion, self._detector.rule, self._recovery.config)
+        return Rules(
+            self.plan,
+            self.config,
+            self._wide_config,
+            self.gate,
+            self.motion_noise,
+            self.degeneracy,
+            self.continuity,
+            self.fusion,
+            self._occlusion,
+            self._detector.rule,
+            self._recovery.config,
+        )
 
 
 DEFAULT_INITIAL_STD = (0.1, 0.1, math.radians(5.0))

@@ -35,8 +35,13 @@ class MotionNoise:
     rotation_floor: float = math.radians(0.05)
 
     def __post_init__(self) -> None:
-        for name in ("translation_fraction", "translation_floor", "rotation_fraction", "rotation_per_metre",
-                     "rotation_floor"):
+        for name in (
+            "translation_fraction",
+            "translation_floor",
+            "rotation_fraction",
+            "rotation_per_metre",
+            "rotation_floor",
+        ):
             value = real_number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0.0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
@@ -69,8 +74,10 @@ class MotionNoise:
             q = np.diag(np.square([sigma_t, sigma_t, sigma_r]))
             out: NDArray[np.float64] = f @ covariance @ f.T + g @ q @ g.T
         if not np.isfinite(out).all():
-            raise ValueError(f"the covariance propagated over motion {(dx, dy, dyaw)} from {pose} is not finite "
-                             f"(motion or covariance too large, or not finite)")
+            raise ValueError(
+                f"the covariance propagated over motion {(dx, dy, dyaw)} from {pose} is not finite "
+                f"(motion or covariance too large, or not finite)"
+            )
         return (out + out.T) / 2.0
 
 

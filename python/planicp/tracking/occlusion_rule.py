@@ -64,8 +64,9 @@ class OcclusionFilter:
         self.rule = rule
         self._plan = plan
         # Rows of the native grid grow with +y; images put the top row first.
-        self._grid = _core.OccupancyGrid(np.ascontiguousarray(raster.walls[::-1]), raster.resolution,
-                                         (raster.origin[0], raster.origin[1]))
+        self._grid = _core.OccupancyGrid(
+            np.ascontiguousarray(raster.walls[::-1]), raster.resolution, (raster.origin[0], raster.origin[1])
+        )
 
     def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig) -> _core.WallView:
         """The plan as seen from `pose` (T_map_base) over the arc the base-frame `points` span

@@ -38,9 +38,9 @@ Poses are T_map_base; scans are base-frame points (metres).
 from __future__ import annotations
 
 import math
-from statistics import NormalDist
 from collections import deque
 from dataclasses import dataclass, field
+from statistics import NormalDist
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,13 +48,13 @@ from numpy.typing import NDArray
 from .._validation import Pose, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
+from .acceptance_gate import AcceptanceGate
+from .fusion_rule import CHI2_3_999
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 from .localize import localize
-from .occlusion_rule import OcclusionFilter
-from .acceptance_gate import AcceptanceGate
 from .motion_noise import MotionNoise, largest_position_std
-from .fusion_rule import CHI2_3_999
+from .occlusion_rule import OcclusionFilter
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
 
 
@@ -135,8 +135,16 @@ class SearchBudget:
         """What the other searches may still score (None: no limit)."""
         return None if self.left is None else max(self.left - self.reserved, 0)
 
-    def search(self, scan: NDArray[np.float64], plan: PlanMap, region: SearchRegion, config: RelocalizationConfig,
-               max_candidates: int, *, whole_plan: bool = False) -> Relocalization | None:
+    def search(
+        self,
+        scan: NDArray[np.float64],
+        plan: PlanMap,
+        region: SearchRegion,
+        config: RelocalizationConfig,
+        max_candidates: int,
+        *,
+        whole_plan: bool = False,
+    ) -> Relocalization | None:
         """`relocalize` of `scan` in `region` within what is `free` (all that is left for the
         re-searches of the whole plan's places, `whole_plan`): None when the search would score
         more (a search cut short proves nothing). Spends what it scored."""
@@ -237,7 +245,7 @@ class Recovery:
         self.hypotheses = [h for h in self.hypotheses if not _same(h.pose, pose)]
         rival = self._confirmed()
         if rival is not None:
-            same_scans = list(self._incumbent)[-rival.streak:]
+            same_scans = list(self._incumbent)[-rival.streak :]
             if rival.mean_inlier_ratio >= sum(same_scans) / len(same_scans) + self.config.margin:
                 self.clear()
                 return rival
@@ -274,8 +282,12 @@ class Recovery:
         be weighed against it; a robot whose odometry broke is back as soon as the searches near
         it end, not when a search of the whole plan does (minutes of driving on a large plan
         with the search spread over updates)."""
-        return (hypothesis.near and self._whole is not None
-                and self.explained_seen > 0.0 and hypothesis.mean_inlier_ratio >= self.explained_seen)
+        return (
+            hypothesis.near
+            and self._whole is not None
+            and self.explained_seen > 0.0
+            and hypothesis.mean_inlier_ratio >= self.explained_seen
+        )
 
     def new_update(self) -> SearchBudget:
         """A fresh `search_nodes` budget for the searches of the update that begins (returned)."""
@@ -286,8 +298,9 @@ class Recovery:
     def coast(self, motion: Pose) -> None:
         """A scan too small to align while lost: the hypotheses, and the odometry motion since
         the running search's scan, follow `motion` alone."""
-        self.hypotheses = [Hypothesis(compose(h.pose, motion), h.result, h.streak, h.total, h.near)
-                           for h in self.hypotheses]
+        self.hypotheses = [
+            Hypothesis(compose(h.pose, motion), h.result, h.streak, h.total, h.near) for h in self.hypotheses
+        ]
         for run in (self._near, self._whole):
             if run is not None:
                 run.move(motion, self.motion_noise)
@@ -321,8 +334,7 @@ class Recovery:
             for run in (self._near, self._whole):
                 if run is not None:
                     run.move(motion, self.motion_noise)
-        if (near and self._near is None and self.config.local_radius > 0.0
-                and not any(h.near for h in self.hypotheses)):
+        if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
             self._near = self._start(scan, SearchRegion(last_pose, self.config.local_radius, math.pi))
         if self._near is not None and self._advance(self._near, scan, self.budget.free):
             self._near = None
@@ -330,13 +342,16 @@ class Recovery:
             self._whole = None
             self._cycle, self._near = False, None
             self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
-            self.hypotheses = self.hypotheses[:self.config.max_hypotheses]
+            self.hypotheses = self.hypotheses[: self.config.max_hypotheses]
 
     def _start(self, scan: NDArray[np.float64], region: SearchRegion | None) -> _Run:
         """A search of `region` (None: the whole plan) for `scan`, no node scored yet."""
         self.searches += 1
-        return _Run(SearchInSteps(scan, self.plan, region=region, config=self.config.search,
-                                  max_candidates=self.config.max_hypotheses))
+        return _Run(
+            SearchInSteps(
+                scan, self.plan, region=region, config=self.config.search, max_candidates=self.config.max_hypotheses
+            )
+        )
 
     def _advance(self, run: _Run, scan: NDArray[np.float64], nodes: int | None) -> bool:
         """Scores up to `nodes` (None: no limit) of `run`, drawn from the update's budget; when the
@@ -358,8 +373,9 @@ class Recovery:
                 self.hypotheses.append(found)
         return True
 
-    def _found_again(self, scan: NDArray[np.float64], candidate: Candidate, since: Pose,
-                     spread: NDArray[np.float64], near: bool) -> Hypothesis | None:
+    def _found_again(
+        self, scan: NDArray[np.float64], candidate: Candidate, since: Pose, spread: NDArray[np.float64], near: bool
+    ) -> Hypothesis | None:
         """The hypothesis a search's candidate gives now: at once when the search ended with the
         scan it started with (`since` the identity); otherwise the odometry moved the robot by
         `since` in the meantime, with the covariance `spread`, which over many updates outgrows
@@ -378,8 +394,9 @@ class Recovery:
         fit = localize(scan, self.plan, here, self.icp)
         metres, radians = _moved(fit.pose, here)
         if fit.inlier_ratio < self.config.min_inlier_ratio or metres > radius or radians > yaw:
-            searched = self.budget.search(scan, self.plan, SearchRegion(here, radius, yaw), self.config.search, 1,
-                                          whole_plan=not near)
+            searched = self.budget.search(
+                scan, self.plan, SearchRegion(here, radius, yaw), self.config.search, 1, whole_plan=not near
+            )
             again = None if searched is None else searched.best
             if again is None:
                 return None
@@ -391,12 +408,15 @@ class Recovery:
     def _follow(self, hypothesis: Hypothesis, scan: NDArray[np.float64], motion: Pose) -> Hypothesis | None:
         predicted = compose(hypothesis.pose, motion)
         result = localize(scan, self.plan, predicted, self.icp)
-        if (result.inlier_ratio < self.config.min_inlier_ratio or self.gate.rejection(result, predicted)
-                or self._contradicted(scan, result.pose)):
+        if (
+            result.inlier_ratio < self.config.min_inlier_ratio
+            or self.gate.rejection(result, predicted)
+            or self._contradicted(scan, result.pose)
+        ):
             return None
-        return Hypothesis(result.pose, result, hypothesis.streak + 1, hypothesis.total + result.inlier_ratio,
-                          hypothesis.near)
-
+        return Hypothesis(
+            result.pose, result, hypothesis.streak + 1, hypothesis.total + result.inlier_ratio, hypothesis.near
+        )
 
     def _contradicted(self, scan: NDArray[np.float64], pose: Pose) -> bool:
         """Whether more of the scan's returns lie beyond the walls seen from `pose` than
@@ -497,9 +517,14 @@ def student_t_quantile(p: float, dof: int) -> float:
         return (2.0 * p - 1.0) * math.sqrt(2.0 / (4.0 * p * (1.0 - p)))
     z = NormalDist().inv_cdf(p)
     v = float(dof)
-    return (z + (z**3 + z) / (4 * v) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * v**2)
-            + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * v**3)
-            + (79 * z**9 + 776 * z**7 + 1482 * z**5 - 1920 * z**3 - 945 * z) / (92160 * v**4))
+    return (
+        z
+        + (z**3 + z) / (4 * v)
+        + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * v**2)
+        + (3 * z**7 + 19 * z**5 + 17 * z**3 - 15 * z) / (384 * v**3)
+        + (79 * z**9 + 776 * z**7 + 1482 * z**5 - 1920 * z**3 - 945 * z) / (92160 * v**4)
+    )
+
 
 _WHOLE_SEARCH = 2**62
 """A node budget no search reaches: `search_nodes=None` runs each search within one update."""

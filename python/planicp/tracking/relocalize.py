@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .. import _core
-from .._validation import Pose, as_pose, as_points, positive, real_number, whole_number
+from .._validation import Pose, as_points, as_pose, positive, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
@@ -108,9 +108,20 @@ class RelocalizationConfig:
             raise TypeError(f"icp must be a planicp.IcpConfig, got {type(self.icp).__name__}")
 
     def _matcher_key(self) -> tuple[Any, ...]:
-        return (self.resolution, self.sigma, self.levels, self.angular_step, self.max_angular_step,
-                self.search_candidates, self.min_score, self.relative_score, self.nms_distance, self.nms_angle,
-                self.max_scan_points, self.max_nodes)
+        return (
+            self.resolution,
+            self.sigma,
+            self.levels,
+            self.angular_step,
+            self.max_angular_step,
+            self.search_candidates,
+            self.min_score,
+            self.relative_score,
+            self.nms_distance,
+            self.nms_angle,
+            self.max_scan_points,
+            self.max_nodes,
+        )
 
 
 @dataclass(frozen=True)
@@ -159,8 +170,10 @@ class Candidate:
 
     def __repr__(self) -> str:
         x, y, yaw = self.pose
-        return (f"Candidate(pose=(x={x:.3f} m, y={y:.3f} m, yaw={math.degrees(yaw):.2f} deg), "
-                f"score={self.score:.3f}, rmse={self.rmse * 100:.2f} cm, search_score={self.search_score:.3f})")
+        return (
+            f"Candidate(pose=(x={x:.3f} m, y={y:.3f} m, yaw={math.degrees(yaw):.2f} deg), "
+            f"score={self.score:.3f}, rmse={self.rmse * 100:.2f} cm, search_score={self.search_score:.3f})"
+        )
 
 
 @dataclass(frozen=True, repr=False)
@@ -199,9 +212,11 @@ class Relocalization:
     def __repr__(self) -> str:
         best = self.best
         where = "none" if best is None else repr(best)
-        return (f"Relocalization(best={where}, candidates={len(self.candidates)}, "
-                f"ambiguity={self.ambiguity:.3f}, ambiguous={self.ambiguous}, complete={self.complete}, "
-                f"{self.seconds * 1000:.0f} ms)")
+        return (
+            f"Relocalization(best={where}, candidates={len(self.candidates)}, "
+            f"ambiguity={self.ambiguity:.3f}, ambiguous={self.ambiguous}, complete={self.complete}, "
+            f"{self.seconds * 1000:.0f} ms)"
+        )
 
 
 def relocalize(
@@ -237,16 +252,25 @@ def relocalize(
     """
     start = time.perf_counter()
     config, count, points, window = _search_arguments(scan_xy, plan, region, config, max_candidates)
-    raw = _core.relocalize(_matcher(plan, config), points, window, config.icp._native, count,
-                           float(config.ambiguity_margin))
+    raw = _core.relocalize(
+        _matcher(plan, config), points, window, config.icp._native, count, float(config.ambiguity_margin)
+    )
     return _relocalization(raw, config, time.perf_counter() - start)
 
 
 def _relocalization(raw: _core.Relocalization, config: RelocalizationConfig, seconds: float) -> Relocalization:
     candidates = tuple(_candidate(c, config.icp.covariance_scale) for c in raw.candidates)
-    return Relocalization(candidates=candidates, ambiguity=raw.ambiguity, ambiguous=raw.ambiguous,
-                          complete=raw.complete, rotations=raw.rotations, angular_step=raw.angular_step,
-                          nodes=raw.nodes, scan_points=raw.scan_points, seconds=seconds)
+    return Relocalization(
+        candidates=candidates,
+        ambiguity=raw.ambiguity,
+        ambiguous=raw.ambiguous,
+        complete=raw.complete,
+        rotations=raw.rotations,
+        angular_step=raw.angular_step,
+        nodes=raw.nodes,
+        scan_points=raw.scan_points,
+        seconds=seconds,
+    )
 
 
 class SearchInSteps:
@@ -259,16 +283,22 @@ class SearchInSteps:
     `seconds` is the time spent in the calls. The GIL is released while a call works.
     """
 
-    def __init__(self, scan_xy: Any, plan: PlanMap, *, region: SearchRegion | None = None,
-                 config: RelocalizationConfig | None = None, max_candidates: int = 5) -> None:
+    def __init__(
+        self,
+        scan_xy: Any,
+        plan: PlanMap,
+        *,
+        region: SearchRegion | None = None,
+        config: RelocalizationConfig | None = None,
+        max_candidates: int = 5,
+    ) -> None:
         """Arguments as for `relocalize`; no node is scored yet.
 
         Raises:
             TypeError, ValueError: as `relocalize`.
         """
         start = time.perf_counter()
-        self._config, self._count, self.scan, window = _search_arguments(scan_xy, plan, region, config,
-                                                                         max_candidates)
+        self._config, self._count, self.scan, window = _search_arguments(scan_xy, plan, region, config, max_candidates)
         """`scan`: the scan searched for, (N, 2) robot-frame metres."""
         self.region = region
         """`region`: where the search looks (None: the whole plan)."""
@@ -299,9 +329,9 @@ _Window = tuple[float, float, float, float, float]
 """A native search window: (x, y, yaw, half_width, half_angle)."""
 
 
-def _search_arguments(scan_xy: Any, plan: PlanMap, region: SearchRegion | None,
-                      config: RelocalizationConfig | None, max_candidates: int
-                      ) -> tuple[RelocalizationConfig, int, NDArray[np.float64], _Window | None]:
+def _search_arguments(
+    scan_xy: Any, plan: PlanMap, region: SearchRegion | None, config: RelocalizationConfig | None, max_candidates: int
+) -> tuple[RelocalizationConfig, int, NDArray[np.float64], _Window | None]:
     """The checked arguments of a search: (config, candidate count, scan points, native window)."""
     if not isinstance(plan, PlanMap):
         raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -328,8 +358,15 @@ def prepare_search(plan: PlanMap, config: RelocalizationConfig | None = None) ->
 def _candidate(raw: _core.RelocalizationCandidate, covariance_scale: float) -> Candidate:
     a = raw.alignment
     result = IcpResult.from_alignment(a, covariance_scale)
-    return Candidate(pose=raw.pose, score=raw.score, inlier_ratio=a.inlier_ratio, rmse=a.rmse,
-                     search_score=raw.search_score, search_pose=raw.search_pose, result=result)
+    return Candidate(
+        pose=raw.pose,
+        score=raw.score,
+        inlier_ratio=a.inlier_ratio,
+        rmse=a.rmse,
+        search_score=raw.search_score,
+        search_pose=raw.search_pose,
+        result=result,
+    )
 
 
 _CACHE_SIZE = 2
@@ -349,10 +386,19 @@ def _matcher(plan: PlanMap, config: RelocalizationConfig) -> _core.GlobalMatcher
             return hit[1]
     c = config
     matcher = _core.GlobalMatcher(
-        plan._native, float(c.resolution), float(c.sigma), int(c.levels),
-        None if c.angular_step is None else float(c.angular_step), float(c.max_angular_step),
-        int(c.search_candidates), float(c.min_score), float(c.relative_score), float(c.nms_distance), float(c.nms_angle),
-        int(c.max_scan_points), int(c.max_nodes),
+        plan._native,
+        float(c.resolution),
+        float(c.sigma),
+        int(c.levels),
+        None if c.angular_step is None else float(c.angular_step),
+        float(c.max_angular_step),
+        int(c.search_candidates),
+        float(c.min_score),
+        float(c.relative_score),
+        float(c.nms_distance),
+        float(c.nms_angle),
+        int(c.max_scan_points),
+        int(c.max_nodes),
     )
     with _MATCHERS_LOCK:
         _MATCHERS[key] = (plan._native, matcher)

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,13 +35,13 @@ from ..se2 import between, compose
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule
 from .decisions import (
-    RecoveryAction,
     Bookkeeping,
     Correction,
     FitDecision,
     LostDecision,
     PendingDecision,
     Prediction,
+    RecoveryAction,
     RecoveryDecision,
     ScoreDecision,
     SearchCause,
@@ -92,8 +91,9 @@ class Rules:
 # 1. Prediction
 
 
-def predict(pose: Pose, covariance: NDArray[np.float64], last_odom: Pose | None, odom: Pose,
-            motion_noise: MotionNoise) -> Prediction:
+def predict(
+    pose: Pose, covariance: NDArray[np.float64], last_odom: Pose | None, odom: Pose, motion_noise: MotionNoise
+) -> Prediction:
     """The last `pose` moved by the odometry motion from `last_odom` to `odom` (none at the first
     update), and its `covariance` propagated through that motion.
 
@@ -109,8 +109,7 @@ def predict(pose: Pose, covariance: NDArray[np.float64], last_odom: Pose | None,
 # 2. Fit from the prediction
 
 
-def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
-                        ) -> FitDecision:
+def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool) -> FitDecision:
     """The scan aligned from the prediction (see `_aligned`; the occlusion rule applies while not
     `lost`) and judged by the gate; with the index, a fit that explains little of the scan is
     tried again with the KD-tree. A scan with too few usable points, or whose points fall in fewer
@@ -118,14 +117,22 @@ def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rul
     are refused by every stage, never accepted on one update and refused by a search on another."""
     usable = -(-len(points) // rules.config.subsample)
     if usable < _core.MIN_SCAN_POINTS:
-        return FitDecision(None, None, None, False, f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})",
-                           usable=False)
+        return FitDecision(
+            None, None, None, False, f"scan has {usable} usable points (need {_core.MIN_SCAN_POINTS})", usable=False
+        )
     resolution = rules.recovery.search.resolution
     cells = occupied_cells(points, resolution)
     if cells < _core.MIN_SEARCH_POINTS:
         # A thousand returns at one spot are one: ICP would "align" them, and the searches refuse them.
-        return FitDecision(None, None, None, False, f"scan covers {cells} cells of {resolution:g} m (need "
-                           f"{_core.MIN_SEARCH_POINTS}): too little of the scene to place the robot", usable=False)
+        return FitDecision(
+            None,
+            None,
+            None,
+            False,
+            f"scan covers {cells} cells of {resolution:g} m (need "
+            f"{_core.MIN_SEARCH_POINTS}): too little of the scene to place the robot",
+            usable=False,
+        )
     predicted = prediction.pose
     result, kept, beyond, occluded, realigned = _aligned(points, prediction, rules, lost)
     reason = rules.gate.rejection(result, predicted)
@@ -133,8 +140,10 @@ def fit_from_prediction(points: NDArray[np.float64], prediction: Prediction, rul
     # A fit that explains little of the whole scan may have started outside the index's
     # narrower basin (a bad odometry step also misleads the occlusion rule): the KD-tree
     # tries again.
-    if (poor_fit(result.num_inliers / len(points), reason, result, rules)
-            and rules.config.correspondence_search == "wall_index"):
+    if (
+        poor_fit(result.num_inliers / len(points), reason, result, rules)
+        and rules.config.correspondence_search == "wall_index"
+    ):
         used = points if kept is None else points[kept]
         wide = localize(used, rules.plan, predicted, rules.wide_config)
         if wide.num_inliers > result.num_inliers:
@@ -150,8 +159,9 @@ def occupied_cells(points: NDArray[np.float64], resolution: float) -> int:
     return int(np.unique(keys).size)
 
 
-def _aligned(points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
-             ) -> tuple[IcpResult, NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, bool]:
+def _aligned(
+    points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
+) -> tuple[IcpResult, NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, bool]:
     """The fit of the scan from the prediction, with the occlusion rule's (kept, beyond,
     occluded) (see `_unoccluded`) and whether every return was aligned again. The rule judges the
     returns from the prediction. When the fit lands more than a quarter of the rule's margin
@@ -173,8 +183,9 @@ def _aligned(points: NDArray[np.float64], prediction: Prediction, rules: Rules, 
     return result, kept, beyond, occluded, False
 
 
-def _unoccluded(points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
-                ) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
+def _unoccluded(
+    points: NDArray[np.float64], prediction: Prediction, rules: Rules, lost: bool
+) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, bool, _core.WallView | None]:
     """(kept, beyond, occluded, view) when the occlusion rule applies (a trusted prediction,
     not lost): the points not in front of the plan's walls (None when too few would remain, or
     all: align them all), the points beyond the walls seen from the prediction, whether fewer
@@ -204,15 +215,19 @@ def _unoccluded(points: NDArray[np.float64], prediction: Prediction, rules: Rule
 def poor_fit(score: float, reason: str, result: IcpResult, rules: Rules) -> bool:
     """Whether the plan explains `result` poorly: rejected for its fit, or accepted with a
     `score` (see `scan_score`) below the lost rule's."""
-    return (reason != "" and rules.gate.fit_rejection(result) != "") or (
-        reason == "" and score < rules.lost.min_score)
+    return (reason != "" and rules.gate.fit_rejection(result) != "") or (reason == "" and score < rules.lost.min_score)
 
 
 # 3. The pending place
 
 
-def confirm_pending(points: NDArray[np.float64], prediction: Prediction, pending: tuple[Pose, Pose] | None,
-                    fit: FitDecision, rules: Rules) -> PendingDecision:
+def confirm_pending(
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    pending: tuple[Pose, Pose] | None,
+    fit: FitDecision,
+    rules: Rules,
+) -> PendingDecision:
     """The place an earlier scan put the robot at after a rejected jump (`pending`: the place and
     that scan's odometry pose), followed with the odometry, and the fit there when this scan
     confirms it: a sound fit there that explains the scan better than the prediction's fit by the
@@ -236,8 +251,15 @@ def confirm_pending(points: NDArray[np.float64], prediction: Prediction, pending
 # 4. The search around the prediction
 
 
-def search_near_prediction(points: NDArray[np.float64], prediction: Prediction, fit: FitDecision,
-                           pending: PendingDecision, rules: Rules, lost: bool, budget: SearchBudget) -> SearchDecision:
+def search_near_prediction(
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    fit: FitDecision,
+    pending: PendingDecision,
+    rules: Rules,
+    lost: bool,
+    budget: SearchBudget,
+) -> SearchDecision:
     """The fit the update goes on with after a search around the prediction, when the gate cannot
     vouch for it (`search_cause`; not while `lost`, nor after a confirmed pending place, which the
     update goes on with).
@@ -256,21 +278,29 @@ def search_near_prediction(points: NDArray[np.float64], prediction: Prediction, 
     if result is None or cause is None:
         return SearchDecision(None, None, result, reason, False)
     predicted = prediction.pose
-    found = _search_near(points, predicted, result if reason == "" else None,
-                         prediction.covariance if cause == "uncertain" else None, rules, budget)
+    found = _search_near(
+        points,
+        predicted,
+        result if reason == "" else None,
+        prediction.covariance if cause == "uncertain" else None,
+        rules,
+        budget,
+    )
     if cause == "uncertain":
         if found is not None:
             return SearchDecision(cause, found, found, "", True)
         return SearchDecision(cause, None, result, reason, False)
     place = found if found is not None else result
     source = "a search found" if found is not None else "the fit puts the robot at"
-    reason = (f"{reason}; {source} a place {_distance(predicted, place.pose):.2f} m away, taken if the next scan "
-              f"confirms it")
+    reason = (
+        f"{reason}; {source} a place {_distance(predicted, place.pose):.2f} m away, taken if the next scan confirms it"
+    )
     return SearchDecision(cause, found, result, reason, False, pending=(place.pose, prediction.odom))
 
 
-def search_cause(result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64], rules: Rules
-                 ) -> SearchCause | None:
+def search_cause(
+    result: IcpResult, reason: str, predicted_covariance: NDArray[np.float64], rules: Rules
+) -> SearchCause | None:
     """Why the gate cannot vouch for this update, if it cannot: "jump", a good fit rejected
     only for its jump; "uncertain", a prediction whose 3-sigma position uncertainty exceeds
     the translation limit. None: no search (or the recovery searches no neighbourhood)."""
@@ -283,9 +313,14 @@ def search_cause(result: IcpResult, reason: str, predicted_covariance: NDArray[n
     return None
 
 
-def _search_near(points: NDArray[np.float64], predicted: Pose, accepted: IcpResult | None,
-                 consistent_with: NDArray[np.float64] | None, rules: Rules, budget: SearchBudget
-                 ) -> IcpResult | None:
+def _search_near(
+    points: NDArray[np.float64],
+    predicted: Pose,
+    accepted: IcpResult | None,
+    consistent_with: NDArray[np.float64] | None,
+    rules: Rules,
+    budget: SearchBudget,
+) -> IcpResult | None:
     """The fit at the unambiguous best place around `predicted`, when it explains at least the
     recovery's `min_inlier_ratio` of the scan, (if the fit from the prediction was acceptable,
     `accepted`) more of it than that fit by the recovery's `margin`, and (given the
@@ -309,8 +344,9 @@ def _search_near(points: NDArray[np.float64], predicted: Pose, accepted: IcpResu
         radius = min(radius, k * largest_position_std(consistent_with) + reach)
         yaw_std = math.sqrt(max(float(consistent_with[2, 2]), 0.0))
         yaw_tolerance = min(math.pi, k * yaw_std + 2.0 * config.search.heading_step)
-    found = budget.search(points, rules.plan, SearchRegion(predicted, radius, yaw_tolerance), config.search,
-                          config.max_hypotheses)
+    found = budget.search(
+        points, rules.plan, SearchRegion(predicted, radius, yaw_tolerance), config.search, config.max_hypotheses
+    )
     best = None if found is None else found.best
     if found is None or best is None or found.ambiguous or best.inlier_ratio < config.min_inlier_ratio:
         return None
@@ -329,8 +365,15 @@ def _search_near(points: NDArray[np.float64], predicted: Pose, accepted: IcpResu
 # 5. Score and continuity
 
 
-def judge_score(points: NDArray[np.float64], prediction: Prediction, fit: FitDecision, search: SearchDecision,
-                rules: Rules, lost: bool, anchor: tuple[NDArray[np.float64], Pose] | None) -> ScoreDecision:
+def judge_score(
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    fit: FitDecision,
+    search: SearchDecision,
+    rules: Rules,
+    lost: bool,
+    anchor: tuple[NDArray[np.float64], Pose] | None,
+) -> ScoreDecision:
     """How much of the whole scan the plan explains (`scan_score`; a search's fit is over the whole
     scan), whether that is poor (`poor_fit`), and, for a poor fit while not `lost`, whether the
     scan continues the last one the plan explained well (`anchor`: its points and odometry pose;
@@ -338,8 +381,11 @@ def judge_score(points: NDArray[np.float64], prediction: Prediction, fit: FitDec
     result, reason, searched = search.result, search.reason, search.searched
     if result is None:
         return ScoreDecision(0.0, False, None, reason)
-    score = (scan_score(result, None, None, len(points)) if searched else
-             scan_score(result, fit.kept, fit.beyond, len(points)))
+    score = (
+        scan_score(result, None, None, len(points))
+        if searched
+        else scan_score(result, fit.kept, fit.beyond, len(points))
+    )
     poor = poor_fit(score, reason, result, rules)
     continues: bool | None = None
     if poor and not lost:
@@ -347,8 +393,9 @@ def judge_score(points: NDArray[np.float64], prediction: Prediction, fit: FitDec
     return ScoreDecision(score, poor, continues, reason)
 
 
-def scan_score(result: IcpResult, kept: NDArray[np.bool_] | None, beyond: NDArray[np.bool_] | None,
-               scan_points: int) -> float:
+def scan_score(
+    result: IcpResult, kept: NDArray[np.bool_] | None, beyond: NDArray[np.bool_] | None, scan_points: int
+) -> float:
     """How much of the WHOLE scan of `scan_points` the plan explains: returns the occlusion rule
     left out (`kept` False) count as unexplained, so that a wrong prediction cannot hide the
     evidence against it, and so do returns `beyond` the walls seen from the prediction even
@@ -364,9 +411,17 @@ def scan_score(result: IcpResult, kept: NDArray[np.bool_] | None, beyond: NDArra
     return float(np.count_nonzero(inliers & ~beyond)) / scan_points
 
 
-def _continuity(points: NDArray[np.float64], odom: Pose, fit: FitDecision, result: IcpResult, reason: str,
-                searched: bool, score: float, rules: Rules, anchor: tuple[NDArray[np.float64], Pose] | None
-                ) -> tuple[bool, str]:
+def _continuity(
+    points: NDArray[np.float64],
+    odom: Pose,
+    fit: FitDecision,
+    result: IcpResult,
+    reason: str,
+    searched: bool,
+    score: float,
+    rules: Rules,
+    anchor: tuple[NDArray[np.float64], Pose] | None,
+) -> tuple[bool, str]:
     """(continues, reason) for a fit the plan explains poorly (rejected for its fit, or
     accepted with a score below the lost rule's), checked against the last scan the plan
     explained well (`anchor`): if the scan continues it, the robot is among clutter and nothing
@@ -381,14 +436,18 @@ def _continuity(points: NDArray[np.float64], odom: Pose, fit: FitDecision, resul
     nothing either way. Otherwise only the kept returns need to continue the last scan: a
     return short of the plan's walls says nothing about where the robot is."""
     kept = fit.kept
-    continues = fit.occluded or (kept is not None and not searched and reason == ""
-                                 and result.inlier_ratio >= rules.continuity.min_overlap)
+    continues = fit.occluded or (
+        kept is not None and not searched and reason == "" and result.inlier_ratio >= rules.continuity.min_overlap
+    )
     if not continues and anchor is not None:
-        continues = rules.continuity.continues(points if kept is None else points[kept], anchor[0],
-                                               between(anchor[1], odom))
+        continues = rules.continuity.continues(
+            points if kept is None else points[kept], anchor[0], between(anchor[1], odom)
+        )
         if not continues and reason == "":
-            reason = (f"the plan explains only {100 * score:.0f} % of the scan and it does not "
-                      f"continue the last scan the plan explained")
+            reason = (
+                f"the plan explains only {100 * score:.0f} % of the scan and it does not "
+                f"continue the last scan the plan explained"
+            )
     return continues, reason
 
 
@@ -416,8 +475,14 @@ def correct(prediction: Prediction, search: SearchDecision, score: ScoreDecision
 # 7. Lost
 
 
-def judge_lost(detector: LostDetector, score: ScoreDecision, correction: Correction, search: SearchDecision,
-               was_lost: bool, rules: Rules) -> LostDecision:
+def judge_lost(
+    detector: LostDetector,
+    score: ScoreDecision,
+    correction: Correction,
+    search: SearchDecision,
+    was_lost: bool,
+    rules: Rules,
+) -> LostDecision:
     """The lost rule's verdict, with this scan counted in `detector` unless it is clutter
     (`ScoreDecision.continues`)."""
     if score.continues:
@@ -436,8 +501,15 @@ def judge_lost(detector: LostDetector, score: ScoreDecision, correction: Correct
 # 8. Recovery
 
 
-def recover(recovery: Recovery, detector: LostDetector, points: NDArray[np.float64], prediction: Prediction,
-            fit: FitDecision, correction: Correction, lost: LostDecision) -> RecoveryDecision:
+def recover(
+    recovery: Recovery,
+    detector: LostDetector,
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    fit: FitDecision,
+    correction: Correction,
+    lost: LostDecision,
+) -> RecoveryDecision:
     """While lost, one step of the recovery with this scan (when it could be aligned; otherwise
     its places follow the odometry), and the place it adopts, if any: then the lost state ends
     (`detector` is reset). While a place adopted before the whole plan was searched is on trial,
@@ -461,15 +533,22 @@ def recover(recovery: Recovery, detector: LostDetector, points: NDArray[np.float
     if found is not None:
         covariance = finite_or(found.result.covariance, prediction.covariance)
         detector.reset()
-    return RecoveryDecision(action, found, covariance, tuple(h.pose for h in recovery.hypotheses),
-                            recovery.on_trial)
+    return RecoveryDecision(action, found, covariance, tuple(h.pose for h in recovery.hypotheses), recovery.on_trial)
 
 
 # 9. Bookkeeping
 
 
-def keep_records(recovery: Recovery, fit: FitDecision, score: ScoreDecision, result: IcpResult | None,
-                 scan_points: int, accepted: bool, relocalized: bool, lost: bool) -> Bookkeeping:
+def keep_records(
+    recovery: Recovery,
+    fit: FitDecision,
+    score: ScoreDecision,
+    result: IcpResult | None,
+    scan_points: int,
+    accepted: bool,
+    relocalized: bool,
+    lost: bool,
+) -> Bookkeeping:
     """Whether the scan becomes the continuity anchor (an `accepted` fit the plan explains well,
     or clutter that continues the last anchor), and, for a soundly tracked scan (accepted, well
     explained, not `relocalized`, not `lost`), what the recovery learns of this plan and scanner
