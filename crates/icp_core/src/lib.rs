@@ -7,14 +7,11 @@
 //! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
 //! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
 //! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
-//! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
+//! - [`grids`]: rasters and beams through them: cell traversal, clearance, the wall raster, the
+//!   simulated LIDAR, the log-odds occupancy grid.
 //! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
 //! - [`wall_view`]: one cast from a pose for both the visible points and each direction's wall range.
-//! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
-//! - [`clearance`]: each cell's distance to the nearest occupied one, so beams jump across empty space.
-//! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
-//! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
 //! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
@@ -34,27 +31,23 @@ pub mod acceleration;
 pub mod bucket_grid;
 pub mod cancel;
 pub mod candidate_cache;
-pub mod cell_traversal;
-pub mod clearance;
 pub mod correspondence;
 pub mod covariance;
 pub mod error;
 pub mod global_search;
+pub mod grids;
 pub mod icp;
 pub mod kd_tree;
 pub mod likelihood_field;
-pub mod log_odds_grid;
 pub mod nearest_wall_index;
 pub mod point_map;
 pub mod pose;
-pub mod ray_casting;
 pub mod relocalization;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;
 pub mod visible_through_index;
 pub mod wall_facing;
-pub mod wall_raster;
 pub mod wall_view;
 
 pub use error::{IcpError, Result};

@@ -4,11 +4,11 @@
 use crate::cancel::{self, Cancel};
 use crate::covariance;
 use crate::error::{check_finite, IcpError, Result};
+use crate::grids::wall_raster::WallRaster;
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility;
 use crate::wall_facing::visibility_masks;
-use crate::wall_raster::WallRaster;
 use crate::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
 

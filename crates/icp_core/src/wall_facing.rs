@@ -16,7 +16,7 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::Result;
-use crate::wall_raster::WallRaster;
+use crate::grids::wall_raster::WallRaster;
 
 /// Directions per point.
 pub const SECTORS: usize = 16;
@@ -100,7 +100,7 @@ fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool 
         }
         // Every cell within `clearance - 1` of this free one is free: the next 2 (clearance - 2)
         // half-cell steps (one cell short, against rounding) land on free cells and change
-        // nothing, so the march jumps over them, as the visibility casts do (crate::clearance).
+        // nothing, so the march jumps over them, as the visibility casts do (crate::grids::clearance).
         // Marches from a wall of a dense plan cross its open space in a few jumps.
         i += 1 + 2 * usize::from(clearance.saturating_sub(2));
     }

@@ -14,10 +14,10 @@
 //! cost robustness in crowds.
 
 use crate::error::{invalid, Result};
+use crate::grids::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
+use crate::grids::wall_raster::WallRaster;
 use crate::pose::Pose2;
-use crate::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
 use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan};
-use crate::wall_raster::WallRaster;
 use std::f64::consts::{PI, TAU};
 
 /// How far (radians) a view cast for a scan reaches beyond the directions the scan's returns span:
@@ -221,7 +221,7 @@ pub fn classify_returns(ranges: &[f64], points: &[[f64; 2]], margin: f64) -> Ret
 }
 
 /// The occlusion rule's classes of `points` (base frame, metres) against exact ranges: beams cast
-/// from `pose` (`T_map_base`) through the plan image `raster` ([`crate::ray_casting`]) in
+/// from `pose` (`T_map_base`) through the plan image `raster` ([`crate::grids::ray_casting`]) in
 /// `directions` directions, over the arc the returns span and one direction either side. The
 /// image's wall faces are exact to a pixel; a [`WallView`]'s ranges come from the coarser
 /// visibility raster, whose cells lengthen walls at their ends.

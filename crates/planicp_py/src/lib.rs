@@ -470,7 +470,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `planicp.synthetic.Floor`); `origin` is the map-frame (x, y) of the lower-left corner of cell (0, 0).
 #[pyclass(frozen, module = "planicp._core")]
 struct OccupancyGrid {
-    inner: Arc<icp_core::ray_casting::OccupancyRaster>,
+    inner: Arc<icp_core::grids::ray_casting::OccupancyRaster>,
 }
 
 /// A non-negative integer below 2**64 (a Python int or anything with `__index__`, e.g. numpy
@@ -526,7 +526,9 @@ impl OccupancyGrid {
         let flat: Vec<bool> = cells.as_array().iter().copied().collect();
         let origin = [origin.0, origin.1];
         let raster = py.detach(|| {
-            guarded(|| icp_core::ray_casting::OccupancyRaster::new(flat, rows, cols, resolution, origin))
+            guarded(|| {
+                icp_core::grids::ray_casting::OccupancyRaster::new(flat, rows, cols, resolution, origin)
+            })
         })?;
         Ok(Self { inner: Arc::new(raster) })
     }
@@ -597,7 +599,7 @@ impl OccupancyGrid {
         seed: Option<&Bound<'py, PyAny>>,
         discs: Option<numpy::PyArrayLikeDyn<'py, f64, numpy::AllowTypeChange>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        use icp_core::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel};
+        use icp_core::grids::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel};
         let beams = usize::try_from(unsigned_arg("beams", beams)?).unwrap_or(usize::MAX);
         let seed = seed.map(|s| unsigned_arg("seed", s)).transpose()?;
         let discs: Vec<Disc> = match discs {

@@ -1,8 +1,8 @@
 //! `planicp._core.LogOddsGrid`: the scan occupancy layer of the enhanced occupancy grid
-//! (`icp_core::log_odds_grid`).
+//! (`icp_core::grids::log_odds_grid`).
 
 use crate::{guarded, points_from};
-use icp_core::log_odds_grid::{LogOddsGrid as CoreGrid, OccupancyModel};
+use icp_core::grids::log_odds_grid::{LogOddsGrid as CoreGrid, OccupancyModel};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;

@@ -19,8 +19,8 @@
 //! Ranges follow ROS REP-117: `+inf` when nothing is hit within `range_max` (and for dropouts),
 //! `-inf` for a return closer than `range_min`.
 
-use crate::clearance::{chebyshev_clearance, BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::error::{invalid, Result, MAX_COORDINATE};
+use crate::grids::clearance::{chebyshev_clearance, BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::pose::Pose2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -31,7 +31,7 @@ pub const CORNER_TIE: f64 = 1e-9;
 /// Finest raster resolution accepted, metres per cell (keeps cell indices exact in an `f64`).
 pub const MIN_RESOLUTION: f64 = 1e-6;
 /// Most cells an [`OccupancyRaster`] may have.
-pub const MAX_CELLS: usize = crate::wall_raster::MAX_RASTER_CELLS;
+pub const MAX_CELLS: usize = crate::grids::wall_raster::MAX_RASTER_CELLS;
 /// Most beams one scan may have.
 pub const MAX_BEAMS: usize = 1 << 20;
 
