@@ -96,7 +96,7 @@ pub struct IcpConfig {
 pub enum CorrespondenceSearch {
     /// The plan's precomputed nearest-wall index ([`crate::nearest_wall_index`]): a few
     /// nanoseconds per look-up. `use_visibility` refuses pairings with the far face of a wall
-    /// ([`crate::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
+    /// ([`crate::visibility::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
     /// exceeds the index's reach, or plans whose index cannot be built, use the KD-tree.
     #[default]
     WallIndex,
@@ -200,7 +200,7 @@ pub struct IcpResult {
 /// (`T_map_base` guess).
 ///
 /// `visible` are the plan points visible from `initial` already cast (for instance
-/// [`crate::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
+/// [`crate::visibility::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
 /// returns): the KD-tree search with `use_visibility` matches against them instead of casting its
 /// own. `None` casts them here. Other searches ignore them. An index that is not a plan point is
 /// an error.

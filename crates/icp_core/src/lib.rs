@@ -9,9 +9,8 @@
 //! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
 //! - [`grids`]: rasters and beams through them: cell traversal, clearance, the wall raster, the
 //!   simulated LIDAR, the log-odds occupancy grid.
-//! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
-//! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
-//! - [`wall_view`]: one cast from a pose for both the visible points and each direction's wall range.
+//! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting), the ranges to the
+//!   walls, and the directions each wall point can be seen from.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
 //! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
@@ -47,8 +46,6 @@ pub mod rigid_solver;
 pub mod termination;
 pub mod visibility;
 pub mod visible_through_index;
-pub mod wall_facing;
-pub mod wall_view;
 
 pub use error::{IcpError, Result};
 pub use icp::{align, IcpConfig, IcpResult};

@@ -7,9 +7,9 @@ use crate::error::{check_finite, IcpError, Result};
 use crate::grids::wall_raster::WallRaster;
 use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
-use crate::visibility;
-use crate::wall_facing::visibility_masks;
-use crate::wall_view::WallView;
+use crate::visibility::visible_points::visible_points;
+use crate::visibility::wall_facing::visibility_masks;
+use crate::visibility::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
 
 pub use crate::kd_tree::Tree2;
@@ -152,9 +152,10 @@ impl PointMap {
         self.wall_index.get().and_then(|built| built.as_ref().ok())
     }
 
-    /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
-    /// on the first call (thread-safe) and kept. Threads that ask while another builds wait for its
-    /// index. Errors: the index would be too large for the plan's extent at its cell size.
+    /// The nearest-wall index, with the directions each point is seen from
+    /// ([`crate::visibility::wall_facing`]), built on the first call (thread-safe) and kept. Threads that ask
+    /// while another builds wait for its index. Errors: the index would be too large for the plan's extent at
+    /// its cell size.
     ///
     /// `cancel` is polled while the index is built; when it returns true the build stops with
     /// [`IcpError::Interrupted`], is not kept, and the next call starts it again (callers that
@@ -241,9 +242,9 @@ impl PointMap {
     }
 
     /// Indices (ascending) of the wall points a range sensor at `position` sees within `max_range`
-    /// metres. See [`visibility::visible_points`].
+    /// metres. See [`visible_points`].
     pub fn visible_from(&self, pose: Pose2, max_range: f64) -> Result<Vec<u32>> {
-        visibility::visible_points(&self.raster, [pose.x, pose.y], max_range)
+        visible_points(&self.raster, [pose.x, pose.y], max_range)
     }
 
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and

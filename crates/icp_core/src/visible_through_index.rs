@@ -1,8 +1,8 @@
 //! Exact nearest *visible* plan points, answered mostly by the plan's nearest-wall index.
 //!
 //! The KD-tree search pairs a scan point with the nearest plan point among those visible from the
-//! initial guess (ray cast through the plan, [`crate::visibility`]). The nearest-wall index gives
-//! the nearest plan point of the whole plan in about 10 ns. Whenever that point is visible it is
+//! initial guess (ray cast through the plan, [`crate::visibility::visible_points`]). The nearest-wall index
+//! gives the nearest plan point of the whole plan in about 10 ns. Whenever that point is visible it is
 //! also the nearest visible one, since the visible points are a subset of the plan; only the
 //! look-ups whose nearest point is hidden need the subset's KD-tree. The pairs are the ones
 //! [`crate::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction

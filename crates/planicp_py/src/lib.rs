@@ -227,7 +227,7 @@ type BoolPair<'py> = (Bound<'py, PyArray1<bool>>, Bound<'py, PyArray1<bool>>);
 /// wall points and the range to the first wall in each of `directions` evenly spaced directions.
 #[pyclass(frozen, module = "planicp._core")]
 pub(crate) struct WallView {
-    inner: Arc<icp_core::wall_view::WallView>,
+    inner: Arc<icp_core::visibility::wall_view::WallView>,
 }
 
 #[pymethods]
@@ -574,7 +574,9 @@ impl OccupancyGrid {
         let raster = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
         let classes = py.detach(|| {
-            guarded(|| icp_core::wall_view::classify_exact(&raster, pose, &pts, margin, directions))
+            guarded(|| {
+                icp_core::visibility::wall_view::classify_exact(&raster, pose, &pts, margin, directions)
+            })
         })?;
         Ok((classes.in_front.into_pyarray(py), classes.beyond.into_pyarray(py)))
     }

@@ -17,8 +17,8 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 /// (map frame, metres) reach first, within `max_range` metres.
 ///
 /// [`BASE_RAYS`] rays are cast evenly; between two neighbouring rays whose first wall cells are not
-/// adjacent (a depth jump, a doorway, a far wall; see `adjacent`), a ray is added halfway, recursively, until the
-/// cells touch or the angle between the rays is below one cell at `max_range` (at most
+/// adjacent (a depth jump, a doorway, a far wall; see `adjacent`), a ray is added halfway, recursively, until
+/// the cells touch or the angle between the rays is below one cell at `max_range` (at most
 /// [`MAX_REFINEMENT_DEPTH`] halvings). The cell holding `position` itself is skipped, so a
 /// position that falls inside a wall (a poor guess) still sees the walls around it.
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
