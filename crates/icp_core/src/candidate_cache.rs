@@ -14,8 +14,8 @@
 //! than radius queries that would be stale at the next iteration), and fetched again when more
 //! than an eighth of the points went stale.
 
-use crate::bucket_grid::BucketGrid;
 use crate::correspondence::{Pair, TargetSet};
+use crate::maps::bucket_grid::BucketGrid;
 
 /// Candidate plan points per scan point, fetched by radius queries: through a [`BucketGrid`]
 /// over a subset target (the visible points), through the KD-tree over the full plan.
@@ -181,7 +181,7 @@ impl TargetSet<'_> {
 mod tests {
     use super::*;
     use crate::correspondence::find_pairs;
-    use crate::point_map::PointMap;
+    use crate::maps::point_map::PointMap;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

@@ -1,7 +1,7 @@
 //! Correspondences: every (transformed) scan point paired with its nearest plan point, kept only
 //! when nearer than a maximum distance (furniture, people and robots are not in the plan).
 
-use crate::point_map::{PointMap, Tree2};
+use crate::maps::point_map::{PointMap, Tree2};
 
 /// A scan point paired with a plan point.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,7 +9,7 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::Result;
-use crate::point_map::PointMap;
+use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
 use nalgebra::{Matrix3, Vector3};
 
@@ -24,7 +24,7 @@ pub const NORMAL_NEIGHBOURS: usize = 6;
 /// [`crate::error::IcpError::Interrupted`] ([`cancel::NEVER`]: it cannot be stopped, and never fails).
 pub fn estimate_normals(
     map_points: &[[f64; 2]],
-    tree: &crate::point_map::Tree2,
+    tree: &crate::maps::point_map::Tree2,
     cancel: Cancel<'_>,
 ) -> Result<Vec<[f64; 2]>> {
     let mut normals = Vec::with_capacity(map_points.len());
@@ -36,7 +36,7 @@ pub fn estimate_normals(
 }
 
 /// The wall normal at `p` (see [`estimate_normals`]).
-fn normal_at(map_points: &[[f64; 2]], tree: &crate::point_map::Tree2, p: &[f64; 2]) -> [f64; 2] {
+fn normal_at(map_points: &[[f64; 2]], tree: &crate::maps::point_map::Tree2, p: &[f64; 2]) -> [f64; 2] {
     let mut nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
     if nn.len() < 3 {
         return [0.0, 0.0];

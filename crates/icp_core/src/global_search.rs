@@ -24,7 +24,7 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
-use crate::point_map::PointMap;
+use crate::maps::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;

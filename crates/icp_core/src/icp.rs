@@ -15,8 +15,8 @@ use crate::correspondence::{
 };
 use crate::covariance::pose_covariance;
 use crate::error::{check_finite, invalid, IcpError, Result};
-use crate::nearest_wall_index::{NearestWallIndex, SensorView};
-use crate::point_map::PointMap;
+use crate::maps::nearest_wall_index::{NearestWallIndex, SensorView};
+use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
 use crate::termination::{pair_fingerprint, stage_end, Tolerances};
@@ -94,7 +94,7 @@ pub struct IcpConfig {
 /// How the nearest plan point of a scan point is found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CorrespondenceSearch {
-    /// The plan's precomputed nearest-wall index ([`crate::nearest_wall_index`]): a few
+    /// The plan's precomputed nearest-wall index ([`crate::maps::nearest_wall_index`]): a few
     /// nanoseconds per look-up. `use_visibility` refuses pairings with the far face of a wall
     /// ([`crate::visibility::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
     /// exceeds the index's reach, or plans whose index cannot be built, use the KD-tree.

@@ -5,16 +5,14 @@
 //!
 //! One concept per module:
 //! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
-//! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
-//! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
+//! - [`maps`]: the plan's wall points with their KD-tree, normals and visibility raster, built once,
+//!   and the nearest-wall index that pairs scan points with them.
 //! - [`grids`]: rasters and beams through them: cell traversal, clearance, the wall raster, the
 //!   simulated LIDAR, the log-odds occupancy grid.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting), the ranges to the
 //!   walls, and the directions each wall point can be seen from.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance.
-//! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
-//! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
 //! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
 //! - [`termination`]: when an ICP stage stops.
 //! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
@@ -27,7 +25,6 @@
 //! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
 
 pub mod acceleration;
-pub mod bucket_grid;
 pub mod cancel;
 pub mod candidate_cache;
 pub mod correspondence;
@@ -36,10 +33,8 @@ pub mod error;
 pub mod global_search;
 pub mod grids;
 pub mod icp;
-pub mod kd_tree;
 pub mod likelihood_field;
-pub mod nearest_wall_index;
-pub mod point_map;
+pub mod maps;
 pub mod pose;
 pub mod relocalization;
 pub mod rigid_solver;
@@ -49,5 +44,5 @@ pub mod visible_through_index;
 
 pub use error::{IcpError, Result};
 pub use icp::{align, IcpConfig, IcpResult};
-pub use point_map::PointMap;
+pub use maps::point_map::PointMap;
 pub use pose::Pose2;

@@ -14,7 +14,7 @@ use crate::cancel::Cancel;
 use crate::error::{invalid, Result};
 use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
 use crate::icp::{align, IcpConfig, IcpResult};
-use crate::point_map::PointMap;
+use crate::maps::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 
 /// How the refined candidates are reported.

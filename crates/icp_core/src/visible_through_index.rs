@@ -9,7 +9,7 @@
 //! of the cost: in tracking almost every return lies on a visible wall face.
 
 use crate::correspondence::{Pair, TargetSet};
-use crate::nearest_wall_index::NearestWallIndex;
+use crate::maps::nearest_wall_index::NearestWallIndex;
 
 /// The visible subset of a plan, with the plan's nearest-wall index in front of its KD-tree.
 #[derive(Debug)]
@@ -71,7 +71,7 @@ mod tests {
     use super::*;
     use crate::cancel;
     use crate::correspondence::find_pairs;
-    use crate::point_map::PointMap;
+    use crate::maps::point_map::PointMap;
     use crate::pose::Pose2;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

@@ -74,7 +74,9 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
     let valid_normals = normals.as_ref().is_none_or(|n: &Vec<[f64; 2]>| n.len() == pts.len() && in_range(n));
     // A plan far denser than useful keeps the first point of each THIN_CELL square, in order.
     let kept: Option<Vec<[f64; 2]>> = valid_points
-        .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
+        .then(|| {
+            icp_core::maps::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect())
+        })
         .flatten();
     let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
     let result = PointMap::build(pts, normals.clone(), res, cancel::NEVER);

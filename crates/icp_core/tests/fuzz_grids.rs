@@ -10,7 +10,6 @@
 mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
-use icp_core::bucket_grid::BucketGrid;
 use icp_core::error::MAX_COORDINATE;
 use icp_core::grids::cell_traversal::for_each_cell;
 use icp_core::grids::log_odds_grid::{LogOddsGrid, OccupancyModel};
@@ -18,6 +17,7 @@ use icp_core::grids::ray_casting::{
     add_noise, cast_ranges, noise_rng, Disc, LidarModel, OccupancyRaster, MAX_BEAMS,
 };
 use icp_core::grids::wall_raster::WallRaster;
+use icp_core::maps::bucket_grid::BucketGrid;
 use icp_core::pose::wrap_angle;
 use icp_core::termination::stage_end;
 use icp_core::Pose2;

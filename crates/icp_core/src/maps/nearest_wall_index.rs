@@ -35,7 +35,7 @@
 use crate::cancel::{self, Cancel};
 use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
-use crate::point_map::Tree2;
+use crate::maps::point_map::Tree2;
 use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
 
 /// Cells per block side.
@@ -863,7 +863,7 @@ mod tests {
 
     #[test]
     fn a_plan_checks_its_index_settings_and_coarsens_a_default_cell_that_would_not_fit() {
-        use crate::point_map::{PointMap, DEFAULT_INDEX_CELL};
+        use crate::maps::point_map::{PointMap, DEFAULT_INDEX_CELL};
         let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
         for (cell, reach) in [(0.0, 0.5), (0.03, f64::NAN), (-1.0, 0.5)] {
             assert!(matches!(
