@@ -11,24 +11,15 @@
 //!   simulated LIDAR, the log-odds occupancy grid.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting), the ranges to the
 //!   walls, and the directions each wall point can be seen from.
-//! - [`correspondence`]: nearest-point pairing with a maximum distance.
-//! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
-//! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
-//! - [`termination`]: when an ICP stage stops.
-//! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
-//! - [`icp`]: the trimmed, coarse-to-fine ICP loop and its configuration and result.
+//! - [`icp`]: the trimmed, coarse-to-fine ICP loop: correspondences, the rigid solver, when to
+//!   stop, acceleration, and the covariance of the result.
 //! - [`likelihood_field`]: the plan as a likelihood raster with max-pooled levels.
 //! - [`global_search`]: correlative branch-and-bound search for a pose with no initial guess.
 //! - [`relocalization`]: global search candidates refined by ICP, ranked, with their ambiguity.
-//! - [`covariance`]: the pose covariance of a finished alignment.
 //! - [`error`]: every way the core can refuse its input.
 //! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
 
-pub mod acceleration;
 pub mod cancel;
-pub mod candidate_cache;
-pub mod correspondence;
-pub mod covariance;
 pub mod error;
 pub mod global_search;
 pub mod grids;
@@ -37,10 +28,7 @@ pub mod likelihood_field;
 pub mod maps;
 pub mod pose;
 pub mod relocalization;
-pub mod rigid_solver;
-pub mod termination;
 pub mod visibility;
-pub mod visible_through_index;
 
 pub use error::{IcpError, Result};
 pub use icp::{align, IcpConfig, IcpResult};

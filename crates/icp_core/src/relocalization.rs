@@ -13,7 +13,7 @@
 use crate::cancel::Cancel;
 use crate::error::{invalid, Result};
 use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
-use crate::icp::{align, IcpConfig, IcpResult};
+use crate::icp::alignment::{align, IcpConfig, IcpResult};
 use crate::maps::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
 

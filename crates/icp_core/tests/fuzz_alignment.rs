@@ -10,13 +10,13 @@
 mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
-use icp_core::acceleration::{extrapolation, truncated_cost, Update};
 use icp_core::cancel;
-use icp_core::candidate_cache::CandidateCache;
-use icp_core::correspondence::{find_pairs, trim, Pair, TargetSet};
-use icp_core::covariance::{estimate_normals, pose_covariance};
 use icp_core::error::{IcpError, MAX_COORDINATE};
-use icp_core::rigid_solver::{solve_rigid, MIN_PAIRS};
+use icp_core::icp::acceleration::{extrapolation, truncated_cost, Update};
+use icp_core::icp::candidate_cache::CandidateCache;
+use icp_core::icp::correspondence::{find_pairs, trim, Pair, TargetSet};
+use icp_core::icp::covariance::{estimate_normals, pose_covariance};
+use icp_core::icp::rigid_solver::{solve_rigid, MIN_PAIRS};
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use nalgebra::{Matrix3, SymmetricEigen};
 use std::f64::consts::PI;

@@ -17,9 +17,9 @@ use icp_core::grids::ray_casting::{
     add_noise, cast_ranges, noise_rng, Disc, LidarModel, OccupancyRaster, MAX_BEAMS,
 };
 use icp_core::grids::wall_raster::WallRaster;
+use icp_core::icp::termination::stage_end;
 use icp_core::maps::bucket_grid::BucketGrid;
 use icp_core::pose::wrap_angle;
-use icp_core::termination::stage_end;
 use icp_core::Pose2;
 use std::f64::consts::PI;
 

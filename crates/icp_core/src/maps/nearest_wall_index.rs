@@ -33,8 +33,8 @@
 //! its list from that short, sorted prefix.
 
 use crate::cancel::{self, Cancel};
-use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
+use crate::icp::correspondence::Pair;
 use crate::maps::point_map::Tree2;
 use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
 

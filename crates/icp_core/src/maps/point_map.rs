@@ -2,9 +2,9 @@
 //! a visibility raster, all built once and shared read-only between alignments and threads.
 
 use crate::cancel::{self, Cancel};
-use crate::covariance;
 use crate::error::{check_finite, IcpError, Result};
 use crate::grids::wall_raster::WallRaster;
+use crate::icp::covariance;
 use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::pose::Pose2;
 use crate::visibility::visible_points::visible_points;

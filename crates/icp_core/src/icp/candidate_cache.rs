@@ -14,7 +14,7 @@
 //! than radius queries that would be stale at the next iteration), and fetched again when more
 //! than an eighth of the points went stale.
 
-use crate::correspondence::{Pair, TargetSet};
+use crate::icp::correspondence::{Pair, TargetSet};
 use crate::maps::bucket_grid::BucketGrid;
 
 /// Candidate plan points per scan point, fetched by radius queries: through a [`BucketGrid`]
@@ -93,7 +93,7 @@ impl CandidateCache {
         self.refills += 1;
     }
 
-    /// Like [`crate::correspondence::find_pairs`], with the same result, using the cache.
+    /// Like [`crate::icp::correspondence::find_pairs`], with the same result, using the cache.
     /// `max_distance` must not exceed the cache radius.
     pub fn find_pairs(
         &mut self,
@@ -117,7 +117,7 @@ impl CandidateCache {
             if settled {
                 self.refill(target, positions);
             } else {
-                crate::correspondence::find_pairs(target, positions, max_distance, out);
+                crate::icp::correspondence::find_pairs(target, positions, max_distance, out);
                 self.direct_passes += 1;
                 return;
             }
@@ -180,7 +180,7 @@ impl TargetSet<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::correspondence::find_pairs;
+    use crate::icp::correspondence::find_pairs;
     use crate::maps::point_map::PointMap;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

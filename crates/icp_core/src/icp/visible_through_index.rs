@@ -5,10 +5,10 @@
 //! gives the nearest plan point of the whole plan in about 10 ns. Whenever that point is visible it is
 //! also the nearest visible one, since the visible points are a subset of the plan; only the
 //! look-ups whose nearest point is hidden need the subset's KD-tree. The pairs are the ones
-//! [`crate::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction
+//! [`crate::icp::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction
 //! of the cost: in tracking almost every return lies on a visible wall face.
 
-use crate::correspondence::{Pair, TargetSet};
+use crate::icp::correspondence::{Pair, TargetSet};
 use crate::maps::nearest_wall_index::NearestWallIndex;
 
 /// The visible subset of a plan, with the plan's nearest-wall index in front of its KD-tree.
@@ -70,7 +70,7 @@ impl<'a> VisibleThroughIndex<'a> {
 mod tests {
     use super::*;
     use crate::cancel;
-    use crate::correspondence::find_pairs;
+    use crate::icp::correspondence::find_pairs;
     use crate::maps::point_map::PointMap;
     use crate::pose::Pose2;
     use rand::{Rng, SeedableRng};
