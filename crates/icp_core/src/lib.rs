@@ -13,21 +13,18 @@
 //!   walls, and the directions each wall point can be seen from.
 //! - [`icp`]: the trimmed, coarse-to-fine ICP loop: correspondences, the rigid solver, when to
 //!   stop, acceleration, and the covariance of the result.
-//! - [`likelihood_field`]: the plan as a likelihood raster with max-pooled levels.
-//! - [`global_search`]: correlative branch-and-bound search for a pose with no initial guess.
-//! - [`relocalization`]: global search candidates refined by ICP, ranked, with their ambiguity.
+//! - [`search`]: global localization: a likelihood field of the plan searched by branch and bound,
+//!   its candidates refined by ICP and ranked.
 //! - [`error`]: every way the core can refuse its input.
 //! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
 
 pub mod cancel;
 pub mod error;
-pub mod global_search;
 pub mod grids;
 pub mod icp;
-pub mod likelihood_field;
 pub mod maps;
 pub mod pose;
-pub mod relocalization;
+pub mod search;
 pub mod visibility;
 
 pub use error::{IcpError, Result};

@@ -445,7 +445,7 @@ fn _panic_for_tests() -> PyResult<()> {
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MIN_SCAN_POINTS", icp_core::icp::rigid_solver::MIN_PAIRS)?;
-    m.add("MIN_SEARCH_POINTS", icp_core::global_search::MIN_SEARCH_POINTS)?;
+    m.add("MIN_SEARCH_POINTS", icp_core::search::global_search::MIN_SEARCH_POINTS)?;
     m.add("PlanicpError", m.py().get_type::<PlanicpError>())?;
     m.add("PlanicpInternalError", m.py().get_type::<PlanicpInternalError>())?;
     m.add_class::<PyPointMap>()?;
