@@ -4,9 +4,11 @@
 //!   built once and shared.
 //! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
 //! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
+//! - [`wall_normals`]: the wall normal at every plan point (a line fitted to its neighbours).
 //! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
 
 pub mod bucket_grid;
 pub mod kd_tree;
 pub mod nearest_wall_index;
 pub mod point_map;
+pub mod wall_normals;

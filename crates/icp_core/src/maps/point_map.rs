@@ -4,8 +4,8 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, IcpError, Result};
 use crate::grids::wall_raster::WallRaster;
-use crate::icp::covariance;
 use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
+use crate::maps::wall_normals::estimate_normals;
 use crate::pose::Pose2;
 use crate::visibility::visible_points::visible_points;
 use crate::visibility::wall_facing::visibility_masks;
@@ -117,7 +117,7 @@ impl PointMap {
         let raster = WallRaster::new(&points, resolution)?;
         let normals = match normals {
             Some(n) => n,
-            None => covariance::estimate_normals(&points, &tree, cancel)?,
+            None => estimate_normals(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,

@@ -189,7 +189,7 @@ mod tests {
         sample(&mut pts, [10.0, -3.0], [10.0, 3.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
         let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::icp::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         for (i, p) in pts.iter().enumerate() {
             if p[0] < 1.0 || (p[0] > 5.0 && p[0] < 9.0) || p[1].abs() > 2.5 {
@@ -228,7 +228,7 @@ mod tests {
             sample(&mut pts, a, b);
         }
         let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::icp::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         for resolution in [0.075, 0.031] {
             let raster = WallRaster::new(&pts, resolution).unwrap();
             let jumping = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
@@ -246,7 +246,7 @@ mod tests {
         sample(&mut pts, [0.0, 0.05], [0.0, 4.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
         let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::icp::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         let i = pts.iter().position(|p| (p[0] - 0.3).abs() < 1e-9 && p[1] == 0.0).unwrap();
         // Seen from the room (up and to the right), hidden from behind the x = 0 wall.
