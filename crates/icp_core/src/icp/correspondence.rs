@@ -1,7 +1,8 @@
 //! Correspondences: every (transformed) scan point paired with its nearest plan point, kept only
 //! when nearer than a maximum distance (furniture, people and robots are not in the plan).
 
-use crate::maps::point_map::{PointMap, Tree2};
+use crate::maps::kd_tree::Tree2;
+use crate::maps::point_map::PointMap;
 
 /// A scan point paired with a plan point.
 #[derive(Clone, Copy, Debug, PartialEq)]

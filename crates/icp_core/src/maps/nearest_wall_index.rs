@@ -35,7 +35,7 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{invalid, IcpError, Result};
 use crate::icp::correspondence::Pair;
-use crate::maps::point_map::Tree2;
+use crate::maps::kd_tree::Tree2;
 use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
 
 /// Cells per block side.

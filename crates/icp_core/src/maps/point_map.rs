@@ -4,6 +4,7 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, IcpError, Result};
 use crate::grids::wall_raster::WallRaster;
+use crate::maps::kd_tree::Tree2;
 use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::maps::wall_normals::estimate_normals;
 use crate::pose::Pose2;
@@ -11,8 +12,6 @@ use crate::visibility::visible_points::visible_points;
 use crate::visibility::wall_facing::visibility_masks;
 use crate::visibility::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
-
-pub use crate::maps::kd_tree::Tree2;
 
 /// Largest number of points a map may hold (indices are `u32`).
 pub const MAX_POINTS: usize = u32::MAX as usize;

@@ -188,7 +188,7 @@ mod tests {
         // ...and a one-line wall far from everything.
         sample(&mut pts, [10.0, -3.0], [10.0, 3.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
-        let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
         let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         for (i, p) in pts.iter().enumerate() {
@@ -227,7 +227,7 @@ mod tests {
         ] {
             sample(&mut pts, a, b);
         }
-        let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
         let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         for resolution in [0.075, 0.031] {
             let raster = WallRaster::new(&pts, resolution).unwrap();
@@ -245,7 +245,7 @@ mod tests {
         sample(&mut pts, [0.0, 0.0], [4.0, 0.0]);
         sample(&mut pts, [0.0, 0.05], [0.0, 4.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
-        let tree = crate::maps::point_map::Tree2::new_from_slice(&pts);
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
         let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         let i = pts.iter().position(|p| (p[0] - 0.3).abs() < 1e-9 && p[1] == 0.0).unwrap();
