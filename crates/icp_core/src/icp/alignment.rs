@@ -12,13 +12,14 @@ use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::icp::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
 use crate::icp::candidate_cache::CandidateCache;
 use crate::icp::correspondence::{
-    find_pairs, trim, trim_auto, Pair, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
+    find_pairs, trim, trim_auto, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
 };
 use crate::icp::covariance::pose_covariance;
 use crate::icp::rigid_solver::{RigidAccumulator, MIN_PAIRS};
 use crate::icp::termination::{pair_fingerprint, stage_end, Tolerances};
 use crate::icp::visible_through_index::VisibleThroughIndex;
 use crate::maps::nearest_wall_index::{NearestWallIndex, SensorView};
+use crate::maps::pair::Pair;
 use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
 use nalgebra::Matrix3;

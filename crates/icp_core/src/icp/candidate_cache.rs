@@ -14,8 +14,9 @@
 //! than radius queries that would be stale at the next iteration), and fetched again when more
 //! than an eighth of the points went stale.
 
-use crate::icp::correspondence::{Pair, TargetSet};
+use crate::icp::correspondence::TargetSet;
 use crate::maps::bucket_grid::BucketGrid;
+use crate::maps::pair::Pair;
 
 /// Candidate plan points per scan point, fetched by radius queries: through a [`BucketGrid`]
 /// over a subset target (the visible points), through the KD-tree over the full plan.

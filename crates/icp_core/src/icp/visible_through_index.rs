@@ -8,8 +8,9 @@
 //! [`crate::icp::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction
 //! of the cost: in tracking almost every return lies on a visible wall face.
 
-use crate::icp::correspondence::{Pair, TargetSet};
+use crate::icp::correspondence::TargetSet;
 use crate::maps::nearest_wall_index::NearestWallIndex;
+use crate::maps::pair::Pair;
 
 /// The visible subset of a plan, with the plan's nearest-wall index in front of its KD-tree.
 #[derive(Debug)]

@@ -5,10 +5,12 @@
 //! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
 //! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
 //! - [`wall_normals`]: the wall normal at every plan point (a line fitted to its neighbours).
+//! - [`pair`]: a scan point paired with its nearest plan point, what the look-ups answer.
 //! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
 
 pub mod bucket_grid;
 pub mod kd_tree;
 pub mod nearest_wall_index;
+pub mod pair;
 pub mod point_map;
 pub mod wall_normals;

@@ -34,8 +34,8 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::{invalid, IcpError, Result};
-use crate::icp::correspondence::Pair;
 use crate::maps::kd_tree::Tree2;
+use crate::maps::pair::Pair;
 use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
 
 /// Cells per block side.
