@@ -860,27 +860,4 @@ mod tests {
             IcpError::Empty { what: "plan" }
         );
     }
-
-    #[test]
-    fn a_plan_checks_its_index_settings_and_coarsens_a_default_cell_that_would_not_fit() {
-        use crate::maps::point_map::{PointMap, DEFAULT_INDEX_CELL};
-        let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
-        for (cell, reach) in [(0.0, 0.5), (0.03, f64::NAN), (-1.0, 0.5)] {
-            assert!(matches!(
-                PointMap::new(pts.clone(), None).unwrap().with_index_settings(cell, reach),
-                Err(IcpError::InvalidParameter { .. })
-            ));
-        }
-        let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
-        let index = custom.wall_index(cancel::NEVER).unwrap();
-        assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
-        // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
-        // explicit one is refused.
-        let mut wide = pts.clone();
-        wide.push([1000.0, 1000.0]);
-        let map = PointMap::new(wide.clone(), None).unwrap();
-        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
-        let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
-        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
-    }
 }
