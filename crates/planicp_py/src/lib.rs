@@ -467,7 +467,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
 
 /// An occupancy grid to simulate LIDAR scans in (`icp_core::ray_casting`). `cells` is (rows, cols)
 /// bool, True = occupied, with the ROW INDEX GROWING WITH +y (row 0 is the lowest y, as in
-/// `planicp.synthetic.Floor`); `origin` is the map-frame (x, y) of the lower-left corner of cell (0, 0).
+/// `planicp.sim.Floor`); `origin` is the map-frame (x, y) of the lower-left corner of cell (0, 0).
 #[pyclass(frozen, module = "planicp._core")]
 struct OccupancyGrid {
     inner: Arc<icp_core::grids::ray_casting::OccupancyRaster>,
@@ -620,7 +620,8 @@ impl OccupancyGrid {
         };
         let raster = Arc::clone(&self.inner);
         let model = LidarModel { angle_min, angle_increment, beams, range_min, range_max };
-        // The yaw as given (not wrapped): the beam angles round exactly as synthetic.simulate_ranges's.
+        // The yaw as given (not wrapped): the beam angles round exactly as the numpy reference's
+        // (tests/numpy_ray_caster.py).
         let pose = Pose2 { x: sensor_pose.0, y: sensor_pose.1, yaw: sensor_pose.2 };
         let ranges = py.detach(|| {
             guarded(|| {
