@@ -1,7 +1,10 @@
 //! `planicp._core.GlobalMatcher` and `relocalize`: global relocalization on the plan
 //! (`icp_core::search::global_search`, `icp_core::search::relocalization`). `planicp.relocalize` wraps them.
 
-use crate::{guarded, interruptible, points_from, Alignment, IcpSettings, PyPointMap};
+use crate::conversions::points_from;
+use crate::errors::guarded;
+use crate::interrupt::interruptible;
+use crate::{Alignment, IcpSettings, PyPointMap};
 use icp_core::search::global_search::{
     GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
 };

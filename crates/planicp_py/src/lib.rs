@@ -6,125 +6,21 @@
 //! for seconds on their input (alignments, searches, map and index builds) look for Python signals
 //! every 50 ms, so that Ctrl-C stops them with KeyboardInterrupt.
 
-use icp_core::cancel::Cancel;
+use crate::conversions::{points_from, points_to_array, shape_text, unsigned_arg, BoolPair};
+use crate::errors::{core_error, guarded, PlanicpError, PlanicpInternalError};
+use crate::interrupt::interruptible;
 use icp_core::icp::CorrespondenceSearch;
-use icp_core::{IcpConfig, IcpError, IcpResult, PointMap, Pose2};
+use icp_core::{IcpConfig, IcpResult, PointMap, Pose2};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::create_exception;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use std::cell::{Cell, RefCell};
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
+mod conversions;
+mod errors;
 mod global_search;
+mod interrupt;
 mod log_odds_grid;
-
-create_exception!(
-    _core,
-    PlanicpError,
-    PyValueError,
-    "An input planicp cannot work with; the message names the problem."
-);
-create_exception!(
-    _core,
-    PlanicpInternalError,
-    PyRuntimeError,
-    "A bug inside planicp's native core (a Rust panic, caught at the boundary). Please report it."
-);
-
-fn core_error(err: IcpError) -> PyErr {
-    PlanicpError::new_err(err.to_string())
-}
-
-/// Runs `f`, turning a core error into `PlanicpError` and a panic into `PlanicpInternalError`.
-pub(crate) fn guarded<T>(f: impl FnOnce() -> Result<T, IcpError>) -> PyResult<T> {
-    match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(Ok(v)) => Ok(v),
-        Ok(Err(e)) => Err(core_error(e)),
-        Err(payload) => {
-            let msg = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".to_string());
-            Err(PlanicpInternalError::new_err(format!("internal error in planicp's native core: {msg}")))
-        }
-    }
-}
-
-/// Longest a native call runs between two looks for Python signals (Ctrl-C), seconds.
-const SIGNAL_CHECK_INTERVAL: Duration = Duration::from_millis(50);
-
-/// The hook a long core computation polls (`icp_core::cancel`): at most every
-/// [`SIGNAL_CHECK_INTERVAL`] it attaches to Python and runs its signal handlers; an exception they
-/// raise (KeyboardInterrupt for Ctrl-C) is kept and stops the computation. Between those looks a
-/// poll only reads the clock.
-struct SignalCheck {
-    last: Cell<Instant>,
-    raised: RefCell<Option<PyErr>>,
-}
-
-impl SignalCheck {
-    fn new() -> Self {
-        Self { last: Cell::new(Instant::now()), raised: RefCell::new(None) }
-    }
-
-    fn poll(&self) -> bool {
-        if self.raised.borrow().is_some() {
-            return true;
-        }
-        let now = Instant::now();
-        if now.duration_since(self.last.get()) < SIGNAL_CHECK_INTERVAL {
-            return false;
-        }
-        self.last.set(now);
-        // No Python to ask (the interpreter is shutting down): go on.
-        match Python::try_attach(|py| py.check_signals()) {
-            Some(Err(raised)) => {
-                *self.raised.borrow_mut() = Some(raised);
-                true
-            }
-            _ => false,
-        }
-    }
-}
-
-/// Runs `f` with the GIL released, as [`guarded`] does, handing it a cancel hook that looks for
-/// Python signals every [`SIGNAL_CHECK_INTERVAL`]: a Ctrl-C during a long computation stops it
-/// and raises its KeyboardInterrupt (not a PlanicpError) when `f` has returned.
-pub(crate) fn interruptible<T: Send>(
-    py: Python<'_>,
-    f: impl FnOnce(Cancel<'_>) -> Result<T, IcpError> + Send,
-) -> PyResult<T> {
-    py.detach(|| {
-        let signals = SignalCheck::new();
-        let out = guarded(|| f(&|| signals.poll()));
-        match signals.raised.into_inner() {
-            Some(raised) => Err(raised),
-            None => out,
-        }
-    })
-}
-
-/// Copies an (N, 2) float64 array into owned points; `what` names it in errors.
-pub(crate) fn points_from(what: &str, array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[f64; 2]>> {
-    let shape = array.shape();
-    if shape[1] != 2 {
-        return Err(PlanicpError::new_err(format!(
-            "{what} must have shape (N, 2), got ({}, {})",
-            shape[0], shape[1]
-        )));
-    }
-    Ok(array.as_array().rows().into_iter().map(|r| [r[0], r[1]]).collect())
-}
-
-fn points_to_array<'py>(py: Python<'py>, points: &[[f64; 2]]) -> Bound<'py, PyArray2<f64>> {
-    let flat: Vec<f64> = points.iter().flat_map(|p| [p[0], p[1]]).collect();
-    Array2::from_shape_vec((points.len(), 2), flat).expect("length matches shape").into_pyarray(py)
-}
 
 /// Wall points of a plan (metres, map frame) with their KD-tree, normals and visibility raster;
 /// points denser than two per 5 mm square on average are thinned to one per square.
@@ -219,9 +115,6 @@ impl PyPointMap {
         Ok(WallView { inner: Arc::new(view) })
     }
 }
-
-/// Two (N,) bool arrays.
-type BoolPair<'py> = (Bound<'py, PyArray1<bool>>, Bound<'py, PyArray1<bool>>);
 
 /// What a range sensor at a pose sees of the plan (`icp_core::wall_view::WallView`): the visible
 /// wall points and the range to the first wall in each of `directions` evenly spaced directions.
@@ -435,12 +328,6 @@ fn visibility_range(scan: PyReadonlyArray2<'_, f64>, settings: &IcpSettings) -> 
     Ok(icp_core::icp::visibility_range(&pts, &settings.inner))
 }
 
-/// Panics inside the guarded boundary, to prove that a panic surfaces as PlanicpInternalError.
-#[pyfunction]
-fn _panic_for_tests() -> PyResult<()> {
-    guarded(|| -> Result<(), IcpError> { panic!("deliberate panic for the boundary test") })
-}
-
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -461,7 +348,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(global_search::relocalize, m)?)?;
     m.add_function(wrap_pyfunction!(align, m)?)?;
     m.add_function(wrap_pyfunction!(visibility_range, m)?)?;
-    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(errors::_panic_for_tests, m)?)?;
     Ok(())
 }
 
@@ -471,29 +358,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
 #[pyclass(frozen, module = "planicp._core")]
 struct OccupancyGrid {
     inner: Arc<icp_core::grids::ray_casting::OccupancyRaster>,
-}
-
-/// A non-negative integer below 2**64 (a Python int or anything with `__index__`, e.g. numpy
-/// integers): TypeError for a non-integer, PlanicpError out of range.
-pub(crate) fn unsigned_arg(what: &str, value: &Bound<'_, PyAny>) -> PyResult<u64> {
-    let out_of_range =
-        || PlanicpError::new_err(format!("{what} must be a non-negative integer below 2**64, got {value}"));
-    let wide: i128 = value.extract().map_err(|_| {
-        if value.is_instance_of::<pyo3::types::PyInt>() {
-            return out_of_range();
-        }
-        let name = value.get_type().name().map(|n| n.to_string()).unwrap_or_default();
-        pyo3::exceptions::PyTypeError::new_err(format!("{what} must be an int, got {name}"))
-    })?;
-    u64::try_from(wide).map_err(|_| out_of_range())
-}
-
-/// A shape as Python prints it: `(3,)`, `(2, 4)`.
-fn shape_text(shape: &[usize]) -> String {
-    match shape {
-        [n] => format!("({n},)"),
-        _ => format!("({})", shape.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ")),
-    }
 }
 
 #[pymethods]
