@@ -1,10 +1,11 @@
 //! `planicp._core.GlobalMatcher` and `relocalize`: global relocalization on the plan
 //! (`icp_core::search::global_search`, `icp_core::search::relocalization`). `planicp.relocalize` wraps them.
 
+use crate::alignment::{Alignment, IcpSettings};
 use crate::conversions::points_from;
 use crate::errors::guarded;
 use crate::interrupt::interruptible;
-use crate::{Alignment, IcpSettings, PyPointMap};
+use crate::point_map::PyPointMap;
 use icp_core::search::global_search::{
     GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
 };
