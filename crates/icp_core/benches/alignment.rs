@@ -9,12 +9,14 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use icp_core::cancel;
-use icp_core::candidate_cache::CandidateCache;
-use icp_core::correspondence::{find_pairs, Pair, TargetSet};
+use icp_core::icp::candidate_cache::CandidateCache;
+use icp_core::icp::correspondence::{find_pairs, TargetSet};
+use icp_core::icp::visible_through_index::VisibleThroughIndex;
 use icp_core::icp::CorrespondenceSearch;
-use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
-use icp_core::point_map::{Tree2, DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
-use icp_core::visible_through_index::VisibleThroughIndex;
+use icp_core::maps::kd_tree::Tree2;
+use icp_core::maps::nearest_wall_index::{NearestWallIndex, SensorView};
+use icp_core::maps::pair::Pair;
+use icp_core::maps::point_map::{DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -8,8 +8,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use icp_core::cancel;
-use icp_core::global_search::{GlobalMatcher, GlobalSearchConfig, SearchWindow};
-use icp_core::relocalization::{relocalize, RankingConfig};
+use icp_core::search::global_search::{GlobalMatcher, GlobalSearchConfig, SearchWindow};
+use icp_core::search::relocalization::{relocalize, RankingConfig};
 use icp_core::{IcpConfig, PointMap, Pose2};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -5,8 +5,8 @@
 //! Run `cargo bench --bench occupancy_grid`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use icp_core::log_odds_grid::{LogOddsGrid, OccupancyModel};
-use icp_core::ray_casting::{cast_ranges, LidarModel};
+use icp_core::grids::log_odds_grid::{LogOddsGrid, OccupancyModel};
+use icp_core::grids::ray_casting::{cast_ranges, LidarModel};
 use icp_core::Pose2;
 use std::hint::black_box;
 

@@ -4,7 +4,7 @@
 //! without noise and a few people (discs). Run `cargo bench --bench ray_casting`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use icp_core::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel};
+use icp_core::grids::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel};
 use icp_core::Pose2;
 use std::f64::consts::PI;
 use std::hint::black_box;

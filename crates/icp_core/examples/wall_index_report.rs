@@ -10,8 +10,8 @@
 mod common;
 
 use icp_core::cancel;
-use icp_core::nearest_wall_index::{NearestWallIndex, SensorView};
-use icp_core::point_map::{DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
+use icp_core::maps::nearest_wall_index::{NearestWallIndex, SensorView};
+use icp_core::maps::point_map::{DEFAULT_INDEX_CELL, DEFAULT_INDEX_REACH};
 use icp_core::{PointMap, Pose2};
 use rand::SeedableRng;
 use std::time::Instant;

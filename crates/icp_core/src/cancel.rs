@@ -3,7 +3,7 @@
 //! The core's long loops (ICP iterations, batches of global-search nodes, batches of plan points
 //! while a map and its nearest-wall index are built) call a [`Cancel`] hook between units of work;
 //! when it returns true they stop with [`IcpError::Interrupted`], leaving nothing half-built behind
-//! (a [`crate::global_search::SearchRun`] can be advanced again). The hook is called often, up to
+//! (a [`crate::search::global_search::SearchRun`] can be advanced again). The hook is called often, up to
 //! a few million times a second on small units, so it should be cheap: the Python binding's reads
 //! the clock and looks for Ctrl-C (`PyErr_CheckSignals`) at most every 50 ms.
 

@@ -3,61 +3,32 @@
 //! Aligns 2D LIDAR scans to a floor plan given as wall-surface points (metres, map frame).
 //! Everything here is pure Rust; the Python bindings live in the `planicp_py` crate.
 //!
-//! One concept per module:
-//! - [`pose`]: SE(2) poses (x, y, yaw) and their composition.
-//! - [`point_map`]: the plan's wall points with a KD-tree and a visibility raster, built once.
-//! - [`kd_tree`]: the KD-tree over the wall points, split across the longer side (walls along an axis).
-//! - [`wall_raster`]: the occupancy raster of wall points used for ray casting.
-//! - [`wall_facing`]: the directions each wall point can be seen from, to refuse pairings with hidden faces.
-//! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting).
-//! - [`wall_view`]: one cast from a pose for both the visible points and each direction's wall range.
-//! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
-//! - [`clearance`]: each cell's distance to the nearest occupied one, so beams jump across empty space.
-//! - [`log_odds_grid`]: the occupancy grid built from scans (log-odds, per-scan updates, growth).
-//! - [`ray_casting`]: a simulated LIDAR: exact ranges through an occupancy raster, noise, dropouts.
-//! - [`correspondence`]: nearest-point pairing with a maximum distance.
-//! - [`nearest_wall_index`]: exact nearest-wall look-ups from a precomputed raster of candidates.
-//! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations.
-//! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
-//! - [`rigid_solver`]: the closed-form least-squares rigid transform between paired points.
-//! - [`termination`]: when an ICP stage stops.
-//! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
-//! - [`icp`]: the trimmed, coarse-to-fine ICP loop and its configuration and result.
-//! - [`likelihood_field`]: the plan as a likelihood raster with max-pooled levels.
-//! - [`global_search`]: correlative branch-and-bound search for a pose with no initial guess.
-//! - [`relocalization`]: global search candidates refined by ICP, ranked, with their ambiguity.
-//! - [`covariance`]: the pose covariance of a finished alignment.
+//! One folder per concept, each built on the ones listed before it (a module never imports a
+//! later folder; `tests/module_layers.rs` checks it):
+//! - [`pose`]: SE(2) poses (x, y, yaw), their composition and the one angle wrap.
 //! - [`error`]: every way the core can refuse its input.
 //! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
+//! - [`grids`]: rasters and beams through them: cell traversal, clearance, the wall raster, the
+//!   simulated LIDAR, the log-odds occupancy grid.
+//! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting), the ranges to the
+//!   walls, and the directions each wall point can be seen from.
+//! - [`maps`]: the plan's wall points with their KD-tree, normals and visibility raster, built once,
+//!   and the nearest-wall index that pairs scan points with them.
+//! - [`icp`]: the trimmed, coarse-to-fine ICP loop: correspondences, the rigid solver, when to
+//!   stop, acceleration, and the covariance of the result.
+//! - [`search`]: global localization: a likelihood field of the plan searched by branch and bound,
+//!   its candidates refined by ICP and ranked.
 
-pub mod acceleration;
-pub mod bucket_grid;
 pub mod cancel;
-pub mod candidate_cache;
-pub mod cell_traversal;
-pub mod clearance;
-pub mod correspondence;
-pub mod covariance;
 pub mod error;
-pub mod global_search;
+pub mod grids;
 pub mod icp;
-pub mod kd_tree;
-pub mod likelihood_field;
-pub mod log_odds_grid;
-pub mod nearest_wall_index;
-pub mod point_map;
+pub mod maps;
 pub mod pose;
-pub mod ray_casting;
-pub mod relocalization;
-pub mod rigid_solver;
-pub mod termination;
+pub mod search;
 pub mod visibility;
-pub mod visible_through_index;
-pub mod wall_facing;
-pub mod wall_raster;
-pub mod wall_view;
 
 pub use error::{IcpError, Result};
 pub use icp::{align, IcpConfig, IcpResult};
-pub use point_map::PointMap;
+pub use maps::point_map::PointMap;
 pub use pose::Pose2;

@@ -10,13 +10,15 @@
 mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
-use icp_core::acceleration::{extrapolation, truncated_cost, Update};
 use icp_core::cancel;
-use icp_core::candidate_cache::CandidateCache;
-use icp_core::correspondence::{find_pairs, trim, Pair, TargetSet};
-use icp_core::covariance::{estimate_normals, pose_covariance};
 use icp_core::error::{IcpError, MAX_COORDINATE};
-use icp_core::rigid_solver::{solve_rigid, MIN_PAIRS};
+use icp_core::icp::acceleration::{extrapolation, truncated_cost, Update};
+use icp_core::icp::candidate_cache::CandidateCache;
+use icp_core::icp::correspondence::{find_pairs, trim, TargetSet};
+use icp_core::icp::covariance::pose_covariance;
+use icp_core::icp::rigid_solver::{solve_rigid, MIN_PAIRS};
+use icp_core::maps::pair::Pair;
+use icp_core::maps::wall_normals::estimate_normals;
 use icp_core::{align, IcpConfig, PointMap, Pose2};
 use nalgebra::{Matrix3, SymmetricEigen};
 use std::f64::consts::PI;
@@ -74,7 +76,9 @@ fn random_map(c: &mut Case, max_n: usize) -> std::result::Result<Option<PointMap
     let valid_normals = normals.as_ref().is_none_or(|n: &Vec<[f64; 2]>| n.len() == pts.len() && in_range(n));
     // A plan far denser than useful keeps the first point of each THIN_CELL square, in order.
     let kept: Option<Vec<[f64; 2]>> = valid_points
-        .then(|| icp_core::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect()))
+        .then(|| {
+            icp_core::maps::point_map::thinned(&pts).map(|k| k.iter().map(|&i| pts[i as usize]).collect())
+        })
         .flatten();
     let n_points = kept.as_ref().map_or(pts.len(), Vec::len);
     let result = PointMap::build(pts, normals.clone(), res, cancel::NEVER);

@@ -10,16 +10,16 @@
 mod fuzz_harness;
 
 use fuzz_harness::{clear_error, in_range, run, Case, Outcome};
-use icp_core::bucket_grid::BucketGrid;
-use icp_core::cell_traversal::for_each_cell;
 use icp_core::error::MAX_COORDINATE;
-use icp_core::log_odds_grid::{LogOddsGrid, OccupancyModel};
-use icp_core::pose::wrap_angle;
-use icp_core::ray_casting::{
+use icp_core::grids::cell_traversal::for_each_cell;
+use icp_core::grids::log_odds_grid::{LogOddsGrid, OccupancyModel};
+use icp_core::grids::ray_casting::{
     add_noise, cast_ranges, noise_rng, Disc, LidarModel, OccupancyRaster, MAX_BEAMS,
 };
-use icp_core::termination::stage_end;
-use icp_core::wall_raster::WallRaster;
+use icp_core::grids::wall_raster::WallRaster;
+use icp_core::icp::termination::stage_end;
+use icp_core::maps::bucket_grid::BucketGrid;
+use icp_core::pose::wrap_angle;
 use icp_core::Pose2;
 use std::f64::consts::PI;
 
@@ -88,9 +88,9 @@ fn fuzz_ray_casting() {
             && cols > 0
             && rows
                 .checked_mul(cols)
-                .is_some_and(|n| n <= icp_core::ray_casting::MAX_CELLS && n == cells.len())
+                .is_some_and(|n| n <= icp_core::grids::ray_casting::MAX_CELLS && n == cells.len())
             && resolution.is_finite()
-            && resolution >= icp_core::ray_casting::MIN_RESOLUTION
+            && resolution >= icp_core::grids::ray_casting::MIN_RESOLUTION
             && within(origin[0])
             && within(origin[1])
             && within(far[0])
@@ -222,7 +222,7 @@ fn fuzz_log_odds_grid() {
         let far = [origin[0] + cols as f64 * resolution, origin[1] + rows as f64 * resolution];
         let valid = model.validate().is_ok()
             && resolution.is_finite()
-            && resolution >= icp_core::log_odds_grid::MIN_RESOLUTION
+            && resolution >= icp_core::grids::log_odds_grid::MIN_RESOLUTION
             && rows > 0
             && cols > 0
             && rows.saturating_mul(cols) <= max_cells

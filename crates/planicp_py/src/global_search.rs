@@ -1,11 +1,15 @@
 //! `planicp._core.GlobalMatcher` and `relocalize`: global relocalization on the plan
-//! (`icp_core::global_search`, `icp_core::relocalization`). `planicp.relocalize` wraps them.
+//! (`icp_core::search::global_search`, `icp_core::search::relocalization`). `planicp.relocalize` wraps them.
 
-use crate::{guarded, interruptible, points_from, Alignment, IcpSettings, PyPointMap};
-use icp_core::global_search::{
+use crate::alignment::{Alignment, IcpSettings};
+use crate::conversions::points_from;
+use crate::errors::guarded;
+use crate::interrupt::interruptible;
+use crate::point_map::PyPointMap;
+use icp_core::search::global_search::{
     GlobalMatcher as CoreMatcher, GlobalSearchConfig, SearchRun as CoreRun, SearchWindow,
 };
-use icp_core::relocalization::{refine as core_refine, relocalize as core_relocalize, RankingConfig};
+use icp_core::search::relocalization::{refine as core_refine, relocalize as core_relocalize, RankingConfig};
 use icp_core::{PointMap, Pose2};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
@@ -233,7 +237,7 @@ pub fn relocalize(
 }
 
 /// The Python view of a core relocalization.
-fn wrap(py: Python<'_>, out: icp_core::relocalization::Relocalization) -> PyResult<Relocalization> {
+fn wrap(py: Python<'_>, out: icp_core::search::relocalization::Relocalization) -> PyResult<Relocalization> {
     let candidates = out
         .candidates
         .into_iter()

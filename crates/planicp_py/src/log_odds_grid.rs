@@ -1,8 +1,9 @@
 //! `planicp._core.LogOddsGrid`: the scan occupancy layer of the enhanced occupancy grid
-//! (`icp_core::log_odds_grid`).
+//! (`icp_core::grids::log_odds_grid`).
 
-use crate::{guarded, points_from};
-use icp_core::log_odds_grid::{LogOddsGrid as CoreGrid, OccupancyModel};
+use crate::conversions::points_from;
+use crate::errors::guarded;
+use icp_core::grids::log_odds_grid::{LogOddsGrid as CoreGrid, OccupancyModel};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -34,7 +35,7 @@ impl LogOddsGrid {
     ) -> PyResult<Self> {
         // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
         let count = |what: &str, v: &Bound<'_, PyAny>| {
-            crate::unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
+            crate::conversions::unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
         };
         let (rows, cols, max_cells) =
             (count("rows", rows)?, count("cols", cols)?, count("max_cells", max_cells)?);

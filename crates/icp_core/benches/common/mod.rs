@@ -5,7 +5,7 @@
 // Each bench compiles this module on its own and uses only part of it.
 #![allow(dead_code)]
 
-use icp_core::ray_casting::{LidarModel, OccupancyRaster};
+use icp_core::grids::ray_casting::{LidarModel, OccupancyRaster};
 use icp_core::{PointMap, Pose2};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;

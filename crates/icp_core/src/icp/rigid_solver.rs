@@ -4,7 +4,7 @@
 //! Umeyama/Kabsch, without reflection): `theta = atan2(sum s'_i x d'_i, sum s'_i . d'_i)` over the
 //! centred points, `t = mean(d) - R mean(s)`.
 
-use crate::correspondence::Pair;
+use crate::maps::pair::Pair;
 use crate::pose::Pose2;
 
 /// Fewest pairs the solver accepts: two distinct points fix a 2D rigid transform; a third guards

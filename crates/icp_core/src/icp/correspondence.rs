@@ -1,18 +1,9 @@
 //! Correspondences: every (transformed) scan point paired with its nearest plan point, kept only
 //! when nearer than a maximum distance (furniture, people and robots are not in the plan).
 
-use crate::point_map::{PointMap, Tree2};
-
-/// A scan point paired with a plan point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pair {
-    /// Index into the scan points.
-    pub source: u32,
-    /// Index into the plan's points.
-    pub target: u32,
-    /// Squared distance between them, square metres.
-    pub sq_dist: f64,
-}
+use crate::maps::kd_tree::Tree2;
+use crate::maps::pair::Pair;
+use crate::maps::point_map::PointMap;
 
 /// The plan points a scan is matched against: all of them, or a subset (e.g. the visible ones)
 /// with its own KD-tree. Either way results are reported as indices into the full plan.

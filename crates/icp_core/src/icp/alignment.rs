@@ -7,20 +7,21 @@
 //! 3. Report the final pose with its inliers (pairs within `max_correspondence_distance`), RMSE,
 //!    and covariance.
 
-use crate::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
 use crate::cancel::{self, Cancel};
-use crate::candidate_cache::CandidateCache;
-use crate::correspondence::{
-    find_pairs, trim, trim_auto, Pair, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
-};
-use crate::covariance::pose_covariance;
 use crate::error::{check_finite, invalid, IcpError, Result};
-use crate::nearest_wall_index::{NearestWallIndex, SensorView};
-use crate::point_map::PointMap;
+use crate::icp::acceleration::{extrapolation, truncated_cost, Update, COOLDOWN};
+use crate::icp::candidate_cache::CandidateCache;
+use crate::icp::correspondence::{
+    find_pairs, trim, trim_auto, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
+};
+use crate::icp::covariance::pose_covariance;
+use crate::icp::rigid_solver::{RigidAccumulator, MIN_PAIRS};
+use crate::icp::termination::{pair_fingerprint, stage_end, Tolerances};
+use crate::icp::visible_through_index::VisibleThroughIndex;
+use crate::maps::nearest_wall_index::{NearestWallIndex, SensorView};
+use crate::maps::pair::Pair;
+use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
-use crate::rigid_solver::{RigidAccumulator, MIN_PAIRS};
-use crate::termination::{pair_fingerprint, stage_end, Tolerances};
-use crate::visible_through_index::VisibleThroughIndex;
 use nalgebra::Matrix3;
 
 /// Candidates are fetched within this many times a stage's distance, so a scan point may move
@@ -70,7 +71,7 @@ pub struct IcpConfig {
     /// `auto_trim`: the most that may be kept).
     pub trim_ratio: f64,
     /// Drop pairs beyond three robust standard deviations of the pair distances at every
-    /// iteration ([`crate::correspondence::trim_auto`]); `trim_ratio` caps what is kept.
+    /// iteration ([`crate::icp::correspondence::trim_auto`]); `trim_ratio` caps what is kept.
     pub auto_trim: bool,
     /// A stage stops when a step moves less than this (and rotates less than `rotation_tolerance`).
     pub translation_tolerance: f64,
@@ -82,7 +83,7 @@ pub struct IcpConfig {
     pub correspondence_schedule: Vec<f64>,
     /// Match only against the plan points visible from the initial guess.
     pub use_visibility: bool,
-    /// Extrapolate slowly converging iterations (see [`crate::acceleration`]).
+    /// Extrapolate slowly converging iterations (see [`crate::icp::acceleration`]).
     pub accelerate: bool,
     /// Range for the visibility ray casting; `None`: the scan's farthest point plus the largest
     /// stage distance.
@@ -94,9 +95,9 @@ pub struct IcpConfig {
 /// How the nearest plan point of a scan point is found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum CorrespondenceSearch {
-    /// The plan's precomputed nearest-wall index ([`crate::nearest_wall_index`]): a few
+    /// The plan's precomputed nearest-wall index ([`crate::maps::nearest_wall_index`]): a few
     /// nanoseconds per look-up. `use_visibility` refuses pairings with the far face of a wall
-    /// ([`crate::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
+    /// ([`crate::visibility::wall_facing`]) instead of ray casting. Alignments whose largest stage distance
     /// exceeds the index's reach, or plans whose index cannot be built, use the KD-tree.
     #[default]
     WallIndex,
@@ -188,7 +189,7 @@ pub struct IcpResult {
     /// Covariance over (x, y, yaw); `inf` on the diagonal when the pose is not constrained.
     pub covariance: Matrix3<f64>,
     /// The wall-normal constraint `H = sum J J^T` of the inliers (see
-    /// [`crate::covariance::PoseUncertainty::constraint`]).
+    /// [`crate::icp::covariance::PoseUncertainty::constraint`]).
     pub constraint: Matrix3<f64>,
     /// Per input scan point: is it an inlier.
     pub inlier_mask: Vec<bool>,
@@ -200,7 +201,7 @@ pub struct IcpResult {
 /// (`T_map_base` guess).
 ///
 /// `visible` are the plan points visible from `initial` already cast (for instance
-/// [`crate::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
+/// [`crate::visibility::wall_view::WallView::visible`], cast once for the alignment and the occlusion of
 /// returns): the KD-tree search with `use_visibility` matches against them instead of casting its
 /// own. `None` casts them here. Other searches ignore them. An index that is not a plan point is
 /// an error.

@@ -18,14 +18,14 @@
 //!    likelihood of the scan's points, i.e. the share of them the plan explains (0..1). Leaves
 //!    below `relative_score` times the best score are no rivals and are pruned too.
 //!
-//! The result is a set of hypotheses on a `resolution` lattice; [`crate::relocalization`] refines
+//! The result is a set of hypotheses on a `resolution` lattice; [`crate::search::relocalization`] refines
 //! them with ICP and ranks them.
 
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, invalid, IcpError, Result};
-use crate::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
-use crate::point_map::PointMap;
+use crate::maps::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
+use crate::search::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::f64::consts::PI;

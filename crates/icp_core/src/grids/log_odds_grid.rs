@@ -2,7 +2,7 @@
 //! occupancy grid).
 //!
 //! Each beam is traced from the sensor to its end point through the cells it passes
-//! ([`crate::cell_traversal`]): the cells before the end are evidence of free space (`miss`), the end
+//! ([`crate::grids::cell_traversal`]): the cells before the end are evidence of free space (`miss`), the end
 //! cell of a beam that returned is evidence of an obstacle (`hit`). A beam with no return clears the
 //! cells up to the end point it is given and marks nothing occupied. A return beyond `max_range`
 //! is treated as no return and clears only up to `max_range`.
@@ -17,8 +17,8 @@
 //! `anchor + k * resolution`. The grid grows by whole cells when a scan reaches beyond it, up to a
 //! cell budget; a scan that would need more is refused and the grid is left as it was.
 
-use crate::cell_traversal::for_each_cell;
 use crate::error::{check_finite, invalid, try_filled, IcpError, Result, MAX_COORDINATE};
+use crate::grids::cell_traversal::for_each_cell;
 
 /// Finest resolution accepted, metres per cell.
 pub const MIN_RESOLUTION: f64 = 1e-4;

@@ -2,7 +2,7 @@
 //! under both tolerances, or at a fixed point (the pairs did not change, so another iteration
 //! would reproduce the same pose).
 
-use crate::correspondence::Pair;
+use crate::maps::pair::Pair;
 use crate::pose::Pose2;
 
 /// Step tolerances. Both zero disables early stopping: every stage runs its whole budget.

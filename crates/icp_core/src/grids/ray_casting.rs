@@ -8,8 +8,9 @@
 //! moves `d - 2` cells at once (one cell is kept as a guard against rounding) without changing the
 //! result.
 //!
-//! The walk reproduces `planicp.synthetic.simulate_ranges` (with `range_sigma=0, dropout=0`) operation
-//! for operation: the same beam angles `(yaw + angle_min) + angle_increment * i`, the same crossing
+//! The walk reproduces the numpy reference caster, `simulate_ranges` in `tests/numpy_ray_caster.py`
+//! (with `range_sigma=0, dropout=0`; `planicp.sim` casts with this one), operation for operation:
+//! the same beam angles `(yaw + angle_min) + angle_increment * i`, the same crossing
 //! parameters `(f + k) / |d|` in cells, and the same corner rule: two grid-line crossings less than
 //! [`CORNER_TIE`] cells apart are one crossing of the corner, so the beam enters the diagonal cell and
 //! does not hit the two cells it only grazes there. What can still differ is the last bit of `sin`
@@ -19,8 +20,8 @@
 //! Ranges follow ROS REP-117: `+inf` when nothing is hit within `range_max` (and for dropouts),
 //! `-inf` for a return closer than `range_min`.
 
-use crate::clearance::{chebyshev_clearance, BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::error::{invalid, Result, MAX_COORDINATE};
+use crate::grids::clearance::{chebyshev_clearance, BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::pose::Pose2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -31,14 +32,14 @@ pub const CORNER_TIE: f64 = 1e-9;
 /// Finest raster resolution accepted, metres per cell (keeps cell indices exact in an `f64`).
 pub const MIN_RESOLUTION: f64 = 1e-6;
 /// Most cells an [`OccupancyRaster`] may have.
-pub const MAX_CELLS: usize = crate::wall_raster::MAX_RASTER_CELLS;
+pub const MAX_CELLS: usize = crate::grids::wall_raster::MAX_RASTER_CELLS;
 /// Most beams one scan may have.
 pub const MAX_BEAMS: usize = 1 << 20;
 
 /// An occupancy grid to cast beams through.
 ///
 /// Cells are row-major and the ROW INDEX GROWS WITH +y: row 0 is the lowest y (the convention of
-/// `planicp.synthetic.Floor`, not image order). Cell `(row, col)` covers
+/// `planicp.sim.Floor`, not image order). Cell `(row, col)` covers
 /// `x in [origin_x + col * res, origin_x + (col + 1) * res)` and the same for `y` with `row`.
 /// Everything outside the raster is free.
 #[derive(Debug, Clone)]
@@ -223,9 +224,9 @@ fn validate_discs(discs: &[Disc]) -> Result<()> {
 /// A range is the distance to the first occupied cell boundary or disc along the beam; `+inf` when
 /// nothing is within `range_max`, `-inf` when the return is closer than `range_min` (REP-117). A
 /// sensor inside an occupied cell or a disc measures 0. The sensor may be outside the raster: the
-/// beams then start where they enter it. Agrees with `planicp.synthetic.simulate_ranges`
-/// (noise-free) as the module documentation describes. The yaw is used as given (not wrapped), so
-/// the beam angles round exactly as the Python reference's do.
+/// beams then start where they enter it. Agrees with the numpy reference in
+/// `tests/numpy_ray_caster.py` (noise-free) as the module documentation describes. The yaw is used
+/// as given (not wrapped), so the beam angles round exactly as the Python reference's do.
 ///
 /// Errors: an invalid `model`, a pose that is not finite or beyond [`MAX_COORDINATE`], a bad disc.
 pub fn cast_ranges(

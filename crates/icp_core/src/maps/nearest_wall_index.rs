@@ -18,7 +18,8 @@
 //! cell: the one or two plan points whose Voronoi regions meet the cell (nearly every cell), or the
 //! offset of a longer list (4 bytes per candidate plus a 4-byte length). The index keeps its own
 //! copy of the wall points with the directions they can be seen from and their plan indices
-//! (24 bytes per point), so that a look-up touches only the index. [`NearestWallIndex::memory_bytes`] reports the total.
+//! (24 bytes per point), so that a look-up touches only the index. [`NearestWallIndex::memory_bytes`] reports
+//! the total.
 //!
 //! A look-up has no data-dependent branch in the common case: an empty block or cell points at a
 //! sentinel point infinitely far away, and a single candidate is stored twice. A scan's look-ups
@@ -32,10 +33,10 @@
 //! its list from that short, sorted prefix.
 
 use crate::cancel::{self, Cancel};
-use crate::correspondence::Pair;
 use crate::error::{invalid, IcpError, Result};
-use crate::point_map::Tree2;
-use crate::wall_facing::SEEN_FROM_EVERYWHERE;
+use crate::maps::kd_tree::Tree2;
+use crate::maps::pair::Pair;
+use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
 
 /// Cells per block side.
 pub const BLOCK: usize = 8;
@@ -75,7 +76,7 @@ pub fn cell_within_budget(cell: f64, extent: [f64; 2], reach: f64) -> f64 {
 struct Site {
     x: f64,
     y: f64,
-    /// Sectors it can be seen from, see [`crate::wall_facing`].
+    /// Sectors it can be seen from, see [`crate::visibility::wall_facing`].
     seen: u16,
     /// Its index in the plan (a placeholder for the sentinel). In the padding after `seen`: a
     /// pair's target costs no further read.
@@ -127,7 +128,7 @@ pub struct IndexStats {
 
 impl NearestWallIndex {
     /// Builds the index of `points` (the plan's wall points, metres, map frame; `tree` is their
-    /// KD-tree; `seen` their visibility masks ([`crate::wall_facing`], `None`: seen from
+    /// KD-tree; `seen` their visibility masks ([`crate::visibility::wall_facing`], `None`: seen from
     /// everywhere) with square
     /// cells of `cell` metres, answering exactly for queries up to `reach` metres from the walls.
     ///
@@ -485,7 +486,7 @@ impl NearestWallIndex {
 
     /// Pairs every point of `transformed` (map frame) with its nearest wall point when nearer
     /// than `max_distance` (at most the reach) and, given a `view`, when that wall point can be
-    /// seen from the sensor ([`crate::wall_facing`]); a hidden one is replaced by its cell's
+    /// seen from the sensor ([`crate::visibility::wall_facing`]); a hidden one is replaced by its cell's
     /// alternative when that is seen. `out` is cleared first.
     ///
     /// Two passes: the first finds every point's cell (a block-table read each, independent of
@@ -617,7 +618,7 @@ fn cell_index(f: f64) -> usize {
 #[derive(Clone, Copy, Debug)]
 pub struct SensorView<'a> {
     /// Per scan point: the robot-frame angle of the direction from it to the sensor, in sectors
-    /// ([`crate::wall_facing::SECTORS`] per turn).
+    /// ([`crate::visibility::wall_facing::SECTORS`] per turn).
     pub bearings: &'a [f64],
     /// The pose's yaw, in sectors.
     pub yaw: f64,
@@ -636,7 +637,7 @@ impl<'a> SensorView<'a> {
 
     #[inline]
     fn sector(&self, i: usize) -> u32 {
-        (cell_index(self.bearings[i] + self.yaw) & (crate::wall_facing::SECTORS - 1)) as u32
+        (cell_index(self.bearings[i] + self.yaw) & (crate::visibility::wall_facing::SECTORS - 1)) as u32
     }
 }
 
@@ -666,7 +667,7 @@ fn fast_atan2(y: f64, x: f64) -> f64 {
     }
 }
 
-const SECTORS_PER_RADIAN: f64 = crate::wall_facing::SECTORS as f64 / std::f64::consts::TAU;
+const SECTORS_PER_RADIAN: f64 = crate::visibility::wall_facing::SECTORS as f64 / std::f64::consts::TAU;
 
 /// `yes` if `pick` else `no`, as arithmetic (a conditional move).
 #[inline]
@@ -858,28 +859,5 @@ mod tests {
                 .unwrap_err(),
             IcpError::Empty { what: "plan" }
         );
-    }
-
-    #[test]
-    fn a_plan_checks_its_index_settings_and_coarsens_a_default_cell_that_would_not_fit() {
-        use crate::point_map::{PointMap, DEFAULT_INDEX_CELL};
-        let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
-        for (cell, reach) in [(0.0, 0.5), (0.03, f64::NAN), (-1.0, 0.5)] {
-            assert!(matches!(
-                PointMap::new(pts.clone(), None).unwrap().with_index_settings(cell, reach),
-                Err(IcpError::InvalidParameter { .. })
-            ));
-        }
-        let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
-        let index = custom.wall_index(cancel::NEVER).unwrap();
-        assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
-        // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
-        // explicit one is refused.
-        let mut wide = pts.clone();
-        wide.push([1000.0, 1000.0]);
-        let map = PointMap::new(wide.clone(), None).unwrap();
-        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
-        let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
-        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
     }
 }

@@ -15,7 +15,7 @@
 //! split is closer than its current best. Distances are squared and computed as
 //! `dx * dx + dy * dy`. Among points at the same distance the k-nearest query keeps the lowest
 //! indices, so that its answer depends on the points, not on the tree's layout (the wall normals
-//! go further and take every tie at the sixth distance, `covariance::estimate_normals`); the
+//! go further and take every tie at the sixth distance, `wall_normals::estimate_normals`); the
 //! nearest and radius queries return the first they meet, which is the same every time.
 
 /// Most points in a leaf.

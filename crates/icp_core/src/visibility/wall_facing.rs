@@ -16,7 +16,7 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::Result;
-use crate::wall_raster::WallRaster;
+use crate::grids::wall_raster::WallRaster;
 
 /// Directions per point.
 pub const SECTORS: usize = 16;
@@ -100,7 +100,7 @@ fn occluded(raster: &WallRaster, p: [f64; 2], n: [f64; 2], d: [f64; 2]) -> bool 
         }
         // Every cell within `clearance - 1` of this free one is free: the next 2 (clearance - 2)
         // half-cell steps (one cell short, against rounding) land on free cells and change
-        // nothing, so the march jumps over them, as the visibility casts do (crate::clearance).
+        // nothing, so the march jumps over them, as the visibility casts do (crate::grids::clearance).
         // Marches from a wall of a dense plan cross its open space in a few jumps.
         i += 1 + 2 * usize::from(clearance.saturating_sub(2));
     }
@@ -152,11 +152,11 @@ mod tests {
     #[test]
     fn a_denormal_raster_resolution_does_not_hang_the_march() {
         // Found by the fuzz target: half of 5e-324 rounds to 0, and the march never advanced.
-        // (The 54 copies of one point the target gave are thinned to one by the map; the raster
-        // is the same, and so is the march.)
+        // (The target gave a map 54 copies of one point, which the map thins to one; the raster
+        // of the copies is the same, and so is the march.)
         let points = vec![[0.3, -0.2]; 54];
-        let map = crate::PointMap::build(points.clone(), None, Some(5e-324), cancel::NEVER).unwrap();
-        let masks = visibility_masks(&points, &vec![[0.0, 0.0]; 54], map.raster(), cancel::NEVER).unwrap();
+        let raster = WallRaster::new(&points, 5e-324).unwrap();
+        let masks = visibility_masks(&points, &vec![[0.0, 0.0]; 54], &raster, cancel::NEVER).unwrap();
         assert_eq!(masks.len(), 54);
     }
 
@@ -188,8 +188,8 @@ mod tests {
         // ...and a one-line wall far from everything.
         sample(&mut pts, [10.0, -3.0], [10.0, 3.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
-        let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         for (i, p) in pts.iter().enumerate() {
             if p[0] < 1.0 || (p[0] > 5.0 && p[0] < 9.0) || p[1].abs() > 2.5 {
@@ -227,8 +227,8 @@ mod tests {
         ] {
             sample(&mut pts, a, b);
         }
-        let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         for resolution in [0.075, 0.031] {
             let raster = WallRaster::new(&pts, resolution).unwrap();
             let jumping = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
@@ -245,8 +245,8 @@ mod tests {
         sample(&mut pts, [0.0, 0.0], [4.0, 0.0]);
         sample(&mut pts, [0.0, 0.05], [0.0, 4.0]);
         let raster = WallRaster::new(&pts, 0.075).unwrap();
-        let tree = crate::point_map::Tree2::new_from_slice(&pts);
-        let normals = crate::covariance::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
+        let tree = crate::maps::kd_tree::Tree2::new_from_slice(&pts);
+        let normals = crate::maps::wall_normals::estimate_normals(&pts, &tree, cancel::NEVER).unwrap();
         let masks = visibility_masks(&pts, &normals, &raster, cancel::NEVER).unwrap();
         let i = pts.iter().position(|p| (p[0] - 0.3).abs() < 1e-9 && p[1] == 0.0).unwrap();
         // Seen from the room (up and to the right), hidden from behind the x = 0 wall.

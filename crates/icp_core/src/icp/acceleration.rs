@@ -8,7 +8,7 @@
 //! checks the result at the next iteration with [`truncated_cost`] and returns to the pose before
 //! the jump when it made the fit worse.
 
-use crate::correspondence::Pair;
+use crate::maps::pair::Pair;
 use crate::pose::Pose2;
 
 /// Largest multiple of the last update that one extrapolation adds.

@@ -12,10 +12,10 @@
 
 use crate::cancel::Cancel;
 use crate::error::{invalid, Result};
-use crate::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
-use crate::icp::{align, IcpConfig, IcpResult};
-use crate::point_map::PointMap;
+use crate::icp::alignment::{align, IcpConfig, IcpResult};
+use crate::maps::point_map::PointMap;
 use crate::pose::{wrap_angle, Pose2};
+use crate::search::global_search::{GlobalMatcher, SearchOutcome, SearchWindow};
 
 /// How the refined candidates are reported.
 #[derive(Clone, Debug, PartialEq)]
@@ -96,7 +96,7 @@ pub fn relocalize(
 }
 
 /// The candidates of a finished search (`search`, of `scan` with `matcher`; see
-/// [`crate::global_search::SearchRun`]) refined by ICP on `map` and ranked, as [`relocalize`]
+/// [`crate::search::global_search::SearchRun`]) refined by ICP on `map` and ranked, as [`relocalize`]
 /// does after its search.
 ///
 /// `cancel` is polled during the alignments (see [`align`]); when it returns true refinement stops
@@ -150,8 +150,8 @@ mod tests {
     use super::*;
     use crate::cancel;
     use crate::error::IcpError;
-    use crate::global_search::tests::{asymmetric_floor, scan_from, segment};
-    use crate::global_search::GlobalSearchConfig;
+    use crate::search::global_search::tests::{asymmetric_floor, scan_from, segment};
+    use crate::search::global_search::GlobalSearchConfig;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 

@@ -1,15 +1,16 @@
 //! Exact nearest *visible* plan points, answered mostly by the plan's nearest-wall index.
 //!
 //! The KD-tree search pairs a scan point with the nearest plan point among those visible from the
-//! initial guess (ray cast through the plan, [`crate::visibility`]). The nearest-wall index gives
-//! the nearest plan point of the whole plan in about 10 ns. Whenever that point is visible it is
+//! initial guess (ray cast through the plan, [`crate::visibility::visible_points`]). The nearest-wall index
+//! gives the nearest plan point of the whole plan in about 10 ns. Whenever that point is visible it is
 //! also the nearest visible one, since the visible points are a subset of the plan; only the
 //! look-ups whose nearest point is hidden need the subset's KD-tree. The pairs are the ones
-//! [`crate::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction
+//! [`crate::icp::correspondence::find_pairs`] finds on the visible subset (up to ties), at a fraction
 //! of the cost: in tracking almost every return lies on a visible wall face.
 
-use crate::correspondence::{Pair, TargetSet};
-use crate::nearest_wall_index::NearestWallIndex;
+use crate::icp::correspondence::TargetSet;
+use crate::maps::nearest_wall_index::NearestWallIndex;
+use crate::maps::pair::Pair;
 
 /// The visible subset of a plan, with the plan's nearest-wall index in front of its KD-tree.
 #[derive(Debug)]
@@ -70,8 +71,8 @@ impl<'a> VisibleThroughIndex<'a> {
 mod tests {
     use super::*;
     use crate::cancel;
-    use crate::correspondence::find_pairs;
-    use crate::point_map::PointMap;
+    use crate::icp::correspondence::find_pairs;
+    use crate::maps::point_map::PointMap;
     use crate::pose::Pose2;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;

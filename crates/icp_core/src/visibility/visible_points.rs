@@ -3,9 +3,9 @@
 //! cell. The points in the cells where rays stop are the visible wall faces; the far face of a
 //! wall, a wall's thickness behind the near one, is hidden, so the ICP cannot lock onto it.
 
-use crate::clearance::{BeamAxis, SKIP_MIN_CLEARANCE};
 use crate::error::{invalid, Result};
-use crate::wall_raster::WallRaster;
+use crate::grids::clearance::{BeamAxis, SKIP_MIN_CLEARANCE};
+use crate::grids::wall_raster::WallRaster;
 use std::f64::consts::TAU;
 
 /// Rays cast evenly around the position before refinement.
@@ -17,8 +17,8 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 /// (map frame, metres) reach first, within `max_range` metres.
 ///
 /// [`BASE_RAYS`] rays are cast evenly; between two neighbouring rays whose first wall cells are not
-/// adjacent (a depth jump, a doorway, a far wall; see `adjacent`), a ray is added halfway, recursively, until the
-/// cells touch or the angle between the rays is below one cell at `max_range` (at most
+/// adjacent (a depth jump, a doorway, a far wall; see `adjacent`), a ray is added halfway, recursively, until
+/// the cells touch or the angle between the rays is below one cell at `max_range` (at most
 /// [`MAX_REFINEMENT_DEPTH`] halvings). The cell holding `position` itself is skipped, so a
 /// position that falls inside a wall (a poor guess) still sees the walls around it.
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
@@ -374,7 +374,7 @@ impl RayCaster<'_> {
 /// and the parameter from `(ox, oy)` where it entered.
 /// The walk is 4-connected (a ray exactly through a cell corner steps along y first), so it cannot
 /// slip between the 8-connected cells of a diagonal wall. It crosses open space in jumps (see
-/// [`crate::clearance`]), landing in the cells the step-by-step walk reaches.
+/// [`crate::grids::clearance`]), landing in the cells the step-by-step walk reaches.
 #[inline]
 fn first_wall_cell(
     raster: &WallRaster,

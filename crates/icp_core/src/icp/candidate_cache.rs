@@ -14,8 +14,9 @@
 //! than radius queries that would be stale at the next iteration), and fetched again when more
 //! than an eighth of the points went stale.
 
-use crate::bucket_grid::BucketGrid;
-use crate::correspondence::{Pair, TargetSet};
+use crate::icp::correspondence::TargetSet;
+use crate::maps::bucket_grid::BucketGrid;
+use crate::maps::pair::Pair;
 
 /// Candidate plan points per scan point, fetched by radius queries: through a [`BucketGrid`]
 /// over a subset target (the visible points), through the KD-tree over the full plan.
@@ -93,7 +94,7 @@ impl CandidateCache {
         self.refills += 1;
     }
 
-    /// Like [`crate::correspondence::find_pairs`], with the same result, using the cache.
+    /// Like [`crate::icp::correspondence::find_pairs`], with the same result, using the cache.
     /// `max_distance` must not exceed the cache radius.
     pub fn find_pairs(
         &mut self,
@@ -117,7 +118,7 @@ impl CandidateCache {
             if settled {
                 self.refill(target, positions);
             } else {
-                crate::correspondence::find_pairs(target, positions, max_distance, out);
+                crate::icp::correspondence::find_pairs(target, positions, max_distance, out);
                 self.direct_passes += 1;
                 return;
             }
@@ -180,8 +181,8 @@ impl TargetSet<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::correspondence::find_pairs;
-    use crate::point_map::PointMap;
+    use crate::icp::correspondence::find_pairs;
+    use crate::maps::point_map::PointMap;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

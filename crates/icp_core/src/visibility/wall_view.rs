@@ -1,8 +1,8 @@
 //! What a range sensor at one pose sees of the plan, and which returns disagree with it.
 //!
 //! A tracking step asks two questions of the walls seen from the predicted pose: which plan points
-//! the alignment may pair with (the visible wall faces, [`crate::visibility`]), and how far each
-//! direction's first wall is, so that returns far short of it (people, furniture) or far beyond it
+//! the alignment may pair with (the visible wall faces, [`crate::visibility::visible_points`]), and how far
+//! each direction's first wall is, so that returns far short of it (people, furniture) or far beyond it
 //! (a wrong prediction) can be told apart.
 //!
 //! A [`WallView`] answers both with one visibility cast: its base rays are every other direction,
@@ -14,10 +14,10 @@
 //! cost robustness in crowds.
 
 use crate::error::{invalid, Result};
+use crate::grids::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
+use crate::grids::wall_raster::WallRaster;
 use crate::pose::Pose2;
-use crate::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
-use crate::visibility::{check_cast, visible_cells, RangeOutput, RayFan};
-use crate::wall_raster::WallRaster;
+use crate::visibility::visible_points::{check_cast, visible_cells, RangeOutput, RayFan};
 use std::f64::consts::{PI, TAU};
 
 /// How far (radians) a view cast for a scan reaches beyond the directions the scan's returns span:
@@ -221,7 +221,7 @@ pub fn classify_returns(ranges: &[f64], points: &[[f64; 2]], margin: f64) -> Ret
 }
 
 /// The occlusion rule's classes of `points` (base frame, metres) against exact ranges: beams cast
-/// from `pose` (`T_map_base`) through the plan image `raster` ([`crate::ray_casting`]) in
+/// from `pose` (`T_map_base`) through the plan image `raster` ([`crate::grids::ray_casting`]) in
 /// `directions` directions, over the arc the returns span and one direction either side. The
 /// image's wall faces are exact to a pixel; a [`WallView`]'s ranges come from the coarser
 /// visibility raster, whose cells lengthen walls at their ends.
@@ -301,6 +301,7 @@ fn spanned_arc(scan: &[[f64; 2]], n: usize, margin: usize) -> Option<(usize, usi
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::visibility::visible_points::{visible_points, BASE_RAYS};
 
     /// A 4 x 4 m room with 0.2 m walls, points every 5 cm on both faces, and a 1 m doorway in the
     /// east wall (x = 4) at y in [1.5, 2.5].
@@ -372,9 +373,8 @@ mod tests {
         let (pts, raster) = room();
         // Facing pi, the first direction is map angle 0, as the visibility cast's first ray.
         let pose = Pose2 { x: 2.3, y: 1.7, yaw: PI };
-        let view =
-            WallView::cast(&raster, &pts, pose, 8.0, 2 * crate::visibility::BASE_RAYS, None, true).unwrap();
-        let seen = crate::visibility::visible_points(&raster, [2.3, 1.7], 8.0).unwrap();
+        let view = WallView::cast(&raster, &pts, pose, 8.0, 2 * BASE_RAYS, None, true).unwrap();
+        let seen = visible_points(&raster, [2.3, 1.7], 8.0).unwrap();
         assert_eq!(view.visible, seen);
     }
 

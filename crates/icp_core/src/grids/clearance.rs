@@ -5,8 +5,8 @@
 //! it may move `d - 2` cells at once (one cell is kept as a guard against rounding) to just after the
 //! last grid-line crossing before that point, and go on cell by cell from there. The crossings are
 //! counted with [`BeamAxis`], whose parameters are exact, so a jump lands in the cell the cell-by-cell
-//! walk would have reached. Used by the simulated LIDAR ([`crate::ray_casting`]) and by the
-//! visibility casts ([`crate::visibility`]).
+//! walk would have reached. Used by the simulated LIDAR ([`crate::grids::ray_casting`]) and by the
+//! visibility casts ([`crate::visibility::visible_points`]).
 
 /// Clearance (cells) from which a beam jumps instead of stepping: a jump costs a few stepping
 /// iterations, so it only pays across wider empty space.

@@ -2,17 +2,16 @@
 //! a visibility raster, all built once and shared read-only between alignments and threads.
 
 use crate::cancel::{self, Cancel};
-use crate::covariance;
 use crate::error::{check_finite, IcpError, Result};
-use crate::nearest_wall_index::{cell_within_budget, NearestWallIndex};
+use crate::grids::wall_raster::WallRaster;
+use crate::maps::kd_tree::Tree2;
+use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
+use crate::maps::wall_normals::estimate_normals;
 use crate::pose::Pose2;
-use crate::visibility;
-use crate::wall_facing::visibility_masks;
-use crate::wall_raster::WallRaster;
-use crate::wall_view::WallView;
+use crate::visibility::visible_points::visible_points;
+use crate::visibility::wall_facing::visibility_masks;
+use crate::visibility::wall_view::WallView;
 use std::sync::{Mutex, OnceLock};
-
-pub use crate::kd_tree::Tree2;
 
 /// Largest number of points a map may hold (indices are `u32`).
 pub const MAX_POINTS: usize = u32::MAX as usize;
@@ -117,7 +116,7 @@ impl PointMap {
         let raster = WallRaster::new(&points, resolution)?;
         let normals = match normals {
             Some(n) => n,
-            None => covariance::estimate_normals(&points, &tree, cancel)?,
+            None => estimate_normals(&points, &tree, cancel)?,
         };
         Ok(Self {
             points,
@@ -152,9 +151,10 @@ impl PointMap {
         self.wall_index.get().and_then(|built| built.as_ref().ok())
     }
 
-    /// The nearest-wall index, with the directions each point is seen from ([`crate::wall_facing`]), built
-    /// on the first call (thread-safe) and kept. Threads that ask while another builds wait for its
-    /// index. Errors: the index would be too large for the plan's extent at its cell size.
+    /// The nearest-wall index, with the directions each point is seen from
+    /// ([`crate::visibility::wall_facing`]), built on the first call (thread-safe) and kept. Threads that ask
+    /// while another builds wait for its index. Errors: the index would be too large for the plan's extent at
+    /// its cell size.
     ///
     /// `cancel` is polled while the index is built; when it returns true the build stops with
     /// [`IcpError::Interrupted`], is not kept, and the next call starts it again (callers that
@@ -241,9 +241,9 @@ impl PointMap {
     }
 
     /// Indices (ascending) of the wall points a range sensor at `position` sees within `max_range`
-    /// metres. See [`visibility::visible_points`].
+    /// metres. See [`visible_points`].
     pub fn visible_from(&self, pose: Pose2, max_range: f64) -> Result<Vec<u32>> {
-        visibility::visible_points(&self.raster, [pose.x, pose.y], max_range)
+        visible_points(&self.raster, [pose.x, pose.y], max_range)
     }
 
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
@@ -453,6 +453,28 @@ mod tests {
         let map = PointMap::new(pts, None).unwrap();
         let (cols, rows) = map.raster().shape();
         assert!((cols * rows) as f64 <= AUTO_RASTER_MAX_CELLS, "{cols} x {rows}");
+    }
+
+    #[test]
+    fn a_plan_checks_its_index_settings_and_coarsens_a_default_cell_that_would_not_fit() {
+        let pts: Vec<[f64; 2]> = (0..100).map(|i| [i as f64 * 0.05, 0.0]).collect();
+        for (cell, reach) in [(0.0, 0.5), (0.03, f64::NAN), (-1.0, 0.5)] {
+            assert!(matches!(
+                PointMap::new(pts.clone(), None).unwrap().with_index_settings(cell, reach),
+                Err(IcpError::InvalidParameter { .. })
+            ));
+        }
+        let custom = PointMap::new(pts.clone(), None).unwrap().with_index_settings(0.05, 0.25).unwrap();
+        let index = custom.wall_index(cancel::NEVER).unwrap();
+        assert_eq!((index.cell(), index.reach()), (0.05, 0.25));
+        // 1 km across: the default 3 cm cell would need over 2^28 cells, so it is coarsened; an
+        // explicit one is refused.
+        let mut wide = pts.clone();
+        wide.push([1000.0, 1000.0]);
+        let map = PointMap::new(wide.clone(), None).unwrap();
+        assert!(map.wall_index(cancel::NEVER).unwrap().cell() > DEFAULT_INDEX_CELL);
+        let explicit = PointMap::new(wide, None).unwrap().with_index_settings(0.01, 0.5).unwrap();
+        assert!(matches!(explicit.wall_index(cancel::NEVER), Err(IcpError::RasterTooLarge { .. })));
     }
 
     #[test]

@@ -5,8 +5,8 @@
 //! Wall points spaced no more than one cell apart along a wall give an 8-connected chain of wall
 //! cells, which a cell-by-cell ray traversal cannot slip through.
 
-use crate::clearance::chebyshev_clearance;
 use crate::error::{check_finite, invalid, IcpError, Result};
+use crate::grids::clearance::chebyshev_clearance;
 
 /// Most cells a raster may have (one byte each plus the point index).
 pub const MAX_RASTER_CELLS: usize = 256 * 1024 * 1024;
@@ -19,7 +19,7 @@ pub struct WallRaster {
     cols: usize,
     rows: usize,
     /// Per cell: 0 for a wall cell, else the Chebyshev distance in cells to the nearest wall cell
-    /// (see [`crate::clearance`]).
+    /// (see [`crate::grids::clearance`]).
     clearance: Vec<u8>,
     /// Cell index of every point, sorted ascending; `point_of_slot` holds the matching point index.
     cell_of_slot: Vec<u32>,

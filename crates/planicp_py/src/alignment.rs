@@ -1,0 +1,171 @@
+//! `planicp._core.align` with its `IcpSettings` and `Alignment`: one ICP alignment of a scan to the
+//! plan (`icp_core::icp`). `planicp.localize` wraps them.
+
+use crate::conversions::{points_from, unsigned_arg};
+use crate::errors::core_error;
+use crate::interrupt::interruptible;
+use crate::point_map::{PyPointMap, WallView};
+use icp_core::icp::CorrespondenceSearch;
+use icp_core::{IcpConfig, IcpResult, Pose2};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use std::sync::Arc;
+
+/// Validated ICP settings (see `planicp.IcpConfig` for their meaning).
+#[pyclass(frozen, module = "planicp._core")]
+pub(crate) struct IcpSettings {
+    pub(crate) inner: IcpConfig,
+}
+
+#[pymethods]
+impl IcpSettings {
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
+                        rotation_tolerance, subsample, correspondence_schedule, use_visibility,
+                        accelerate, visibility_range=None, auto_trim=false, search="wall_index"))]
+    fn new(
+        max_correspondence_distance: f64,
+        max_iterations: &Bound<'_, PyAny>,
+        trim_ratio: f64,
+        translation_tolerance: f64,
+        rotation_tolerance: f64,
+        subsample: &Bound<'_, PyAny>,
+        correspondence_schedule: Vec<f64>,
+        use_visibility: bool,
+        accelerate: bool,
+        visibility_range: Option<f64>,
+        auto_trim: bool,
+        search: &str,
+    ) -> PyResult<Self> {
+        let search = match search {
+            "wall_index" => CorrespondenceSearch::WallIndex,
+            "kd_tree" => CorrespondenceSearch::KdTree,
+            other => {
+                return Err(core_error(icp_core::error::invalid(
+                    "correspondence_search",
+                    format!("{other:?}"),
+                    "must be \"wall_index\" or \"kd_tree\"",
+                )))
+            }
+        };
+        // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
+        let count = |what: &str, v: &Bound<'_, PyAny>| {
+            unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
+        };
+        let max_iterations = count("max_iterations", max_iterations)?;
+        let subsample = count("subsample", subsample)?;
+        let inner = IcpConfig {
+            max_correspondence_distance,
+            max_iterations,
+            trim_ratio,
+            auto_trim,
+            translation_tolerance,
+            rotation_tolerance,
+            subsample,
+            correspondence_schedule,
+            use_visibility,
+            accelerate,
+            visibility_range,
+            search,
+        };
+        inner.validate().map_err(core_error)?;
+        Ok(Self { inner })
+    }
+}
+
+/// The raw outcome of `align`; `planicp.IcpResult` wraps it.
+#[pyclass(frozen, module = "planicp._core")]
+pub(crate) struct Alignment {
+    pub(crate) inner: IcpResult,
+}
+
+#[pymethods]
+impl Alignment {
+    /// (x, y, yaw) of T_map_base: metres, metres, radians.
+    #[getter]
+    fn pose(&self) -> (f64, f64, f64) {
+        let p = self.inner.pose;
+        (p.x, p.y, p.yaw)
+    }
+    #[getter]
+    fn converged(&self) -> bool {
+        self.inner.converged
+    }
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+    #[getter]
+    fn num_inliers(&self) -> usize {
+        self.inner.num_inliers
+    }
+    #[getter]
+    fn inlier_ratio(&self) -> f64 {
+        self.inner.inlier_ratio
+    }
+    #[getter]
+    fn rmse(&self) -> f64 {
+        self.inner.rmse
+    }
+    #[getter]
+    fn num_target_points(&self) -> usize {
+        self.inner.num_target_points
+    }
+    /// 3x3 covariance over (x, y, yaw).
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let c = &self.inner.covariance;
+        Array2::from_shape_fn((3, 3), |(i, j)| c[(i, j)]).into_pyarray(py)
+    }
+    /// 3x3 wall-normal constraint H = sum J J^T of the inliers.
+    #[getter]
+    fn constraint<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let c = &self.inner.constraint;
+        Array2::from_shape_fn((3, 3), |(i, j)| c[(i, j)]).into_pyarray(py)
+    }
+    /// (N,) bool: which scan points are inliers.
+    #[getter]
+    fn inlier_mask<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        self.inner.inlier_mask.clone().into_pyarray(py)
+    }
+}
+
+/// Aligns scan points (N, 2, robot frame, metres) to the map from initial (x, y, yaw); `view`, a
+/// WallView cast from `initial`, gives the visible plan points instead of casting them again.
+#[pyfunction]
+#[pyo3(signature = (map, scan, initial, settings, view=None))]
+pub(crate) fn align(
+    py: Python<'_>,
+    map: &PyPointMap,
+    scan: PyReadonlyArray2<'_, f64>,
+    initial: (f64, f64, f64),
+    settings: &IcpSettings,
+    view: Option<&WallView>,
+) -> PyResult<Alignment> {
+    let pts = points_from("scan points", &scan)?;
+    let map = Arc::clone(&map.inner);
+    let config = settings.inner.clone();
+    let initial = Pose2::new(initial.0, initial.1, initial.2);
+    let view = view.map(|v| Arc::clone(&v.inner));
+    let inner = interruptible(py, |cancel| {
+        icp_core::icp::align(
+            &map,
+            &pts,
+            initial,
+            &config,
+            view.as_ref().map(|v| v.visible.as_slice()),
+            cancel,
+        )
+    })?;
+    Ok(Alignment { inner })
+}
+
+/// The range (metres) an alignment with `settings` casts its visibility to for `scan` (N, 2,
+/// robot frame): the farthest scan point plus the largest stage distance, or the settings' own.
+#[pyfunction]
+pub(crate) fn visibility_range(scan: PyReadonlyArray2<'_, f64>, settings: &IcpSettings) -> PyResult<f64> {
+    let pts = points_from("scan points", &scan)?;
+    Ok(icp_core::icp::visibility_range(&pts, &settings.inner))
+}
