@@ -6,6 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "MAX_RASTER_CELLS",
     "MIN_SCAN_POINTS",
     "MIN_SEARCH_POINTS",
     "Alignment",
@@ -28,6 +29,8 @@ __all__ = [
 ]
 
 __version__: str
+MAX_RASTER_CELLS: int
+"""Most cells of a plan's visibility raster (a plan whose raster would need more is refused)."""
 MIN_SCAN_POINTS: int
 MIN_SEARCH_POINTS: int
 """Fewest search cells (of `RelocalizationConfig.resolution`) a scan must occupy to be searched."""

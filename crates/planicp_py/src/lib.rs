@@ -27,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MIN_SCAN_POINTS", icp_core::icp::rigid_solver::MIN_PAIRS)?;
     m.add("MIN_SEARCH_POINTS", icp_core::search::global_search::MIN_SEARCH_POINTS)?;
+    m.add("MAX_RASTER_CELLS", icp_core::grids::wall_raster::MAX_RASTER_CELLS)?;
     m.add("PlanicpError", m.py().get_type::<errors::PlanicpError>())?;
     m.add("PlanicpInternalError", m.py().get_type::<errors::PlanicpInternalError>())?;
     m.add_class::<point_map::PyPointMap>()?;

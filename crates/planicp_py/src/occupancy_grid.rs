@@ -8,7 +8,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMet
 use pyo3::prelude::*;
 use std::sync::Arc;
 
-/// An occupancy grid to simulate LIDAR scans in (`icp_core::ray_casting`). `cells` is (rows, cols)
+/// An occupancy grid to simulate LIDAR scans in (`icp_core::grids::ray_casting`). `cells` is (rows, cols)
 /// bool, True = occupied, with the ROW INDEX GROWING WITH +y (row 0 is the lowest y, as in
 /// `planicp.sim.Floor`); `origin` is the map-frame (x, y) of the lower-left corner of cell (0, 0).
 #[pyclass(frozen, module = "planicp._core")]

@@ -103,7 +103,7 @@ impl PyPointMap {
     }
 }
 
-/// What a range sensor at a pose sees of the plan (`icp_core::wall_view::WallView`): the visible
+/// What a range sensor at a pose sees of the plan (`icp_core::visibility::wall_view::WallView`): the visible
 /// wall points and the range to the first wall in each of `directions` evenly spaced directions.
 #[pyclass(frozen, module = "planicp._core")]
 pub(crate) struct WallView {

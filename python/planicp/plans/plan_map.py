@@ -17,11 +17,11 @@ from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments
 from .wall_index_stats import WallIndexStats
 
-VISIBILITY_RASTER_CELLS = 256 * 1024 * 1024
-"""Most cells of a plan's visibility raster: the native core's limit (`MAX_RASTER_CELLS`,
-crates/icp_core/src/grids/wall_raster.rs), checked here as well so that wall segments spanning too wide
-an extent for their spacing are refused before their points are sampled (a 4 KB HouseExpo file
-with one vertex 260 km away had 26 million points sampled, 2.5 GB, before the core refused them)."""
+VISIBILITY_RASTER_CELLS = _core.MAX_RASTER_CELLS
+"""Most cells of a plan's visibility raster: the native core's limit, checked here as well so that
+wall segments spanning too wide an extent for their spacing are refused before their points are
+sampled (a 4 KB HouseExpo file with one vertex 260 km away had 26 million points sampled, 2.5 GB,
+before the core refused them)."""
 
 CacheSetting = bool | str | Path
 """True: the default cache folder; False: no cache; a path: that folder."""
