@@ -1,10 +1,11 @@
-"""Three studies on the real CARMEN logs, through the peer harness's own loading (the even-numbered
+"""Studies on the real CARMEN logs, through the peer harness's own loading (the even-numbered
 scans draw the map_server plan, the odd-numbered ones are tracked from its synthetic odometry):
 
     python benches/real_log_studies.py search       # global search settings: right places, nodes
     python benches/real_log_studies.py visibility   # the Localizer with and without visibility
     python benches/real_log_studies.py seeds        # the Localizer over other draws of the odometry
     python benches/real_log_studies.py nees         # how honest Estimate.covariance is on real logs
+    python benches/real_log_studies.py alignments   # one alignment: ray-cast view against the index's masks
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -16,6 +17,11 @@ tracks each log with the defaults from the harness's synthetic odometry drawn wi
 nor lost, gives the normalised estimation error squared e^T P^-1 e of `Estimate.covariance` (and of
 the fit's own `IcpResult.covariance`) against the reference pose: a consistent estimator's median is
 the chi-square's, 2.366 (the reference poses' own error counts as the estimator's here).
+`alignments` aligns 60 evenly spaced tracked scans of each log from guesses off the reference pose
+by a normal error (0.15 m per axis, 2.3 degrees; the size of a search candidate's or a followed
+place's error) with the `Localizer`'s settings, once through the view ray cast from the guess (the
+KD-tree search) and once through the nearest-wall index's visibility masks (no cast), and gives the
+time per alignment and the share of fits left more than 0.3 m off.
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -35,7 +41,7 @@ from typing import Any
 import numpy as np
 
 import planicp
-from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, relocalize
+from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, localize, relocalize
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
@@ -160,9 +166,38 @@ def visibility_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
+ALIGNMENT_SEARCHES = ("kd_tree", "wall_index")
+"""The two visibility paths the `alignments` study compares (`IcpConfig.correspondence_search`)."""
+
+
+def alignments_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | search | ms per alignment (median) | 90th percentile | median error | fits > 0.3 m off |")
+    print("|---|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, _ = load(harness, name, out)
+        pm = PlanMap.from_ros_map(plan.yaml_path)
+        picked = range(10, len(scans), max(1, len(scans) // 60))
+        rng = np.random.default_rng(0)
+        guesses = [ref[k] + rng.normal(0.0, [0.15, 0.15, math.radians(2.3)]) for k in picked]
+        for search in ALIGNMENT_SEARCHES:
+            config = IcpConfig.for_tracking(correspondence_search=search)
+            localize(scans[picked[0]], pm, tuple(map(float, guesses[0])), config)  # the index, once
+            spent, errors = [], []
+            for k, guess in zip(picked, guesses):
+                start = time.perf_counter()
+                fit = localize(scans[k], pm, tuple(map(float, guess)), config)
+                spent.append(time.perf_counter() - start)
+                errors.append(math.dist(fit.pose[:2], ref[k, :2]))
+            print(
+                f"| {name} | {search} | {1e3 * np.median(spent):.2f} | {1e3 * np.percentile(spent, 90):.2f} | "
+                f"{100 * np.median(errors):.1f} cm | {100 * np.mean(np.array(errors) > 0.3):.0f} % |",
+                flush=True,
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees"))
+    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments"))
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
@@ -180,6 +215,8 @@ def main() -> None:
             seeds_study(harness, args.logs, out, args.seeds)
         elif args.study == "nees":
             nees_study(harness, args.logs, out)
+        elif args.study == "alignments":
+            alignments_study(harness, args.logs, out)
         else:
             (search_study if args.study == "search" else visibility_study)(harness, args.logs, out)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 from dataclasses import dataclass, field
@@ -10,6 +11,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _core
 from .._validation import Pose, as_points, as_pose
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
@@ -201,13 +203,15 @@ class Localizer:
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         # The nearest-wall index refuses pairs with hidden wall faces where the KD-tree finds the
         # nearest visible one, so its basin is narrower from a poor start (a 15-degree odometry
-        # step, a candidate place): fits it cannot make are tried again with the KD-tree, and the
-        # recovery refines its candidates with it.
+        # step): fits it cannot make are tried again with the KD-tree.
         self._wide_config = self.config.replace(correspondence_search="kd_tree")
+        # The recovery aligns every place it follows, often several per update: with the index and
+        # its visibility masks, made once for the plan, instead of a ray cast from each place
+        # (docs/design.md#finding-the-robot-again).
         self._recovery = Recovery(
             plan,
             recovery if recovery is not None else RecoveryConfig(),
-            self._wide_config,
+            self.config.replace(correspondence_search="wall_index"),
             self.gate,
             self._occlusion,
             self.motion_noise,
@@ -215,6 +219,11 @@ class Localizer:
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.
         prepare_search(plan, self._recovery.config.search)
+        # So is the nearest-wall index the recovery and the searches align with (seconds on a
+        # large plan; the KD-tree search of tracking goes through it too). A plan it cannot be
+        # built for (too large an extent) is aligned through the KD-tree there instead.
+        with contextlib.suppress(_core.PlanicpError):
+            plan.prepare_index()
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
         self._last_odom: Pose | None = None
