@@ -10,8 +10,10 @@ image in ROS ``map_server`` (top row = highest y) order.
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -44,7 +46,6 @@ class Floor:
     clutter: NDArray[np.bool_]
     resolution: float
     origin: tuple[float, float]
-    _cache: dict[Any, Any] = field(init=False, default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         walls = _as_bool_grid(self.walls, "walls")
@@ -148,35 +149,44 @@ class Floor:
         yaw = float(rng.uniform(-math.pi, math.pi))
         return float(ox + (c + u) * res), float(oy + (r + v) * res), yaw
 
-    # -- cached derived data ---------------------------------------------------------------------------
+    # -- cached derived data (functools: the arrays are read-only, so what is derived from them holds) ---
 
     def _native_grid(self, layer: str) -> _core.OccupancyGrid:
         """The native ray-casting grid of ``"occupied"`` (walls and clutter) or ``"walls"`` cells."""
-        key = ("native_grid", layer)
-        grid = self._cache.get(key)
-        if grid is None:
-            cells = self.occupied() if layer == "occupied" else np.array(self.walls)
-            grid = _core.OccupancyGrid(np.ascontiguousarray(cells), self.resolution, self.origin)
-            self._cache[key] = grid
-        return grid
+        return self._occupied_grid if layer == "occupied" else self._walls_grid
 
-    def _inside(self) -> NDArray[np.bool_]:
+    @functools.cached_property
+    def _occupied_grid(self) -> _core.OccupancyGrid:
+        return _core.OccupancyGrid(np.ascontiguousarray(self.occupied()), self.resolution, self.origin)
+
+    @functools.cached_property
+    def _walls_grid(self) -> _core.OccupancyGrid:
+        return _core.OccupancyGrid(np.ascontiguousarray(self.walls), self.resolution, self.origin)
+
+    @functools.cached_property
+    def _inside_mask(self) -> NDArray[np.bool_]:
         """Mask of the largest free 4-connected region not touching the raster border."""
-        inside = self._cache.get("inside")
-        if inside is None:
-            inside = _largest_interior_region(~self.occupied())
-            inside.flags.writeable = False
-            self._cache["inside"] = inside
+        inside = _largest_interior_region(~self.occupied())
+        inside.flags.writeable = False
         return inside
 
+    def _inside(self) -> NDArray[np.bool_]:
+        return self._inside_mask
+
     def _pose_cells(self, clearance: float) -> NDArray[np.intp]:
-        key = ("pose_cells", clearance)
-        cells = self._cache.get(key)
-        if cells is None:
+        """Flat indices of the inside cells at least `clearance` metres from every occupied cell."""
+        return self._pose_cells_by_clearance(clearance)
+
+    @functools.cached_property
+    def _pose_cells_by_clearance(self) -> Callable[[float], NDArray[np.intp]]:
+        # One memo per floor (a method under lru_cache would keep every floor alive in one global memo).
+        @functools.cache
+        def cells(clearance: float) -> NDArray[np.intp]:
             blocked = _dilate_by_clearance(self.occupied(), clearance / self.resolution)
-            cells = np.flatnonzero(self._inside() & ~blocked)
-            cells.flags.writeable = False
-            self._cache[key] = cells
+            found = np.flatnonzero(self._inside() & ~blocked)
+            found.flags.writeable = False
+            return found
+
         return cells
 
 
