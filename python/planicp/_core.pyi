@@ -1,6 +1,7 @@
 """Type stubs of the native core (crates/planicp_py). See the Python wrappers for full docs."""
 
-from typing import final
+from collections.abc import Sequence
+from typing import Literal, Protocol, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -83,25 +84,39 @@ class WallView:
     def ranges(self) -> NDArray[np.float64]: ...
     def classify(self, points: NDArray[np.float64], margin: float) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]: ...
 
+class _IcpFields(Protocol):
+    """What `IcpSettings` reads off a `planicp.IcpConfig`, by name."""
+
+    @property
+    def max_correspondence_distance(self) -> float: ...
+    @property
+    def max_iterations(self) -> int: ...
+    @property
+    def trim_ratio(self) -> float: ...
+    @property
+    def auto_trim(self) -> bool: ...
+    @property
+    def translation_tolerance(self) -> float: ...
+    @property
+    def rotation_tolerance(self) -> float: ...
+    @property
+    def subsample(self) -> int: ...
+    @property
+    def correspondence_schedule(self) -> Sequence[float]: ...
+    @property
+    def use_visibility(self) -> bool: ...
+    @property
+    def accelerate(self) -> bool: ...
+    @property
+    def visibility_range(self) -> float | None: ...
+    @property
+    def correspondence_search(self) -> Literal["wall_index", "kd_tree"]: ...
+
 @final
 class IcpSettings:
-    """Validated ICP settings."""
+    """ICP settings checked by the core, read off a `planicp.IcpConfig` (its fields, by name)."""
 
-    def __new__(
-        cls,
-        max_correspondence_distance: float,
-        max_iterations: int,
-        trim_ratio: float,
-        translation_tolerance: float,
-        rotation_tolerance: float,
-        subsample: int,
-        correspondence_schedule: list[float],
-        use_visibility: bool,
-        accelerate: bool,
-        visibility_range: float | None = None,
-        auto_trim: bool = False,
-        search: str = "wall_index",
-    ) -> IcpSettings: ...
+    def __new__(cls, config: _IcpFields) -> IcpSettings: ...
 
 @final
 class Alignment:
