@@ -25,6 +25,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from datetime import timedelta
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -387,6 +388,7 @@ def test_native_core(data: Any) -> None:
         call(view.classify, data.draw(arrays(50)), data.draw(values))
     else:
         view = None
+    # The native settings read these off a planicp.IcpConfig by name; here, off any object.
     kw = [
         data.draw(st.one_of(st.sampled_from([0.25]), values, anything)),
         data.draw(st.one_of(st.sampled_from([30]), st.integers(-1, 2**70), anything)),
@@ -399,9 +401,9 @@ def test_native_core(data: Any) -> None:
         data.draw(st.one_of(st.booleans(), anything)),
         data.draw(st.one_of(st.none(), values, anything)),
     ]
-    ok, s = call(_core.IcpSettings, *kw)
+    ok, s = call(_core.IcpSettings, icp_fields(*kw))
     if not ok:
-        s = _core.IcpSettings(0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None)
+        s = _core.IcpSettings(icp_fields(0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None))
     scan = data.draw(st.one_of(st.just(np.ascontiguousarray(box_scan()[::7])), arrays(100)))
     ok, al = call(_core.align, pm, scan, data.draw(poses), s, view if data.draw(st.booleans()) else None)
     if ok:
@@ -782,7 +784,25 @@ def test_native_negative_counts_are_planicp_errors_not_overflow_errors(position:
     args: list[Any] = [0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None]
     args[position] = -1
     with pytest.raises(planicp.PlanicpError, match="must be a non-negative integer"):
-        _core.IcpSettings(*args)
+        _core.IcpSettings(icp_fields(*args))
+
+
+def icp_fields(*values: Any) -> SimpleNamespace:
+    """An object with the fields the native `IcpSettings` reads off a planicp.IcpConfig: `values` in
+    the order of the ten given, and the tracking's search with automatic trimming off."""
+    names = [
+        "max_correspondence_distance",
+        "max_iterations",
+        "trim_ratio",
+        "translation_tolerance",
+        "rotation_tolerance",
+        "subsample",
+        "correspondence_schedule",
+        "use_visibility",
+        "accelerate",
+        "visibility_range",
+    ]
+    return SimpleNamespace(**dict(zip(names, values)), auto_trim=False, correspondence_search="wall_index")
 
 
 @pytest.mark.parametrize("position", [0, 1, 8])

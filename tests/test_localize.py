@@ -4,6 +4,7 @@ outlier rejection, the result's fields, convergence modes, visibility and `scan_
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -623,5 +624,7 @@ def test_correspondence_search_is_checked() -> None:
     # The native settings check it too (a PlanicpError is a ValueError).
     from planicp import _core
 
+    # (The core reads the settings off any object with their names.)
+    fields = SimpleNamespace(**{**IcpConfig().to_dict(), "correspondence_search": "octree"})
     with pytest.raises(ValueError, match='correspondence_search = "octree": must be "wall_index" or "kd_tree"'):
-        _core.IcpSettings(0.25, 30, 1.0, 1e-4, 1e-4, 1, [1.0], True, True, None, False, "octree")
+        _core.IcpSettings(fields)

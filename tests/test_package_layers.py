@@ -3,8 +3,8 @@
 Read from the installed package's sources: every `from .x import`, `from ..x import` and
 `import planicp.x` of a module is an edge from its subpackage to the imported one. A subpackage
 may import only those below it in `LAYERS`; the modules at the top of the package (`se2`,
-`laser_scan`, `_validation`, `progress`, the native `_core`, the version string) are the base every
-layer may use.
+`laser_scan`, `_validation`, `_settings`, `progress`, the native `_core`, the version string) are the
+base every layer may use.
 `demo` and `cli` sit on top."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 import planicp
 
 LAYERS = ["io", "plans", "tracking", "mapping", "sim", "evaluation", "ros", "sweep", "demo", "cli"]
-BASE = {"se2", "laser_scan", "_validation", "progress", "_core", "data", "__version__"}
+BASE = {"se2", "laser_scan", "_validation", "_settings", "progress", "_core", "data", "__version__"}
 ROOT_PACKAGE = "__init__"
 """`planicp` itself, which re-exports every layer: only the top (`demo`, `cli`) may import it."""
 ROOT = Path(planicp.__file__).parent

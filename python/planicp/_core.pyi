@@ -1,6 +1,7 @@
 """Type stubs of the native core (crates/planicp_py). See the Python wrappers for full docs."""
 
-from typing import final
+from collections.abc import Sequence
+from typing import Literal, Protocol, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -83,25 +84,39 @@ class WallView:
     def ranges(self) -> NDArray[np.float64]: ...
     def classify(self, points: NDArray[np.float64], margin: float) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]: ...
 
+class _IcpFields(Protocol):
+    """What `IcpSettings` reads off a `planicp.IcpConfig`, by name."""
+
+    @property
+    def max_correspondence_distance(self) -> float: ...
+    @property
+    def max_iterations(self) -> int: ...
+    @property
+    def trim_ratio(self) -> float: ...
+    @property
+    def auto_trim(self) -> bool: ...
+    @property
+    def translation_tolerance(self) -> float: ...
+    @property
+    def rotation_tolerance(self) -> float: ...
+    @property
+    def subsample(self) -> int: ...
+    @property
+    def correspondence_schedule(self) -> Sequence[float]: ...
+    @property
+    def use_visibility(self) -> bool: ...
+    @property
+    def accelerate(self) -> bool: ...
+    @property
+    def visibility_range(self) -> float | None: ...
+    @property
+    def correspondence_search(self) -> Literal["wall_index", "kd_tree"]: ...
+
 @final
 class IcpSettings:
-    """Validated ICP settings."""
+    """ICP settings checked by the core, read off a `planicp.IcpConfig` (its fields, by name)."""
 
-    def __new__(
-        cls,
-        max_correspondence_distance: float,
-        max_iterations: int,
-        trim_ratio: float,
-        translation_tolerance: float,
-        rotation_tolerance: float,
-        subsample: int,
-        correspondence_schedule: list[float],
-        use_visibility: bool,
-        accelerate: bool,
-        visibility_range: float | None = None,
-        auto_trim: bool = False,
-        search: str = "wall_index",
-    ) -> IcpSettings: ...
+    def __new__(cls, config: _IcpFields) -> IcpSettings: ...
 
 @final
 class Alignment:
@@ -202,26 +217,39 @@ def align(
 def visibility_range(scan: NDArray[np.float64], settings: IcpSettings) -> float: ...
 def _panic_for_tests() -> None: ...
 
+class _SearchFields(Protocol):
+    """What `GlobalMatcher` reads off a `planicp.RelocalizationConfig`, by name."""
+
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def sigma(self) -> float: ...
+    @property
+    def levels(self) -> int: ...
+    @property
+    def angular_step(self) -> float | None: ...
+    @property
+    def max_angular_step(self) -> float: ...
+    @property
+    def search_candidates(self) -> int: ...
+    @property
+    def min_score(self) -> float: ...
+    @property
+    def relative_score(self) -> float: ...
+    @property
+    def nms_distance(self) -> float: ...
+    @property
+    def nms_angle(self) -> float: ...
+    @property
+    def max_scan_points(self) -> int: ...
+    @property
+    def max_nodes(self) -> int: ...
+
 @final
 class GlobalMatcher:
     """The likelihood pyramid of a plan with the global search settings."""
 
-    def __new__(
-        cls,
-        map: PointMap,
-        resolution: float,
-        sigma: float,
-        levels: int,
-        angular_step: float | None,
-        max_angular_step: float,
-        max_candidates: int,
-        min_score: float,
-        relative_score: float,
-        nms_distance: float,
-        nms_angle: float,
-        max_scan_points: int,
-        max_nodes: int,
-    ) -> GlobalMatcher: ...
+    def __new__(cls, map: PointMap, config: _SearchFields) -> GlobalMatcher: ...
     @property
     def shape(self) -> tuple[int, int]: ...
     @property

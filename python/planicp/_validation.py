@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import reprlib
-from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -96,13 +94,6 @@ def whole_number(value: Any, name: str, minimum: int, maximum: int = 2**31 - 1) 
     if value > maximum:
         raise ValueError(f"{name} must be at most {maximum}, got {value}")
     return int(value)
-
-
-def unknown_fields(cls: Any, keys: Iterable[Any]) -> tuple[list[str], list[str]]:
-    """`(unknown, known)`: the sorted `keys` that name no init field of the dataclass `cls`, and
-    the sorted names of its init fields, for an error that names the typo and the choices."""
-    known = {f.name for f in dataclasses.fields(cls) if f.init}
-    return sorted(str(k) for k in keys if k not in known), sorted(known)
 
 
 _BRIEF = reprlib.Repr()

@@ -12,34 +12,38 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use std::sync::Arc;
 
-/// Validated ICP settings (see `planicp.IcpConfig` for their meaning).
+/// ICP settings checked by the core (`IcpConfig::validate`), read off a `planicp.IcpConfig`.
 #[pyclass(frozen, module = "planicp._core")]
 pub(crate) struct IcpSettings {
     pub(crate) inner: IcpConfig,
 }
 
+/// The fields of a `planicp.IcpConfig` (or of any object that has them), read by name: the Python
+/// dataclass defines the settings, their defaults and what a user may type; the core's
+/// `IcpConfig::validate` checks them again here, since the core never runs with settings it has
+/// not checked, whoever made them (Rust callers, the fuzz tests, this binding called directly).
+#[derive(FromPyObject)]
+struct IcpConfigFields<'py> {
+    max_correspondence_distance: f64,
+    // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
+    max_iterations: Bound<'py, PyAny>,
+    trim_ratio: f64,
+    auto_trim: bool,
+    translation_tolerance: f64,
+    rotation_tolerance: f64,
+    subsample: Bound<'py, PyAny>,
+    correspondence_schedule: Vec<f64>,
+    use_visibility: bool,
+    accelerate: bool,
+    visibility_range: Option<f64>,
+    correspondence_search: String,
+}
+
 #[pymethods]
 impl IcpSettings {
     #[new]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (max_correspondence_distance, max_iterations, trim_ratio, translation_tolerance,
-                        rotation_tolerance, subsample, correspondence_schedule, use_visibility,
-                        accelerate, visibility_range=None, auto_trim=false, search="wall_index"))]
-    fn new(
-        max_correspondence_distance: f64,
-        max_iterations: &Bound<'_, PyAny>,
-        trim_ratio: f64,
-        translation_tolerance: f64,
-        rotation_tolerance: f64,
-        subsample: &Bound<'_, PyAny>,
-        correspondence_schedule: Vec<f64>,
-        use_visibility: bool,
-        accelerate: bool,
-        visibility_range: Option<f64>,
-        auto_trim: bool,
-        search: &str,
-    ) -> PyResult<Self> {
-        let search = match search {
+    fn new(config: IcpConfigFields<'_>) -> PyResult<Self> {
+        let search = match config.correspondence_search.as_str() {
             "wall_index" => CorrespondenceSearch::WallIndex,
             "kd_tree" => CorrespondenceSearch::KdTree,
             other => {
@@ -50,24 +54,21 @@ impl IcpSettings {
                 )))
             }
         };
-        // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
         let count = |what: &str, v: &Bound<'_, PyAny>| {
             unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
         };
-        let max_iterations = count("max_iterations", max_iterations)?;
-        let subsample = count("subsample", subsample)?;
         let inner = IcpConfig {
-            max_correspondence_distance,
-            max_iterations,
-            trim_ratio,
-            auto_trim,
-            translation_tolerance,
-            rotation_tolerance,
-            subsample,
-            correspondence_schedule,
-            use_visibility,
-            accelerate,
-            visibility_range,
+            max_correspondence_distance: config.max_correspondence_distance,
+            max_iterations: count("max_iterations", &config.max_iterations)?,
+            trim_ratio: config.trim_ratio,
+            auto_trim: config.auto_trim,
+            translation_tolerance: config.translation_tolerance,
+            rotation_tolerance: config.rotation_tolerance,
+            subsample: count("subsample", &config.subsample)?,
+            correspondence_schedule: config.correspondence_schedule,
+            use_visibility: config.use_visibility,
+            accelerate: config.accelerate,
+            visibility_range: config.visibility_range,
             search,
         };
         inner.validate().map_err(core_error)?;

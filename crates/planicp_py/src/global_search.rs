@@ -40,41 +40,41 @@ pub struct GlobalMatcher {
     inner: Arc<CoreMatcher>,
 }
 
+/// The search fields of a `planicp.RelocalizationConfig` (or of any object that has them), read by
+/// name; the core's `GlobalSearchConfig::validate` checks them again (see `IcpConfigFields`).
+#[derive(FromPyObject)]
+struct SearchConfigFields {
+    resolution: f64,
+    sigma: f64,
+    levels: usize,
+    angular_step: Option<f64>,
+    max_angular_step: f64,
+    search_candidates: usize,
+    min_score: f64,
+    relative_score: f64,
+    nms_distance: f64,
+    nms_angle: f64,
+    max_scan_points: usize,
+    max_nodes: u64,
+}
+
 #[pymethods]
 impl GlobalMatcher {
     #[new]
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (map, resolution, sigma, levels, angular_step, max_angular_step, max_candidates,
-                        min_score, relative_score, nms_distance, nms_angle, max_scan_points, max_nodes))]
-    fn new(
-        py: Python<'_>,
-        map: &PyPointMap,
-        resolution: f64,
-        sigma: f64,
-        levels: usize,
-        angular_step: Option<f64>,
-        max_angular_step: f64,
-        max_candidates: usize,
-        min_score: f64,
-        relative_score: f64,
-        nms_distance: f64,
-        nms_angle: f64,
-        max_scan_points: usize,
-        max_nodes: u64,
-    ) -> PyResult<Self> {
+    fn new(py: Python<'_>, map: &PyPointMap, config: SearchConfigFields) -> PyResult<Self> {
         let config = GlobalSearchConfig {
-            resolution,
-            sigma,
-            levels,
-            angular_step,
-            max_angular_step,
-            max_candidates,
-            min_score,
-            relative_score,
-            nms_distance,
-            nms_angle,
-            max_scan_points,
-            max_nodes,
+            resolution: config.resolution,
+            sigma: config.sigma,
+            levels: config.levels,
+            angular_step: config.angular_step,
+            max_angular_step: config.max_angular_step,
+            max_candidates: config.search_candidates,
+            min_score: config.min_score,
+            relative_score: config.relative_score,
+            nms_distance: config.nms_distance,
+            nms_angle: config.nms_angle,
+            max_scan_points: config.max_scan_points,
+            max_nodes: config.max_nodes,
         };
         let map = Arc::clone(&map.inner);
         let inner = py.detach(|| guarded(|| CoreMatcher::new(&map, config)))?;

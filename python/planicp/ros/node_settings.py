@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import field
+from typing import Annotated, Any
 
-from .._validation import Pose, as_pose, positive, real_number, unknown_fields
+from pydantic import AfterValidator, BeforeValidator, ValidationError, ValidationInfo
+from pydantic.dataclasses import dataclass
+
+from .._settings import SETTINGS, Flag, Pose3, Real, Settings, first_error, read, refuse_type, refuse_value
+from .._validation import brief
 from ..plans.plan_loading import load_plan
 from ..plans.plan_map import PlanMap
 from ..tracking.acceptance_gate import AcceptanceGate
@@ -17,8 +21,55 @@ DEFAULT_PLAN = "default"
 """The `plan` value that selects the office plan shipped with planicp (`planicp.plans.default_plan`)."""
 
 
-@dataclass(frozen=True)
-class NodeSettings:
+def _plan(value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        refuse_value(f"plan must be a file path or 'default', got {brief(value)}")
+    return value
+
+
+def _name(value: Any, info: ValidationInfo) -> str:
+    if not isinstance(value, str) or not value.strip():
+        refuse_value(f"{info.field_name} must be a non-empty name, got {brief(value)}")
+    return value
+
+
+def _topic(value: Any, info: ValidationInfo) -> str:
+    if not isinstance(value, str):
+        refuse_type(info, f"{info.field_name} must be a topic name or '', got {brief(value)}")
+    return value
+
+
+def _std(value: tuple[float, float, float]) -> tuple[float, float, float]:
+    if min(value) < 0.0:
+        refuse_value(f"initial_std must be >= 0 (m, m, rad), got {value}")
+    return value
+
+
+def _icp(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
+    try:
+        _icp_config(overrides)
+    except ValueError as exc:  # an unknown field, or a value refused
+        refuse_value(str(exc))
+    return overrides
+
+
+def _gate(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
+    try:
+        _acceptance_gate(overrides)
+    except ValueError as exc:
+        refuse_value(str(exc))
+    return overrides
+
+
+Name = Annotated[str, BeforeValidator(_name)]
+"""A topic or frame name: a non-empty string."""
+Topic = Annotated[str, BeforeValidator(_topic)]
+"""A topic name, or "" for a topic not published."""
+Rate = Annotated[float, Real(ge=0.0, says=">= 0 per second (0: off)")]
+
+
+@dataclass(frozen=True, config=SETTINGS)
+class NodeSettings(Settings):
     """Everything `planicp_node` is configured with (private ROS parameters `~name`).
 
     Frames follow REP-105: `map_frame` is the plan's frame, `odom_frame` the continuous odometry
@@ -54,110 +105,57 @@ class NodeSettings:
         gate: `AcceptanceGate` fields that differ from its defaults.
     """
 
-    plan: str = DEFAULT_PLAN
-    resolution: float | None = None
-    origin: Pose = (0.0, 0.0, 0.0)
-    scan_topic: str = "scan"
-    odom_topic: str = "odom"
-    initial_pose_topic: str = "initialpose"
-    pose_topic: str = "planicp/pose"
-    plan_topic: str = "map"
-    eog_topic: str = "planicp/eog"
-    map_frame: str = "map"
-    odom_frame: str = "odom"
-    base_frame: str = "base_link"
-    initial_pose: Pose = (0.0, 0.0, 0.0)
-    initial_std: tuple[float, float, float] = (0.1, 0.1, math.radians(5.0))
-    laser_pose: Pose | None = None
-    publish_tf: bool = True
-    transform_tolerance: float = 0.1
-    odometry_span: float = 5.0
-    eog_rate: float = 1.0
-    eog_resolution: float = 0.05
-    plan_resolution: float = 0.05
-    diagnostics_rate: float = 1.0
-    icp: Mapping[str, Any] = field(default_factory=dict)
-    gate: Mapping[str, Any] = field(default_factory=dict)
+    plan: Annotated[str, BeforeValidator(_plan)] = DEFAULT_PLAN
+    resolution: Annotated[float, Real(gt=0.0, unit="metres per pixel")] | None = None
+    origin: Pose3 = (0.0, 0.0, 0.0)
+    scan_topic: Name = "scan"
+    odom_topic: Name = "odom"
+    initial_pose_topic: Name = "initialpose"
+    pose_topic: Name = "planicp/pose"
+    plan_topic: Topic = "map"
+    eog_topic: Topic = "planicp/eog"
+    map_frame: Name = "map"
+    odom_frame: Name = "odom"
+    base_frame: Name = "base_link"
+    initial_pose: Pose3 = (0.0, 0.0, 0.0)
+    initial_std: Annotated[Pose3, AfterValidator(_std)] = (0.1, 0.1, math.radians(5.0))
+    laser_pose: Pose3 | None = None
+    publish_tf: Flag = True
+    transform_tolerance: Annotated[float, Real(ge=0.0, says=">= 0 seconds")] = 0.1
+    odometry_span: Annotated[float, Real(gt=0.0, unit="seconds")] = 5.0
+    eog_rate: Rate = 1.0
+    eog_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
+    plan_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
+    diagnostics_rate: Rate = 1.0
+    icp: Annotated[Mapping[str, Any], AfterValidator(_icp)] = field(default_factory=dict)
+    gate: Annotated[Mapping[str, Any], AfterValidator(_gate)] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.plan, str) or not self.plan:
-            raise ValueError(f"plan must be a file path or 'default', got {self.plan!r}")
-        if self.resolution is not None:
-            object.__setattr__(self, "resolution", positive(self.resolution, "resolution", "metres per pixel"))
-        object.__setattr__(self, "origin", as_pose(self.origin, "origin"))
-        for name in (
-            "scan_topic",
-            "odom_topic",
-            "initial_pose_topic",
-            "pose_topic",
-            "map_frame",
-            "odom_frame",
-            "base_frame",
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, str) or not value.strip():
-                raise ValueError(f"{name} must be a non-empty name, got {value!r}")
-        for name in ("plan_topic", "eog_topic"):
-            if not isinstance(getattr(self, name), str):
-                raise TypeError(f"{name} must be a topic name or '', got {getattr(self, name)!r}")
         if len({self.map_frame, self.odom_frame, self.base_frame}) != 3:
-            raise ValueError(
+            refuse_value(
                 f"map_frame, odom_frame and base_frame must differ, got {self.map_frame!r}, "
                 f"{self.odom_frame!r}, {self.base_frame!r}"
             )
-        object.__setattr__(self, "initial_pose", as_pose(self.initial_pose, "initial_pose"))
-        std = as_pose(self.initial_std, "initial_std")
-        if min(std) < 0.0:
-            raise ValueError(f"initial_std must be >= 0 (m, m, rad), got {std}")
-        object.__setattr__(self, "initial_std", std)
-        if self.laser_pose is not None:
-            object.__setattr__(self, "laser_pose", as_pose(self.laser_pose, "laser_pose"))
-        if not isinstance(self.publish_tf, bool):
-            raise TypeError(f"publish_tf must be true or false, got {self.publish_tf!r}")
-        tolerance = real_number(self.transform_tolerance, "transform_tolerance")
-        if not (math.isfinite(tolerance) and tolerance >= 0.0):
-            raise ValueError(f"transform_tolerance must be >= 0 seconds, got {self.transform_tolerance!r}")
-        object.__setattr__(self, "transform_tolerance", tolerance)
-        object.__setattr__(self, "odometry_span", positive(self.odometry_span, "odometry_span", "seconds"))
-        for name in ("eog_rate", "diagnostics_rate"):
-            rate = real_number(getattr(self, name), name)
-            if not (math.isfinite(rate) and rate >= 0.0):
-                raise ValueError(f"{name} must be >= 0 per second (0: off), got {getattr(self, name)!r}")
-            object.__setattr__(self, name, rate)
-        for name in ("eog_resolution", "plan_resolution"):
-            object.__setattr__(self, name, positive(getattr(self, name), name, "metres"))
-        for name in ("icp", "gate"):
-            if not isinstance(getattr(self, name), Mapping):
-                raise TypeError(f"{name} must be a mapping of field names to values, got {getattr(self, name)!r}")
-        self.icp_config()
-        self.acceptance_gate()
 
     @classmethod
     def from_params(cls, params: Mapping[str, Any]) -> NodeSettings:
         """Settings from a parameter dictionary (e.g. `rospy.get_param("~")`); missing names keep
-        their defaults. Lists become tuples.
+        their defaults.
 
         Raises:
             ValueError: an unknown name (a typo would otherwise be ignored silently), or a bad value.
         """
         if not isinstance(params, Mapping):
             raise TypeError(f"params must be a mapping, got {type(params).__name__}")
-        unknown, known = unknown_fields(cls, params)
-        if unknown:
-            raise ValueError(f"unknown planicp_node parameters {unknown}; known: {known}")
-        values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in params.items()}
-        return cls(**values)
+        return read(cls, params, what="planicp_node parameters")
 
     def icp_config(self) -> IcpConfig:
         """`IcpConfig.for_tracking()` with the `icp` overrides (unknown fields: ValueError)."""
-        return IcpConfig.from_dict({**IcpConfig.for_tracking().to_dict(), **dict(self.icp)})
+        return _icp_config(self.icp)
 
     def acceptance_gate(self) -> AcceptanceGate:
         """`AcceptanceGate()` with the `gate` overrides (unknown fields: ValueError)."""
-        unknown, known = unknown_fields(AcceptanceGate, self.gate)
-        if unknown:
-            raise ValueError(f"unknown gate fields {unknown}; known: {known}")
-        return AcceptanceGate(**dict(self.gate))
+        return _acceptance_gate(self.gate)
 
     def initial_covariance(self) -> list[list[float]]:
         """3x3 covariance of `initial_pose` from `initial_std`."""
@@ -171,3 +169,17 @@ class NodeSettings:
 
             return load_default_plan()
         return load_plan(self.plan, resolution=self.resolution, origin=self.origin)
+
+
+def _icp_config(overrides: Mapping[str, Any]) -> IcpConfig:
+    try:
+        return IcpConfig.from_dict({**IcpConfig.for_tracking().to_dict(), **overrides})
+    except ValidationError as exc:
+        raise ValueError(f"icp: {first_error(exc)}") from None
+
+
+def _acceptance_gate(overrides: Mapping[str, Any]) -> AcceptanceGate:
+    try:
+        return read(AcceptanceGate, overrides, what="gate fields")
+    except ValidationError as exc:
+        raise ValueError(f"gate: {first_error(exc)}") from None

@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Annotated
 
-from .._validation import Pose, positive, real_number, whole_number
+from pydantic.dataclasses import dataclass
+
+from .._settings import SETTINGS, Flag, Real, Settings, Whole
+from .._validation import Pose
 from ..se2 import between
 from .icp_result import IcpResult
 
 
-@dataclass(frozen=True)
-class AcceptanceGate:
+@dataclass(frozen=True, config=SETTINGS)
+class AcceptanceGate(Settings):
     """When the `Localizer` trusts an ICP result instead of odometry.
 
     Attributes:
@@ -26,21 +29,11 @@ class AcceptanceGate:
         max_rotation_jump: largest correction (radians) of the odometry prediction.
     """
 
-    require_convergence: bool = False
-    min_inliers: int = 30
-    min_inlier_ratio: float = 0.25
-    max_translation_jump: float = 0.5
-    max_rotation_jump: float = math.radians(10.0)
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.require_convergence, bool):
-            raise TypeError(f"require_convergence must be a bool, got {self.require_convergence!r}")
-        whole_number(self.min_inliers, "min_inliers", 0)
-        ratio = real_number(self.min_inlier_ratio, "min_inlier_ratio")
-        if not 0.0 <= ratio <= 1.0:
-            raise ValueError(f"min_inlier_ratio must be in [0, 1], got {ratio!r}")
-        positive(self.max_translation_jump, "max_translation_jump", "metres")
-        positive(self.max_rotation_jump, "max_rotation_jump", "radians")
+    require_convergence: Flag = False
+    min_inliers: Annotated[int, Whole(ge=0)] = 30
+    min_inlier_ratio: Annotated[float, Real(ge=0.0, le=1.0)] = 0.25
+    max_translation_jump: Annotated[float, Real(gt=0.0, unit="metres")] = 0.5
+    max_rotation_jump: Annotated[float, Real(gt=0.0, unit="radians")] = math.radians(10.0)
 
     def rejection(self, result: IcpResult, predicted: Pose) -> str:
         """Why `result` is not trusted, or "" when it is."""

@@ -11,13 +11,15 @@ odometry prediction is kept, corrected by ICP only as much as their variances sa
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass as pydantic_dataclass
 
-from .._validation import Pose, real_number
+from .._settings import SETTINGS, Real, Settings
+from .._validation import Pose
 from ..se2 import wrap_angle
 from .fusion_rule import finite_covariance
 from .icp_result import IcpResult
@@ -38,8 +40,8 @@ class Degeneracy:
     strong: float
 
 
-@dataclass(frozen=True)
-class DegeneracyRule:
+@pydantic_dataclass(frozen=True, config=SETTINGS)
+class DegeneracyRule(Settings):
     """When a fit counts as degenerate.
 
     Attributes:
@@ -48,12 +50,7 @@ class DegeneracyRule:
             erred 17 mm along it (1.8 mm above 100); 20 marks those and spares the rest.
     """
 
-    min_constraint: float = 20.0
-
-    def __post_init__(self) -> None:
-        value = real_number(self.min_constraint, "min_constraint")
-        if not (math.isfinite(value) and value >= 0.0):
-            raise ValueError(f"min_constraint must be a finite number >= 0 (0 disables it), got {value!r}")
+    min_constraint: Annotated[float, Real(ge=0.0, note="(0 disables it)")] = 20.0
 
     def check(self, result: IcpResult) -> Degeneracy | None:
         """The degeneracy of `result`, or None when every direction is constrained."""

@@ -18,12 +18,14 @@ exists.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass
 
-from .._validation import Pose, real_number
+from .._settings import SETTINGS, Real, Settings
+from .._validation import Pose
 from ..se2 import wrap_angle
 from .icp_result import IcpResult
 
@@ -34,8 +36,8 @@ UNCONSTRAINED_VARIANCE = 1e6
 """Variance (m^2) given to a direction no inlier constrains at all."""
 
 
-@dataclass(frozen=True)
-class FusionRule:
+@dataclass(frozen=True, config=SETTINGS)
+class FusionRule(Settings):
     """When a fit is fused with the prediction.
 
     Attributes:
@@ -46,12 +48,7 @@ class FusionRule:
             (a degenerate direction still keeps the prediction, see `fuse_along_weak_axis`).
     """
 
-    max_innovation: float = CHI2_3_999
-
-    def __post_init__(self) -> None:
-        value = real_number(self.max_innovation, "max_innovation")
-        if not value >= 0.0:
-            raise ValueError(f"max_innovation must be a number >= 0 (0 never fuses), got {value!r}")
+    max_innovation: Annotated[float, Real(ge=0.0, finite=False, note="(0 never fuses)")] = CHI2_3_999
 
     def innovation(self, result: IcpResult, predicted: Pose, predicted_covariance: NDArray[np.float64]) -> float:
         """The squared Mahalanobis distance between `result.pose` and `predicted` (inf when

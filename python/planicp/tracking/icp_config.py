@@ -2,20 +2,19 @@
 
 from __future__ import annotations
 
-import dataclasses
-import math
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any, Literal
+from functools import cached_property
+from typing import Annotated, Any, Literal
+
+from pydantic.dataclasses import dataclass
 
 from .. import _core
-from .._validation import positive, real_number, unknown_fields, whole_number
+from .._settings import SETTINGS, Flag, Items, Real, Settings, Whole, non_empty
 
 CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
 
-@dataclass(frozen=True)
-class IcpConfig:
+@dataclass(frozen=True, config=SETTINGS)
+class IcpConfig(Settings):
     """How `localize` aligns a scan to the plan. Distances in metres, angles in radians.
 
     Attributes:
@@ -73,67 +72,31 @@ class IcpConfig:
             whose nearest wall point is visible (the same pairs), the KD-tree the rest.
     """
 
-    max_correspondence_distance: float = 0.25
-    max_iterations: int = 30
-    trim_ratio: float = 1.0
-    auto_trim: bool = False
-    translation_tolerance: float = 1e-4
-    rotation_tolerance: float = 1e-4
-    subsample: int = 1
-    correspondence_schedule: tuple[float, ...] = (1.0, 0.5, 0.25)
-    use_visibility: bool = True
-    accelerate: bool = True
-    visibility_range: float | None = None
-    covariance_scale: float = 3.0
+    max_correspondence_distance: Annotated[float, Real(gt=0.0, unit="metres")] = 0.25
+    max_iterations: Annotated[int, Whole(ge=1)] = 30
+    trim_ratio: Annotated[float, Real(gt=0.0, le=1.0)] = 1.0
+    auto_trim: Flag = False
+    translation_tolerance: Annotated[float, Real(ge=0.0, note="(0 disables it)")] = 1e-4
+    rotation_tolerance: Annotated[float, Real(ge=0.0, note="(0 disables it)")] = 1e-4
+    subsample: Annotated[int, Whole(ge=1)] = 1
+    correspondence_schedule: Annotated[
+        tuple[Annotated[float, Real(gt=0.0, name="correspondence_schedule factor")], ...], Items, non_empty("stage")
+    ] = (1.0, 0.5, 0.25)
+    use_visibility: Flag = True
+    accelerate: Flag = True
+    visibility_range: Annotated[float, Real(gt=0.0, unit="metres")] | None = None
+    covariance_scale: Annotated[float, Real(gt=0.0)] = 3.0
     correspondence_search: CorrespondenceSearch = "wall_index"
-    _native: _core.IcpSettings = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        positive(self.max_correspondence_distance, "max_correspondence_distance", "metres")
-        whole_number(self.max_iterations, "max_iterations", 1)
-        ratio = real_number(self.trim_ratio, "trim_ratio")
-        if not (0.0 < ratio <= 1.0):
-            raise ValueError(f"trim_ratio must be in (0, 1], got {self.trim_ratio!r}")
-        for name in ("translation_tolerance", "rotation_tolerance"):
-            v = real_number(getattr(self, name), name)
-            if not (math.isfinite(v) and v >= 0.0):
-                raise ValueError(f"{name} must be a finite number >= 0 (0 disables it), got {v!r}")
-        whole_number(self.subsample, "subsample", 1)
-        schedule = self.correspondence_schedule
-        if isinstance(schedule, (str, bytes)) or not isinstance(schedule, Sequence):
-            raise TypeError(f"correspondence_schedule must be a sequence of factors, got {schedule!r}")
-        if len(schedule) == 0:
-            raise ValueError("correspondence_schedule needs at least one stage")
-        factors = tuple(positive(f, "correspondence_schedule factor") for f in schedule)
-        object.__setattr__(self, "correspondence_schedule", factors)
-        if not isinstance(self.use_visibility, bool):
-            raise TypeError(f"use_visibility must be a bool, got {self.use_visibility!r}")
-        if not isinstance(self.auto_trim, bool):
-            raise TypeError(f"auto_trim must be a bool, got {self.auto_trim!r}")
-        if not isinstance(self.accelerate, bool):
-            raise TypeError(f"accelerate must be a bool, got {self.accelerate!r}")
-        if self.visibility_range is not None:
-            positive(self.visibility_range, "visibility_range", "metres")
-        positive(self.covariance_scale, "covariance_scale")
-        if self.correspondence_search not in ("wall_index", "kd_tree"):
-            raise ValueError(
-                f'correspondence_search must be "wall_index" or "kd_tree", got {self.correspondence_search!r}'
-            )
-        native = _core.IcpSettings(
-            float(self.max_correspondence_distance),
-            int(self.max_iterations),
-            float(self.trim_ratio),
-            float(self.translation_tolerance),
-            float(self.rotation_tolerance),
-            int(self.subsample),
-            list(factors),
-            self.use_visibility,
-            self.accelerate,
-            None if self.visibility_range is None else float(self.visibility_range),
-            self.auto_trim,
-            self.correspondence_search,
-        )
-        object.__setattr__(self, "_native", native)
+        _ = self._native  # made now: the core checks the settings when they are made
+
+    @cached_property
+    def _native(self) -> _core.IcpSettings:
+        """These settings as the core takes them: read by field name, and checked again by the core
+        (`IcpConfig::validate`), which never runs with settings it has not checked. The checks here
+        are those a user gets, naming the field; the core's guard its own callers."""
+        return _core.IcpSettings(self)
 
     @classmethod
     def for_tracking(cls, **changes: Any) -> IcpConfig:
@@ -149,24 +112,3 @@ class IcpConfig:
     def stage_distances(self) -> tuple[float, ...]:
         """The rejection distance of each stage, metres."""
         return tuple(f * self.max_correspondence_distance for f in self.correspondence_schedule)
-
-    def replace(self, **changes: Any) -> IcpConfig:
-        """A copy with some fields changed (validated again)."""
-        return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain values (YAML/JSON friendly); `from_dict` reads them back."""
-        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.init}
-        out["correspondence_schedule"] = list(self.correspondence_schedule)
-        return out
-
-    @classmethod
-    def from_dict(cls, values: Mapping[str, Any]) -> IcpConfig:
-        """The inverse of `to_dict`; unknown keys are an error naming them."""
-        unknown, known = unknown_fields(cls, values)
-        if unknown:
-            raise ValueError(f"unknown IcpConfig keys: {unknown}; known: {known}")
-        kwargs = dict(values)
-        if "correspondence_schedule" in kwargs:
-            kwargs["correspondence_schedule"] = tuple(kwargs["correspondence_schedule"])
-        return cls(**kwargs)

@@ -5,12 +5,15 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Annotated
 
-from .._validation import real_number, whole_number
+from pydantic.dataclasses import dataclass as pydantic_dataclass
+
+from .._settings import SETTINGS, Real, Settings, Whole
 
 
-@dataclass(frozen=True)
-class LostRule:
+@pydantic_dataclass(frozen=True, config=SETTINGS)
+class LostRule(Settings):
     """When the `Localizer` declares itself lost.
 
     The match score of a scan is the share of its points within `max_correspondence_distance` of
@@ -32,16 +35,9 @@ class LostRule:
         max_rejections: rejections in a row that mean lost (>= 1).
     """
 
-    window: int = 5
-    min_score: float = 0.35
-    max_rejections: int = 3
-
-    def __post_init__(self) -> None:
-        whole_number(self.window, "window", 1, 10_000)
-        score = real_number(self.min_score, "min_score")
-        if not 0.0 <= score <= 1.0:
-            raise ValueError(f"min_score must be in [0, 1], got {self.min_score!r}")
-        whole_number(self.max_rejections, "max_rejections", 1, 10_000)
+    window: Annotated[int, Whole(ge=1, le=10_000)] = 5
+    min_score: Annotated[float, Real(ge=0.0, le=1.0)] = 0.35
+    max_rejections: Annotated[int, Whole(ge=1, le=10_000)] = 3
 
 
 @dataclass

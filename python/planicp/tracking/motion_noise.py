@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass
 
-from .._validation import Pose, as_pose, real_number
+from .._settings import SETTINGS, Real, Settings
+from .._validation import Pose, as_pose
 
 
-@dataclass(frozen=True)
-class MotionNoise:
+@dataclass(frozen=True, config=SETTINGS)
+class MotionNoise(Settings):
     """Standard deviations of an odometry motion `(dx, dy, dyaw)` (base frame at its start).
 
     x and y each get `translation_fraction * hypot(dx, dy) + translation_floor` metres; the heading
@@ -28,23 +30,11 @@ class MotionNoise:
         rotation_floor: radians per update, >= 0.
     """
 
-    translation_fraction: float = 0.05
-    translation_floor: float = 0.001
-    rotation_fraction: float = 0.05
-    rotation_per_metre: float = math.radians(1.0)
-    rotation_floor: float = math.radians(0.05)
-
-    def __post_init__(self) -> None:
-        for name in (
-            "translation_fraction",
-            "translation_floor",
-            "rotation_fraction",
-            "rotation_per_metre",
-            "rotation_floor",
-        ):
-            value = real_number(getattr(self, name), name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    translation_fraction: Annotated[float, Real(ge=0.0)] = 0.05
+    translation_floor: Annotated[float, Real(ge=0.0)] = 0.001
+    rotation_fraction: Annotated[float, Real(ge=0.0)] = 0.05
+    rotation_per_metre: Annotated[float, Real(ge=0.0)] = math.radians(1.0)
+    rotation_floor: Annotated[float, Real(ge=0.0)] = math.radians(0.05)
 
     def propagate(self, covariance: NDArray[np.float64], pose: Pose, motion: Pose) -> NDArray[np.float64]:
         """The covariance (3x3 over map-frame x, y, yaw) of `pose * motion` given that of `pose`:

@@ -15,20 +15,22 @@ uncertainty is below `margin`, and when enough returns remain.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass
 
 from .. import _core
-from .._validation import Pose, positive, whole_number
+from .._settings import SETTINGS, Real, Settings, Whole
+from .._validation import Pose
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
 from .icp_config import IcpConfig
 
 
-@dataclass(frozen=True)
-class OcclusionRule:
+@dataclass(frozen=True, config=SETTINGS)
+class OcclusionRule(Settings):
     """When a return counts as standing in front of a plan wall.
 
     Attributes:
@@ -38,14 +40,9 @@ class OcclusionRule:
         min_points: fewest returns that must remain; otherwise the whole scan is used (>= 3).
     """
 
-    margin: float = 0.2
-    beams: int = 1440
-    min_points: int = 50
-
-    def __post_init__(self) -> None:
-        positive(self.margin, "margin", "metres")
-        whole_number(self.beams, "beams", 8, 1 << 20)
-        whole_number(self.min_points, "min_points", 3)
+    margin: Annotated[float, Real(gt=0.0, unit="metres")] = 0.2
+    beams: Annotated[int, Whole(ge=8, le=1 << 20)] = 1440
+    min_points: Annotated[int, Whole(ge=3)] = 50
 
 
 class OcclusionFilter:

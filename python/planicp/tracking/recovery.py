@@ -41,11 +41,14 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 from statistics import NormalDist
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass as pydantic_dataclass
 
-from .._validation import Pose, real_number, whole_number
+from .._settings import SETTINGS, Real, Settings, Whole, instance_of
+from .._validation import Pose
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .acceptance_gate import AcceptanceGate
@@ -58,8 +61,8 @@ from .occlusion_rule import OcclusionFilter
 from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
 
 
-@dataclass(frozen=True)
-class RecoveryConfig:
+@pydantic_dataclass(frozen=True, config=SETTINGS)
+class RecoveryConfig(Settings):
     """How a lost `Localizer` finds itself again.
 
     Attributes:
@@ -89,34 +92,16 @@ class RecoveryConfig:
             the update that starts it (seconds on a large plan).
     """
 
-    search: RelocalizationConfig = field(default_factory=RelocalizationConfig)
-    min_inlier_ratio: float = 0.6
-    confirmations: int = 3
-    max_hypotheses: int = 5
-    margin: float = 0.05
-    local_radius: float = 3.0
-    max_beyond: float = 0.15
-    search_nodes: int | None = 20_000
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.search, RelocalizationConfig):
-            raise TypeError(f"search must be a RelocalizationConfig, got {type(self.search).__name__}")
-        ratio = real_number(self.min_inlier_ratio, "min_inlier_ratio")
-        if not 0.0 < ratio <= 1.0:
-            raise ValueError(f"min_inlier_ratio must be in (0, 1], got {self.min_inlier_ratio!r}")
-        whole_number(self.confirmations, "confirmations", 1, 1000)
-        whole_number(self.max_hypotheses, "max_hypotheses", 1, 100)
-        if self.search_nodes is not None:
-            whole_number(self.search_nodes, "search_nodes", 1)
-        margin = real_number(self.margin, "margin")
-        if not 0.0 <= margin <= 1.0:
-            raise ValueError(f"margin must be in [0, 1], got {self.margin!r}")
-        beyond = real_number(self.max_beyond, "max_beyond")
-        if not 0.0 < beyond <= 1.0:
-            raise ValueError(f"max_beyond must be in (0, 1], got {self.max_beyond!r}")
-        radius = real_number(self.local_radius, "local_radius")
-        if not (math.isfinite(radius) and radius >= 0.0):
-            raise ValueError(f"local_radius must be a finite number >= 0 metres, got {self.local_radius!r}")
+    search: Annotated[RelocalizationConfig, instance_of(RelocalizationConfig)] = field(
+        default_factory=RelocalizationConfig
+    )
+    min_inlier_ratio: Annotated[float, Real(gt=0.0, le=1.0)] = 0.6
+    confirmations: Annotated[int, Whole(ge=1, le=1000)] = 3
+    max_hypotheses: Annotated[int, Whole(ge=1, le=100)] = 5
+    margin: Annotated[float, Real(ge=0.0, le=1.0)] = 0.05
+    local_radius: Annotated[float, Real(ge=0.0, unit="metres")] = 3.0
+    max_beyond: Annotated[float, Real(gt=0.0, le=1.0)] = 0.15
+    search_nodes: Annotated[int, Whole(ge=1)] | None = 20_000
 
 
 @dataclass

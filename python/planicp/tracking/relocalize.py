@@ -18,20 +18,22 @@ import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic.dataclasses import dataclass as pydantic_dataclass
 
 from .. import _core
-from .._validation import Pose, as_points, as_pose, positive, real_number, whole_number
+from .._settings import SETTINGS, Real, Settings, Whole, instance_of
+from .._validation import Pose, as_points, as_pose, real_number, whole_number
 from ..plans.plan_map import PlanMap
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
 
 
-@dataclass(frozen=True)
-class RelocalizationConfig:
+@pydantic_dataclass(frozen=True, config=SETTINGS)
+class RelocalizationConfig(Settings):
     """How `relocalize` searches. Distances in metres, angles in radians.
 
     Attributes:
@@ -64,50 +66,26 @@ class RelocalizationConfig:
             ray cast from each guess, at a fraction of the time; docs/benchmarks.md).
     """
 
-    resolution: float = 0.2
-    sigma: float = 0.2
-    levels: int = 6
-    angular_step: float | None = math.radians(2.0)
-    max_angular_step: float = math.radians(2.0)
-    search_candidates: int = 8
-    min_score: float = 0.2
-    relative_score: float = 0.8
-    nms_distance: float = 1.0
-    nms_angle: float = math.radians(20.0)
-    max_scan_points: int = 100
-    max_nodes: int = 4_000_000
-    ambiguity_margin: float = 0.05
-    icp: IcpConfig = field(default_factory=IcpConfig)
+    resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.2
+    sigma: Annotated[float, Real(gt=0.0, unit="metres")] = 0.2
+    levels: Annotated[int, Whole(ge=1, le=12)] = 6
+    angular_step: Annotated[float, Real(gt=0.0, unit="radians")] | None = math.radians(2.0)
+    max_angular_step: Annotated[float, Real(gt=0.0, unit="radians")] = math.radians(2.0)
+    search_candidates: Annotated[int, Whole(ge=1, le=1000)] = 8
+    min_score: Annotated[float, Real(ge=0.0, lt=1.0)] = 0.2
+    relative_score: Annotated[float, Real(ge=0.0, le=1.0)] = 0.8
+    nms_distance: Annotated[float, Real(gt=0.0, unit="metres")] = 1.0
+    nms_angle: Annotated[float, Real(gt=0.0, unit="radians")] = math.radians(20.0)
+    max_scan_points: Annotated[int, Whole(ge=10, le=1 << 24)] = 100
+    max_nodes: Annotated[int, Whole(ge=1, le=2**62)] = 4_000_000
+    ambiguity_margin: Annotated[float, Real(ge=0.0, lt=1.0)] = 0.05
+    icp: Annotated[IcpConfig, instance_of(IcpConfig, "planicp.IcpConfig")] = field(default_factory=IcpConfig)
 
     @property
     def heading_step(self) -> float:
         """The largest heading step of a search, radians: `angular_step`, or `max_angular_step`
         when the step is chosen from the scan."""
         return self.max_angular_step if self.angular_step is None else min(self.angular_step, math.pi)
-
-    def __post_init__(self) -> None:
-        positive(self.resolution, "resolution", "metres")
-        positive(self.sigma, "sigma", "metres")
-        whole_number(self.levels, "levels", 1, 12)
-        if self.angular_step is not None:
-            positive(self.angular_step, "angular_step", "radians")
-        positive(self.max_angular_step, "max_angular_step", "radians")
-        whole_number(self.search_candidates, "search_candidates", 1, 1000)
-        score = real_number(self.min_score, "min_score")
-        if not 0.0 <= score < 1.0:
-            raise ValueError(f"min_score must be in [0, 1), got {self.min_score!r}")
-        relative = real_number(self.relative_score, "relative_score")
-        if not 0.0 <= relative <= 1.0:
-            raise ValueError(f"relative_score must be in [0, 1], got {self.relative_score!r}")
-        positive(self.nms_distance, "nms_distance", "metres")
-        positive(self.nms_angle, "nms_angle", "radians")
-        whole_number(self.max_scan_points, "max_scan_points", 10, 1 << 24)
-        whole_number(self.max_nodes, "max_nodes", 1, 2**62)
-        margin = real_number(self.ambiguity_margin, "ambiguity_margin")
-        if not 0.0 <= margin < 1.0:
-            raise ValueError(f"ambiguity_margin must be in [0, 1), got {self.ambiguity_margin!r}")
-        if not isinstance(self.icp, IcpConfig):
-            raise TypeError(f"icp must be a planicp.IcpConfig, got {type(self.icp).__name__}")
 
     def _matcher_key(self) -> tuple[Any, ...]:
         return (
@@ -386,22 +364,7 @@ def _matcher(plan: PlanMap, config: RelocalizationConfig) -> _core.GlobalMatcher
         if hit is not None and hit[0] is plan._native:
             _MATCHERS.move_to_end(key)
             return hit[1]
-    c = config
-    matcher = _core.GlobalMatcher(
-        plan._native,
-        float(c.resolution),
-        float(c.sigma),
-        int(c.levels),
-        None if c.angular_step is None else float(c.angular_step),
-        float(c.max_angular_step),
-        int(c.search_candidates),
-        float(c.min_score),
-        float(c.relative_score),
-        float(c.nms_distance),
-        float(c.nms_angle),
-        int(c.max_scan_points),
-        int(c.max_nodes),
-    )
+    matcher = _core.GlobalMatcher(plan._native, config)
     with _MATCHERS_LOCK:
         _MATCHERS[key] = (plan._native, matcher)
         while len(_MATCHERS) > _CACHE_SIZE:

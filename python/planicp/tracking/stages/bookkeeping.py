@@ -1,0 +1,38 @@
+"""Stage 9 of `Localizer.update`: what the next updates need from this scan (`keep_records`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..decisions import Bookkeeping, FitDecision, ScoreDecision
+from ..icp_result import IcpResult
+from ..recovery import Recovery
+
+
+def keep_records(
+    recovery: Recovery,
+    fit: FitDecision,
+    score: ScoreDecision,
+    result: IcpResult | None,
+    scan_points: int,
+    accepted: bool,
+    relocalized: bool,
+    lost: bool,
+) -> Bookkeeping:
+    """Whether the scan becomes the continuity anchor (an `accepted` fit the plan explains well,
+    or clutter that continues the last anchor), and, for a soundly tracked scan (accepted, well
+    explained, not `relocalized`, not `lost`), what the recovery learns of this plan and scanner
+    from it: the share of its returns beyond the walls seen from the prediction (see
+    `Recovery.beyond_limit`) and the share of its `scan_points` the fit `result` explained (over
+    the whole scan, as the recovery's fits count theirs: returns left out in front of the walls
+    are not explained; see `Recovery.explained_seen`)."""
+    anchored = bool(accepted and (score.continues or not score.poor))
+    share = explained = None
+    sound = accepted and not score.poor and not relocalized and not lost
+    if sound and fit.beyond is not None:
+        share = float(np.mean(fit.beyond))
+        recovery.observe_beyond(share)
+    if sound and result is not None and scan_points > 0:
+        explained = result.num_inliers / scan_points
+        recovery.observe_explained(explained)
+    return Bookkeeping(anchored, share, explained)

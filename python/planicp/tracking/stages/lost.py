@@ -1,0 +1,30 @@
+"""Stage 7 of `Localizer.update`: the lost rule's verdict (`judge_lost`)."""
+
+from __future__ import annotations
+
+from ..decisions import Correction, LostDecision, ScoreDecision, SearchDecision
+from ..lost_rule import LostDetector
+from .rules import Rules
+
+
+def judge_lost(
+    detector: LostDetector,
+    score: ScoreDecision,
+    correction: Correction,
+    search: SearchDecision,
+    was_lost: bool,
+    rules: Rules,
+) -> LostDecision:
+    """The lost rule's verdict, with this scan counted in `detector` unless it is clutter
+    (`ScoreDecision.continues`)."""
+    if score.continues:
+        lost = detector.hold()
+        return LostDecision(lost, True, False, detector.score, detector.rejections)
+    # While lost, a fit from the prediction (the place the localizer lost track at) ends the lost
+    # state only when it explains as much of the scan as the recovery asks of a place it adopts:
+    # a wrong place may explain a third of the scan and pass the gate. (Otherwise the recovery
+    # ends it; in a symmetric room it cannot choose, and a sound track would stay lost.)
+    clears = not was_lost or search.searched or score.score >= rules.recovery.min_inlier_ratio
+    counted = correction.accepted and clears
+    lost = detector.update(score.score, counted)
+    return LostDecision(lost, False, counted, detector.score, detector.rejections)

@@ -1,0 +1,40 @@
+"""Stage 3 of `Localizer.update`: a place a rejected jump left pending, confirmed or not by this
+scan (`confirm_pending`)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..._validation import Pose
+from ...se2 import between, compose
+from ..decisions import FitDecision, PendingDecision, Prediction
+from ..localize import localize
+from .rules import Rules
+
+
+def confirm_pending(
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    pending: tuple[Pose, Pose] | None,
+    fit: FitDecision,
+    rules: Rules,
+) -> PendingDecision:
+    """The place an earlier scan put the robot at after a rejected jump (`pending`: the place and
+    that scan's odometry pose), followed with the odometry, and the fit there when this scan
+    confirms it: a sound fit there that explains the scan better than the prediction's fit by the
+    recovery's `margin` (or the prediction's was rejected). A scan that says nothing either way
+    (it could not be aligned, or the gate rejects the fits at both places: a poor scan, such as the
+    one after an odometry fault on fhw, whose true place explained 12 % of it) keeps the place
+    pending for the next scan (`PendingDecision.kept`); the lost rule bounds how long."""
+    if pending is None:
+        return PendingDecision(None, None)
+    there = compose(pending[0], between(pending[1], prediction.odom))
+    if fit.result is None:
+        return PendingDecision(None, None, kept=(there, prediction.odom))
+    follow = localize(points, rules.plan, there, rules.wide_config)
+    if rules.gate.rejection(follow, there):
+        return PendingDecision(there, None, kept=(there, prediction.odom) if fit.reason != "" else None)
+    if fit.reason == "" and follow.inlier_ratio <= fit.result.inlier_ratio + rules.recovery.margin:
+        return PendingDecision(there, None)
+    return PendingDecision(there, follow)

@@ -1,0 +1,45 @@
+"""The plan and rules one `Localizer.update` reads (`Rules`), which every stage is given."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ...plans.plan_map import PlanMap
+from ..acceptance_gate import AcceptanceGate
+from ..continuity_rule import ContinuityRule
+from ..degeneracy_rule import DegeneracyRule
+from ..fusion_rule import FusionRule
+from ..icp_config import IcpConfig
+from ..lost_rule import LostRule
+from ..motion_noise import MotionNoise
+from ..occlusion_rule import OcclusionFilter
+from ..recovery import RecoveryConfig
+
+
+@dataclass(frozen=True)
+class Rules:
+    """The `Localizer`'s plan and rules as one update reads them.
+
+    Attributes:
+        plan: the plan.
+        config: ICP settings.
+        wide_config: `config` with the KD-tree search: the retry of a poor fit with the index,
+            and the fits at pending places.
+        gate, motion_noise, degeneracy, continuity, fusion: the rules of those names.
+        occlusion: the occlusion filter; None: every return is aligned.
+        lost: the lost rule.
+        recovery: the recovery's settings (its `local_radius`, `margin`, `min_inlier_ratio` and
+            search serve the searches around the prediction too).
+    """
+
+    plan: PlanMap
+    config: IcpConfig
+    wide_config: IcpConfig
+    gate: AcceptanceGate
+    motion_noise: MotionNoise
+    degeneracy: DegeneracyRule
+    continuity: ContinuityRule
+    fusion: FusionRule
+    occlusion: OcclusionFilter | None
+    lost: LostRule
+    recovery: RecoveryConfig
