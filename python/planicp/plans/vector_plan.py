@@ -436,7 +436,8 @@ def _bulge_chain(xyb: list[tuple[float, float, float]], closed: bool, tol: float
 
 
 MAX_ARC_POINTS = 1_000_000
-"""Most points one arc or circle of a drawing is flattened to (a 3 km circle at the default 5 mm)."""
+"""Most points one arc or circle of a drawing is flattened to: a 3 km circle followed within 15 nm
+(at the default 0.01 m, a circle of radius 2e9 m). More is a units mistake, not a wall."""
 
 
 def _chord_count(radius: float, center: Any, sweep: float, tol: float) -> int:
