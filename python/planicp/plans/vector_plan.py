@@ -388,8 +388,8 @@ def _entity_polyline(entity: DXFGraphic, tol: float) -> NDArray[np.float64] | No
                 start_deg, sweep_deg = float(entity.dxf.start_angle), sweep
         n = _chord_count(abs(float(entity.dxf.radius)), entity.dxf.center, math.radians(sweep_deg), tol)
         # Circle.vertices: points on the true circle at OCS angles (degrees), in WCS. Not the
-        # entity's own flattening(): its count is ezdxf's (below), and it draws nothing for an ARC
-        # whose start and end angles are equal.
+        # entity's own flattening(): it counts with ezdxf's arc_segment_count (see _chord_count),
+        # and draws nothing for an ARC whose start and end angles are equal.
         points = entity.vertices(np.linspace(start_deg, start_deg + sweep_deg, n + 1))
         chain = np.array([(p.x, p.y) for p in points], dtype=np.float64)
         if sweep_deg == 360.0:
