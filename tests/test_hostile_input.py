@@ -377,6 +377,33 @@ def test_dxf_arcs_of_cad_float_noise_and_of_absurd_radius_give_a_plan_or_one_cle
         assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50_000
 
 
+@pytest.mark.parametrize("kind", ["LWPOLYLINE", "CIRCLE", "ARC"])
+@pytest.mark.parametrize("value", [float("nan"), float("inf")])
+def test_dxf_arcs_of_non_finite_bulge_centre_or_radius_are_one_clear_error(
+    tmp_path: Path, kind: str, value: float
+) -> None:
+    """ezdxf writes and reads back 'nan' and 'inf'. Its virtual_entities() silently drops a bulge
+    of NaN radius, so the reader checks each arc itself; an infinite bulge was refused as an arc
+    of radius 4e15 (tan(pi) rounded) needing 1.4e9 points."""
+    ezdxf = pytest.importorskip("ezdxf")
+    from planicp.plans.vector_plan import dxf_segments
+
+    doc = ezdxf.new()
+    msp = doc.modelspace()
+    msp.add_line((0.0, 0.0), (5.0, 0.0))
+    if kind == "LWPOLYLINE":
+        msp.add_lwpolyline([(0.0, 0.0, 0.0, 0.0, value), (1.0, 0.0)])  # a bulge of NaN or inf
+    elif kind == "CIRCLE":
+        msp.add_circle((value, 0.0), 1.0)
+    else:
+        msp.add_arc((0.0, 0.0), value, 0.0, 90.0)
+    doc.saveas(tmp_path / "odd.dxf")
+    with pytest.raises(
+        ValueError, match=rf"odd\.dxf': {kind} \w+ on layer 0: an arc with no finite radius \(its centre"
+    ):
+        dxf_segments(tmp_path / "odd.dxf")
+
+
 def test_house_expo_files_that_nest_too_deep_hold_huge_numbers_or_ask_for_a_huge_raster(tmp_path: Path) -> None:
     """A HouseExpo JSON nested 3000 deep gave RecursionError, a 400-digit number OverflowError, and
     rasterising at 0.0005 m took 5.3 GB."""

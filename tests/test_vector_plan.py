@@ -455,6 +455,68 @@ def test_dxf_mirrored_arc_follows_its_extrusion(tmp_path: Path) -> None:
     check_arc_chain(segs, (-2.0, 0.0), 1.0, 0.01)
 
 
+def test_dxf_mirrored_bulged_polylines_and_circle_follow_their_extrusion(tmp_path: Path) -> None:
+    """Extrusion (0, 0, -1) maps OCS (x, y, z) to WCS (-x, y, -z): the vertices land mirrored and
+    exactly, a counter-clockwise bulge turns clockwise, and the elevation leaves x, y alone."""
+    doc, msp = new_dxf(6)
+    mirrored = {"extrusion": (0.0, 0.0, -1.0)}
+    # closed, elevation 2.5: a CCW semicircle (bulge 1) below the chord (0, 0)-(2, 0), then a 2 x 3 box
+    lw = msp.add_lwpolyline([(0.0, 0.0, 1.0), (2.0, 0.0, 0.0), (2.0, 3.0, 0.0), (0.0, 3.0, 0.0)], format="xyb")
+    lw.closed = True
+    lw.dxf.extrusion, lw.dxf.elevation = mirrored["extrusion"], 2.5
+    # open 2D POLYLINE: a line, then a clockwise semicircle (bulge -1) from (14, 0) to (14, 2) left of x = 14
+    msp.add_polyline2d([(10.0, 0.0, 0.0), (14.0, 0.0, -1.0), (14.0, 2.0, 0.0)], format="xyb", dxfattribs=mirrored)
+    msp.add_circle((3.0, 4.0, 1.0), 0.5, dxfattribs=mirrored)
+    segs = dxf_segments(save(doc, tmp_path / "mirrored_polylines.dxf"), arc_tolerance=0.002)
+
+    n = min_chords(math.pi, 1.0, 0.002)  # each semicircle
+    assert len(segs) == (n + 3) + (1 + n) + min_chords(2 * math.pi, 0.5, 0.002)
+    lw_segs, poly_segs, circle = segs[: n + 3], segs[n + 3 : 2 * n + 4], segs[2 * n + 4 :]
+
+    bulge = lw_segs[:n]
+    np.testing.assert_array_equal(bulge[0, 0], [0.0, 0.0])
+    np.testing.assert_array_equal(bulge[-1, 1], [-2.0, 0.0])  # the vertex, exactly
+    angles = check_arc_chain(bulge, (-1.0, 0.0), 1.0, 0.002)
+    assert angles[-1] - angles[0] == pytest.approx(-math.pi, abs=1e-12)  # clockwise in WCS
+    assert (bulge[:, :, 1] <= 1e-12).all() and bulge[n // 2, 0, 1] < -0.9  # still below the chord
+    np.testing.assert_array_equal(lw_segs[n:], [[[-2, 0], [-2, 3]], [[-2, 3], [0, 3]], [[0, 3], [0, 0]]])
+
+    np.testing.assert_array_equal(poly_segs[0], [[-10.0, 0.0], [-14.0, 0.0]])
+    arc = poly_segs[1:]
+    np.testing.assert_array_equal(arc[-1, 1], [-14.0, 2.0])
+    angles = check_arc_chain(arc, (-14.0, 1.0), 1.0, 0.002)
+    assert angles[-1] - angles[0] == pytest.approx(math.pi, abs=1e-12)  # counter-clockwise in WCS
+    assert (arc[:, :, 0] >= -14.0 - 1e-12).all() and arc[n // 2, 0, 0] > -13.1  # right of x = -14
+
+    np.testing.assert_array_equal(circle[-1, 1], circle[0, 0])
+    np.testing.assert_allclose(circle[0, 0], [-3.5, 4.0], rtol=0, atol=1e-12)  # OCS angle 0 is WCS -x
+    angles = check_arc_chain(circle, (-3.0, 4.0), 0.5, 0.002)
+    assert angles[-1] - angles[0] == pytest.approx(-2 * math.pi, abs=1e-12)
+
+
+def test_dxf_arc_of_equal_start_and_end_angles_is_a_full_circle(tmp_path: Path) -> None:
+    """As AutoCAD draws it (ezdxf's own ARC.flattening draws nothing), and as 0 to 360 degrees."""
+    doc, msp = new_dxf(6)
+    msp.add_arc((1.0, 1.0), 2.0, 30.0, 30.0)
+    msp.add_arc((1.0, 1.0), 2.0, 0.0, 360.0)
+    segs = dxf_segments(save(doc, tmp_path / "full_arcs.dxf"))
+    n = min_chords(2 * math.pi, 2.0, 0.01)
+    assert len(segs) == 2 * n
+    for circle in (segs[:n], segs[n:]):
+        np.testing.assert_allclose(circle[0, 0], [3.0, 1.0], rtol=0, atol=1e-12)  # from angle 0
+        np.testing.assert_array_equal(circle[-1, 1], circle[0, 0])
+        angles = check_arc_chain(circle, (1.0, 1.0), 2.0, 0.01)
+        assert angles[-1] - angles[0] == pytest.approx(2 * math.pi, abs=1e-12)
+
+
+def test_dxf_bulge_between_coincident_vertices_keeps_the_chain_whole(tmp_path: Path) -> None:
+    """A bulge on a zero-length edge is that point (ezdxf's virtual_entities drops the edge)."""
+    doc, msp = new_dxf(6)
+    msp.add_lwpolyline([(0.0, 0.0, 0.5), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0)], format="xyb")
+    segs = dxf_segments(save(doc, tmp_path / "coincident.dxf"))
+    np.testing.assert_array_equal(segs, [[[0, 0], [0, 0]], [[0, 0], [1, 0]], [[1, 0], [1, 1]]])
+
+
 @pytest.mark.parametrize(
     ("units", "metres_per_unit"),
     [(1, 0.0254), (2, 0.3048), (5, 0.01), (6, 1.0), (0, 1.0), (10, 0.9144), (21, 1200 / 3937)],

@@ -365,86 +365,97 @@ def _layer_names(layers: str | Iterable[str] | None) -> frozenset[str] | None:
 def _entity_polyline(entity: DXFGraphic, tol: float) -> NDArray[np.float64] | None:
     """The entity as a (K >= 2, 2) chain of WCS XY vertices in drawing units, None if not a wall type.
 
-    `tol` is the largest chord sagitta, in drawing units.
+    `tol` is the largest chord sagitta, in drawing units. The geometry is ezdxf's: `bulge_to_arc`
+    for the arc of a bulge, `Circle.vertices` and `ConstructionArc.vertices` for points on the true
+    circle, the entity's OCS for the world coordinates. Only the number of chords is this module's
+    (`_chord_count`).
     """
     from ezdxf.entities.arc import Arc  # type: ignore[import-not-found,unused-ignore]
     from ezdxf.entities.circle import Circle  # type: ignore[import-not-found,unused-ignore]
     from ezdxf.entities.line import Line  # type: ignore[import-not-found,unused-ignore]
     from ezdxf.entities.lwpolyline import LWPolyline  # type: ignore[import-not-found,unused-ignore]
     from ezdxf.entities.polyline import Polyline  # type: ignore[import-not-found,unused-ignore]
+    from ezdxf.math import Vec3  # type: ignore[import-not-found,unused-ignore]
 
     if isinstance(entity, Line):
         start, end = entity.dxf.start, entity.dxf.end
         return np.array([[start.x, start.y], [end.x, end.y]], dtype=np.float64)
+    if isinstance(entity, Circle):  # ARC is a CIRCLE subclass
+        start_deg, sweep_deg = 0.0, 360.0  # equal start and end angles of an ARC draw a full circle
+        if isinstance(entity, Arc):
+            sweep = (float(entity.dxf.end_angle) - float(entity.dxf.start_angle)) % 360.0
+            if sweep != 0.0:
+                start_deg, sweep_deg = float(entity.dxf.start_angle), sweep
+        n = _chord_count(abs(float(entity.dxf.radius)), entity.dxf.center, math.radians(sweep_deg), tol)
+        # Circle.vertices: points on the true circle at OCS angles (degrees), in WCS. Not the
+        # entity's own flattening(): it counts with ezdxf's arc_segment_count (see _chord_count),
+        # and draws nothing for an ARC whose start and end angles are equal.
+        points = entity.vertices(np.linspace(start_deg, start_deg + sweep_deg, n + 1))
+        chain = np.array([(p.x, p.y) for p in points], dtype=np.float64)
+        if sweep_deg == 360.0:
+            chain[-1] = chain[0]
+        return chain
     if isinstance(entity, LWPolyline):
         xyb = [(float(x), float(y), float(b)) for x, y, b in entity.get_points("xyb")]
-        chain = _bulge_chain(xyb, entity.closed, tol)
-        return None if chain is None else _ocs_to_wcs(entity, chain, float(entity.dxf.elevation))
-    if isinstance(entity, Polyline):
-        if not entity.is_2d_polyline:
-            return None
+        closed, elevation = bool(entity.closed), float(entity.dxf.elevation)
+    elif isinstance(entity, Polyline) and entity.is_2d_polyline:
         xyb = [(float(v.dxf.location.x), float(v.dxf.location.y), float(v.dxf.bulge)) for v in entity.vertices]
-        chain = _bulge_chain(xyb, entity.is_closed, tol)
-        return None if chain is None else _ocs_to_wcs(entity, chain, float(entity.dxf.elevation.z))
-    if isinstance(entity, Circle):  # ARC is a CIRCLE subclass
-        center = entity.dxf.center
-        radius = abs(float(entity.dxf.radius))
-        full = True
-        start, sweep = 0.0, 2.0 * math.pi
-        if isinstance(entity, Arc):
-            start_deg, end_deg = float(entity.dxf.start_angle), float(entity.dxf.end_angle)
-            sweep_deg = (end_deg - start_deg) % 360.0
-            if sweep_deg != 0.0:  # equal start and end angles draw a full circle
-                full = False
-                start, sweep = math.radians(start_deg), math.radians(sweep_deg)
-        c = np.array([center.x, center.y], dtype=np.float64)
-        chain = _arc_points(c, c + radius * np.array([math.cos(start), math.sin(start)]), sweep, tol)
-        if full:
-            chain[-1] = chain[0]
-        return _ocs_to_wcs(entity, chain, float(center.z))
-    return None
-
-
-def _bulge_chain(xyb: list[tuple[float, float, float]], closed: bool, tol: float) -> NDArray[np.float64] | None:
-    """Polyline vertices (x, y, bulge) as a chain of points, bulge arcs flattened; None if < 2 vertices."""
+        closed, elevation = bool(entity.is_closed), float(entity.dxf.elevation.z)
+    else:
+        return None
     if len(xyb) < 2:
         return None
+    wcs = entity.ocs().points_to_wcs(Vec3(x, y, elevation) for x, y in _bulge_chain(xyb, closed, tol))
+    return np.array([(p.x, p.y) for p in wcs], dtype=np.float64)
+
+
+def _bulge_chain(xyb: list[tuple[float, float, float]], closed: bool, tol: float) -> list[tuple[float, float]]:
+    """Polyline vertices (x, y, bulge), >= 2 of them, as a chain of OCS points, bulge arcs flattened.
+
+    The polyline's own vertices are kept exactly, the points between them lie on the bulge's arc.
+    Not the polyline's `virtual_entities()`: its ARCs lose the vertices (their ends are recomputed
+    from the centre) and the direction of a negative bulge, and it drops a bulge whose radius is
+    not positive (NaN) or whose vertices coincide.
+    """
+    from ezdxf.math import ConstructionArc, bulge_to_arc  # type: ignore[import-not-found,unused-ignore]
+
     vertices = [*xyb, xyb[0]] if closed else xyb
-    chain: list[NDArray[np.float64]] = [np.array([vertices[0][:2]], dtype=np.float64)]
+    chain = [vertices[0][:2]]
     for (x0, y0, bulge), (x1, y1, _) in itertools.pairwise(vertices):
-        p0, p1 = np.array([x0, y0]), np.array([x1, y1])
-        if bulge == 0.0 or not np.any(p0 != p1):
-            chain.append(p1[None, :])
-            continue
-        # Bulge = tan(sweep / 4), sweep counter-clockwise when positive; the centre lies off the
-        # chord's midpoint, along its left normal, at (chord / 2) * cot(sweep / 2).
-        sweep = 4.0 * math.atan(bulge)
-        chord = p1 - p0
-        normal = np.array([-chord[1], chord[0]])
-        center = (p0 + p1) / 2.0 + normal / 2.0 / math.tan(sweep / 2.0)
-        arc = _arc_points(center, p0, sweep, tol)
-        arc[-1] = p1
-        chain.append(arc[1:])
-    return np.concatenate(chain)
+        if bulge != 0.0 and (x0, y0) != (x1, y1):
+            # bulge = tan(sweep / 4), counter-clockwise when positive; bulge_to_arc returns the arc
+            # counter-clockwise, so from the end vertex to the start one when the bulge is negative.
+            center, ccw_start, ccw_end, radius = bulge_to_arc((x0, y0), (x1, y1), bulge)
+            sweep = 4.0 * math.atan(bulge)
+            n = _chord_count(radius, center, sweep, tol)
+            first = ccw_start if bulge > 0.0 else ccw_end
+            inner = np.degrees(first + sweep * np.arange(1, n) / n)
+            chain.extend((p.x, p.y) for p in ConstructionArc(center, radius).vertices(inner))
+        chain.append((x1, y1))
+    return chain
 
 
 MAX_ARC_POINTS = 1_000_000
-"""Most points one arc or circle of a drawing is flattened to (a 3 km circle at the default 5 mm)."""
+"""Most points one arc or circle of a drawing is flattened to: a 3 km circle followed within 15 nm
+(at the default 0.01 m, a circle of radius 2e9 m). More is a units mistake, not a wall."""
 
 
-def _arc_points(
-    center: NDArray[np.float64], start: NDArray[np.float64], sweep: float, tol: float
-) -> NDArray[np.float64]:
-    """Points on the circle about `center` from `start`, turning by `sweep` radians (CCW > 0).
+def _chord_count(radius: float, center: Any, sweep: float, tol: float) -> int:
+    """How many equal chords follow `sweep` radians of a circle of `radius` within `tol`.
 
-    As few equal chords as keep each sagitta, r (1 - cos(step / 2)), at most `tol`; a full turn
-    gets at least 3.
+    As few as keep each sagitta, r (1 - cos(step / 2)), at most `tol`; a full turn gets at least 3,
+    a circle of radius 0 one (from its centre to itself). Counted before ezdxf makes any point, so
+    that an absurd arc is refused here rather than allocated there.
+
+    Not ezdxf's `arc_segment_count` (which the entities' `flattening` use): it gives 1 when `tol`
+    exceeds the diameter, so a small circle would become one chord from a point to itself; it has
+    no minimum for a full turn; and it counts by asin, which overestimates once `tol` exceeds the
+    radius.
     """
-    radius = float(np.hypot(*(start - center)))
-    if radius == 0.0:
-        return np.array([start, start], dtype=np.float64)
-    if not math.isfinite(radius):
+    if not (math.isfinite(radius) and math.isfinite(center[0]) and math.isfinite(center[1])):
         raise ValueError("an arc with no finite radius (its centre or start is not finite)")
+    if radius == 0.0:
+        return 1
     # 1 - tol / r rounds to 1 for a nearly straight arc (a bulge of 1e-15, ordinary CAD noise): the
     # small-angle form of the same step, r (1 - cos(step / 2)) ~ r step^2 / 8, keeps it positive.
     max_step = max(2.0 * math.acos(max(-1.0, 1.0 - tol / radius)), 2.0 * math.sqrt(2.0 * tol / radius))
@@ -454,18 +465,4 @@ def _arc_points(
             f"an arc of radius {radius:.3g} drawing units would take {n} points to follow within "
             f"{tol:.3g}; check the drawing's units (or the entity: a circle that large is no wall)"
         )
-    if abs(sweep) >= 2.0 * math.pi:
-        n = max(n, 3)
-    angles = math.atan2(start[1] - center[1], start[0] - center[0]) + sweep * np.arange(n + 1) / n
-    points = center + radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
-    points[0] = start
-    return points
-
-
-def _ocs_to_wcs(entity: DXFGraphic, chain: NDArray[np.float64], elevation: float) -> NDArray[np.float64]:
-    """OCS points of a planar entity (LWPOLYLINE, 2D POLYLINE, ARC, CIRCLE) as WCS XY."""
-    ocs = entity.ocs()
-    if not ocs.transform:  # extrusion (0, 0, 1): OCS is WCS
-        return chain
-    wcs = ocs.points_to_wcs([(float(x), float(y), elevation) for x, y in chain])
-    return np.array([(p.x, p.y) for p in wcs], dtype=np.float64)
+    return max(n, 3) if abs(sweep) >= 2.0 * math.pi else n
