@@ -14,9 +14,14 @@
 //! equal coordinates may fall on both sides, and a query searches the far side whenever the
 //! split is closer than its current best. Distances are squared and computed as
 //! `dx * dx + dy * dy`. Among points at the same distance the k-nearest query keeps the lowest
-//! indices, so that its answer depends on the points, not on the tree's layout (the wall normals
-//! go further and take every tie at the sixth distance, `wall_normals::estimate_normals`); the
-//! nearest and radius queries return the first they meet, which is the same every time.
+//! indices, so that its answer depends on the points, not on the tree's layout (the query for the
+//! wall normals, [`Tree2::nearest_n_with_ties`], goes further and keeps every tie at the k-th
+//! distance); the nearest and radius queries return the first they meet, which is the same every
+//! time.
+//!
+//! Every query is one descent (`Tree2::descend`), the near child first, the far one
+//! when the query may want a point at its distance; what a query does at the leaves and how far it
+//! looks is its `Visit`.
 
 /// Most points in a leaf.
 pub const LEAF: usize = 8;
@@ -112,6 +117,22 @@ impl Tree2 {
             self.descend(q, &mut nearest);
         }
         (nearest.found, nearest.examined)
+    }
+
+    /// The `k` points nearest to `q` and every other point as near as the `k`-th of them: all the
+    /// points within `d_k * (1 + tolerance)` (squared distances, `d_k` the `k`-th smallest), or all
+    /// the points when there are fewer than `k`. One query that returns exactly what
+    /// [`Tree2::within_unsorted`] returns for that radius, in the same order (the order of the
+    /// descent), where [`Tree2::nearest_n`] would keep only some of the ties at the `k`-th distance.
+    pub fn nearest_n_with_ties(&self, q: &[f64; 2], k: usize, tolerance: f64) -> Vec<Neighbour> {
+        let mut nearest =
+            NearestWithTies { k, widen: 1.0 + tolerance, found: Vec::with_capacity(2 * k), met: 0 };
+        if k > 0 {
+            self.descend(q, &mut nearest);
+        }
+        let mut found = nearest.found;
+        found.sort_unstable_by_key(|t| t.met);
+        found.into_iter().map(|t| t.neighbour).collect()
     }
 
     /// Calls `f(item, squared distance)` for every point within `sq_radius` (squared, inclusive)
@@ -238,6 +259,57 @@ impl Visit for NearestN {
     }
 }
 
+/// A point [`Tree2::nearest_n_with_ties`] keeps, and when the descent met it.
+struct Met {
+    neighbour: Neighbour,
+    met: u32,
+}
+
+/// [`Tree2::nearest_n_with_ties`]: every point met within `widen` times the `k`-th distance so
+/// far, ordered by distance (the `k`-th only shrinks, so what is dropped stays out).
+struct NearestWithTies {
+    k: usize,
+    widen: f64,
+    found: Vec<Met>,
+    met: u32,
+}
+
+impl NearestWithTies {
+    /// The squared distance within which points are kept: infinite until `k` are met.
+    #[inline(always)]
+    fn reach(&self) -> f64 {
+        match self.found.get(self.k - 1) {
+            Some(kth) => kth.neighbour.distance * self.widen,
+            None => f64::INFINITY,
+        }
+    }
+}
+
+impl Visit for NearestWithTies {
+    #[inline(always)]
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]) {
+        for (p, &item) in points.iter().zip(items) {
+            let d = sq_dist(q, p);
+            let met = self.met;
+            self.met += 1;
+            if d <= self.reach() {
+                let at = self.found.partition_point(|t| t.neighbour.distance <= d);
+                self.found.insert(at, Met { neighbour: Neighbour { item, distance: d }, met });
+                if self.found.len() > self.k {
+                    let reach = self.reach();
+                    let keep = self.found.partition_point(|t| t.neighbour.distance <= reach);
+                    self.found.truncate(keep);
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn reaches(&self, rd: f64) -> bool {
+        rd <= self.reach()
+    }
+}
+
 /// [`Tree2::for_each_within`]: every point within the radius, handed to `f`.
 struct Within<F> {
     sq_radius: f64,
@@ -337,6 +409,38 @@ mod tests {
                 within.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let expected: Vec<(f64, u32)> = all.iter().copied().filter(|&(d, _)| d <= r2).collect();
                 assert_eq!(within, expected);
+            }
+        }
+    }
+
+    /// The query that keeps ties at the k-th distance returns what a k-nearest query and a radius
+    /// query at the k-th distance (widened by the tolerance) return together, in the radius
+    /// query's order; all points when there are fewer than k.
+    #[test]
+    fn nearest_with_ties_is_knn_then_a_radius_query() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for points in point_sets() {
+            let tree = Tree2::new_from_slice(&points);
+            for _ in 0..300 {
+                let q = if rng.random_bool(0.5) && !points.is_empty() {
+                    points[rng.random_range(0..points.len())]
+                } else {
+                    [rng.random_range(-2.0..22.0), rng.random_range(-2.0..22.0)]
+                };
+                for (k, tolerance) in [(1, 0.0), (6, 1e-9), (6, 0.0), (20, 1e-3)] {
+                    let got = tree.nearest_n_with_ties(&q, k, tolerance);
+                    let knn = tree.nearest_n(&q, k);
+                    if knn.len() < k {
+                        let mut all: Vec<u32> = got.iter().map(|n| n.item).collect();
+                        all.sort_unstable();
+                        assert_eq!(all, (0..points.len() as u32).collect::<Vec<_>>());
+                        continue;
+                    }
+                    let reach = knn[k - 1].distance * (1.0 + tolerance);
+                    assert_eq!(got, tree.within_unsorted(&q, reach), "k {k}, {q:?}");
+                    let brute = brute(&points, &q);
+                    assert_eq!(got.len(), brute.iter().filter(|&&(d, _)| d <= reach).count());
+                }
             }
         }
     }
