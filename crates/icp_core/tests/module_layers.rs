@@ -3,8 +3,9 @@
 //!
 //! Read from the sources: every `crate::` path in code (comments left out) is an import of the
 //! module it names; a name that a module re-exports (`pub use` in `lib.rs` or a folder's
-//! `mod.rs`) counts as an import of the module that defines it. Test modules may build their
-//! inputs with higher layers (a PointMap, fitted normals), but take part in the cycle check.
+//! `mod.rs`) counts as an import of the module that defines it. Test modules (`mod tests { .. }`
+//! or a `tests.rs` file) may build their inputs with higher layers (a PointMap, fitted normals),
+//! but take part in the cycle check.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -38,7 +39,9 @@ fn read_modules(dir: &Path, prefix: &str, out: &mut BTreeMap<String, Source>) {
             let text = std::fs::read_to_string(&path).unwrap();
             let text: String =
                 text.lines().map(|l| l.split("//").next().unwrap()).collect::<Vec<_>>().join("\n");
-            let (code, tests) = text.split_at(text.find("mod tests {").unwrap_or(text.len()));
+            // A module's tests: its `mod tests { .. }`, or the whole of a `tests.rs` file.
+            let split = if name == "tests" { 0 } else { text.find("mod tests {").unwrap_or(text.len()) };
+            let (code, tests) = text.split_at(split);
             let module =
                 if name == "mod" || name == "lib" { prefix.to_string() } else { join(prefix, &name) };
             out.insert(module, Source { code: code.to_string(), tests: tests.to_string() });

@@ -41,6 +41,13 @@ pub(crate) fn unsigned_arg(what: &str, value: &Bound<'_, PyAny>) -> PyResult<u64
     u64::try_from(wide).map_err(|_| out_of_range())
 }
 
+/// A count (a size, a number of beams or directions) from Python: [`unsigned_arg`] (so a negative
+/// int is a PlanicpError, not pyo3's OverflowError), saturated to `usize::MAX` where `usize` is
+/// narrower, for the core to refuse as too large.
+pub(crate) fn count_arg(what: &str, value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    unsigned_arg(what, value).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
+}
+
 /// A shape as Python prints it: `(3,)`, `(2, 4)`.
 pub(crate) fn shape_text(shape: &[usize]) -> String {
     match shape {

@@ -1,7 +1,7 @@
 //! `planicp._core.LogOddsGrid`: the scan occupancy layer of the enhanced occupancy grid
 //! (`icp_core::grids::log_odds_grid`).
 
-use crate::conversions::points_from;
+use crate::conversions::{count_arg, points_from};
 use crate::errors::guarded;
 use icp_core::grids::log_odds_grid::{LogOddsGrid as CoreGrid, OccupancyModel};
 use numpy::ndarray::Array2;
@@ -33,12 +33,8 @@ impl LogOddsGrid {
         max: f32,
         max_cells: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
-        // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
-        let count = |what: &str, v: &Bound<'_, PyAny>| {
-            crate::conversions::unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
-        };
         let (rows, cols, max_cells) =
-            (count("rows", rows)?, count("cols", cols)?, count("max_cells", max_cells)?);
+            (count_arg("rows", rows)?, count_arg("cols", cols)?, count_arg("max_cells", max_cells)?);
         let model = OccupancyModel { hit, miss, min, max };
         let inner =
             guarded(|| CoreGrid::new(rows, cols, resolution, [origin.0, origin.1], model, max_cells))?;

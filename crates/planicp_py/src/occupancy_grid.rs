@@ -1,7 +1,7 @@
 //! `planicp._core.OccupancyGrid`: a raster to simulate LIDAR scans in (`icp_core::grids::ray_casting`)
 //! and to classify returns against exactly (`icp_core::visibility::wall_view::classify_exact`).
 
-use crate::conversions::{points_from, shape_text, unsigned_arg, BoolPair};
+use crate::conversions::{count_arg, points_from, shape_text, unsigned_arg, BoolPair};
 use crate::errors::{guarded, PlanicpError};
 use icp_core::Pose2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -89,7 +89,7 @@ impl OccupancyGrid {
                 "margin must be a finite number of metres >= 0, got {margin}"
             )));
         }
-        let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
+        let directions = count_arg("directions", directions)?;
         let pts = points_from("points", &points)?;
         let raster = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
@@ -122,7 +122,7 @@ impl OccupancyGrid {
         discs: Option<numpy::PyArrayLikeDyn<'py, f64, numpy::AllowTypeChange>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         use icp_core::grids::ray_casting::{add_noise, cast_ranges, noise_rng, Disc, LidarModel};
-        let beams = usize::try_from(unsigned_arg("beams", beams)?).unwrap_or(usize::MAX);
+        let beams = count_arg("beams", beams)?;
         let seed = seed.map(|s| unsigned_arg("seed", s)).transpose()?;
         let discs: Vec<Disc> = match discs {
             None => Vec::new(),

@@ -1,7 +1,7 @@
 //! `planicp._core.PointMap` and `WallView`: the plan as the core holds it, and what a sensor at a
 //! pose sees of it (`icp_core::maps::point_map`, `icp_core::visibility::wall_view`).
 
-use crate::conversions::{points_from, points_to_array, unsigned_arg, BoolPair};
+use crate::conversions::{count_arg, points_from, points_to_array, BoolPair};
 use crate::errors::{guarded, PlanicpError};
 use crate::interrupt::interruptible;
 use icp_core::{PointMap, Pose2};
@@ -93,7 +93,7 @@ impl PyPointMap {
         scan: Option<PyReadonlyArray2<'_, f64>>,
         ranges: bool,
     ) -> PyResult<WallView> {
-        let directions = usize::try_from(unsigned_arg("directions", directions)?).unwrap_or(usize::MAX);
+        let directions = count_arg("directions", directions)?;
         let scan = scan.map(|s| points_from("scan", &s)).transpose()?;
         let map = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };

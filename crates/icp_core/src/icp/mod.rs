@@ -1,7 +1,9 @@
 //! ICP: a scan aligned to the plan from an initial guess.
 //!
-//! - [`alignment`]: the trimmed, coarse-to-fine ICP loop, its configuration and result
-//!   ([`align`], [`IcpConfig`], [`IcpResult`], re-exported here).
+//! - [`alignment`]: the trimmed, coarse-to-fine ICP loop and its result ([`align`], [`IcpResult`],
+//!   re-exported here).
+//! - [`icp_config`]: the settings of an alignment ([`IcpConfig`], re-exported here) and the stages
+//!   they imply.
 //! - [`correspondence`]: nearest-point pairing with a maximum distance, and trimming.
 //! - [`visible_through_index`]: nearest *visible* plan points, answered mostly by the nearest-wall index.
 //! - [`candidate_cache`]: exact reuse of radius queries across ICP iterations (the KD-tree search).
@@ -15,8 +17,10 @@ pub mod alignment;
 pub mod candidate_cache;
 pub mod correspondence;
 pub mod covariance;
+pub mod icp_config;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visible_through_index;
 
-pub use alignment::{align, visibility_range, CorrespondenceSearch, IcpConfig, IcpResult};
+pub use alignment::{align, IcpResult};
+pub use icp_config::{visibility_range, CorrespondenceSearch, IcpConfig};

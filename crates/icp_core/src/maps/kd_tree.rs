@@ -14,9 +14,14 @@
 //! equal coordinates may fall on both sides, and a query searches the far side whenever the
 //! split is closer than its current best. Distances are squared and computed as
 //! `dx * dx + dy * dy`. Among points at the same distance the k-nearest query keeps the lowest
-//! indices, so that its answer depends on the points, not on the tree's layout (the wall normals
-//! go further and take every tie at the sixth distance, `wall_normals::estimate_normals`); the
-//! nearest and radius queries return the first they meet, which is the same every time.
+//! indices, so that its answer depends on the points, not on the tree's layout (the query for the
+//! wall normals, [`Tree2::nearest_n_with_ties`], goes further and keeps every tie at the k-th
+//! distance); the nearest and radius queries return the first they meet, which is the same every
+//! time.
+//!
+//! Every query is one descent (`Tree2::descend`), the near child first, the far one
+//! when the query may want a point at its distance; what a query does at the leaves and how far it
+//! looks is its `Visit`.
 
 /// Most points in a leaf.
 pub const LEAF: usize = 8;
@@ -92,50 +97,9 @@ impl Tree2 {
     /// The point nearest to `q` (item 0 at an infinite distance when the tree is empty).
     #[inline]
     pub fn nearest_one(&self, q: &[f64; 2]) -> Neighbour {
-        let mut best = Neighbour { item: 0, distance: f64::INFINITY };
-        if !self.points.is_empty() {
-            let mut examined = 0;
-            self.nearest_in(q, 0, 0, self.points.len(), [0.0; 2], 0.0, &mut best, &mut examined);
-        }
-        best
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn nearest_in(
-        &self,
-        q: &[f64; 2],
-        node: usize,
-        lo: usize,
-        hi: usize,
-        mut off: [f64; 2],
-        rd: f64,
-        best: &mut Neighbour,
-        examined: &mut usize,
-    ) {
-        if hi - lo <= LEAF {
-            *examined += hi - lo;
-            for (p, &item) in self.points[lo..hi].iter().zip(&self.items[lo..hi]) {
-                let d = sq_dist(q, p);
-                if d < best.distance {
-                    *best = Neighbour { item, distance: d };
-                }
-            }
-            return;
-        }
-        let axis = self.axes[node] as usize;
-        let diff = q[axis] - self.splits[node];
-        let mid = lo + (hi - lo) / 2;
-        let (near, far) = if diff < 0.0 {
-            ((2 * node + 1, lo, mid), (2 * node + 2, mid, hi))
-        } else {
-            ((2 * node + 2, mid, hi), (2 * node + 1, lo, mid))
-        };
-        self.nearest_in(q, near.0, near.1, near.2, off, rd, best, examined);
-        let far_rd = rd - off[axis] * off[axis] + diff * diff;
-        if far_rd < best.distance {
-            off[axis] = diff.abs();
-            self.nearest_in(q, far.0, far.1, far.2, off, far_rd, best, examined);
-        }
+        let mut nearest = Nearest { best: Neighbour { item: 0, distance: f64::INFINITY } };
+        self.descend(q, &mut nearest);
+        nearest.best
     }
 
     /// The `k` points nearest to `q` (all of them when there are fewer), nearest first; among
@@ -147,70 +111,35 @@ impl Tree2 {
 
     /// [`Tree2::nearest_n`] and the number of points it examined (the work of the query).
     pub fn nearest_n_counted(&self, q: &[f64; 2], k: usize) -> (Vec<Neighbour>, usize) {
-        let mut found = Vec::with_capacity(k.min(self.points.len()) + 1);
-        let mut examined = 0;
-        if k > 0 && !self.points.is_empty() {
-            self.nearest_n_in(q, k, 0, 0, self.points.len(), [0.0; 2], 0.0, &mut found, &mut examined);
+        let mut nearest =
+            NearestN { k, found: Vec::with_capacity(k.min(self.points.len()) + 1), examined: 0 };
+        if k > 0 {
+            self.descend(q, &mut nearest);
         }
-        (found, examined)
+        (nearest.found, nearest.examined)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn nearest_n_in(
-        &self,
-        q: &[f64; 2],
-        k: usize,
-        node: usize,
-        lo: usize,
-        hi: usize,
-        mut off: [f64; 2],
-        rd: f64,
-        found: &mut Vec<Neighbour>,
-        examined: &mut usize,
-    ) {
-        // Ordered by distance, then index: among points at the k-th distance the lowest indices
-        // are kept, whatever the tree's layout.
-        let before = |n: &Neighbour, d: f64, item: u32| n.distance < d || (n.distance == d && n.item < item);
-        if hi - lo <= LEAF {
-            *examined += hi - lo;
-            for (p, &item) in self.points[lo..hi].iter().zip(&self.items[lo..hi]) {
-                let d = sq_dist(q, p);
-                let candidate = Neighbour { item, distance: d };
-                if found.len() < k || before(&candidate, found[k - 1].distance, found[k - 1].item) {
-                    let at = found.partition_point(|n| before(n, d, item));
-                    found.insert(at, candidate);
-                    found.truncate(k);
-                }
-            }
-            return;
+    /// The `k` points nearest to `q` and every other point as near as the `k`-th of them: all the
+    /// points within `d_k * (1 + tolerance)` (squared distances, `d_k` the `k`-th smallest), or all
+    /// the points when there are fewer than `k`. One query that returns exactly what
+    /// [`Tree2::within_unsorted`] returns for that radius, in the same order (the order of the
+    /// descent), where [`Tree2::nearest_n`] would keep only some of the ties at the `k`-th distance.
+    pub fn nearest_n_with_ties(&self, q: &[f64; 2], k: usize, tolerance: f64) -> Vec<Neighbour> {
+        let mut nearest =
+            NearestWithTies { k, widen: 1.0 + tolerance, found: Vec::with_capacity(2 * k), met: 0 };
+        if k > 0 {
+            self.descend(q, &mut nearest);
         }
-        let axis = self.axes[node] as usize;
-        let diff = q[axis] - self.splits[node];
-        let mid = lo + (hi - lo) / 2;
-        let (near, far) = if diff < 0.0 {
-            ((2 * node + 1, lo, mid), (2 * node + 2, mid, hi))
-        } else {
-            ((2 * node + 2, mid, hi), (2 * node + 1, lo, mid))
-        };
-        self.nearest_n_in(q, k, near.0, near.1, near.2, off, rd, found, examined);
-        let far_rd = rd - off[axis] * off[axis] + diff * diff;
-        // Beyond a split exactly at the k-th distance may lie a tie of lower index, unless that
-        // distance is 0: points on the query itself are taken as met (so that copies of a point
-        // cost no more than one).
-        let bound = if found.len() < k { f64::INFINITY } else { found[k - 1].distance };
-        if far_rd < bound || (far_rd == bound && bound > 0.0) {
-            off[axis] = diff.abs();
-            self.nearest_n_in(q, k, far.0, far.1, far.2, off, far_rd, found, examined);
-        }
+        let mut found = nearest.found;
+        found.sort_unstable_by_key(|t| t.met);
+        found.into_iter().map(|t| t.neighbour).collect()
     }
 
     /// Calls `f(item, squared distance)` for every point within `sq_radius` (squared, inclusive)
     /// of `q`, in no particular order.
     #[inline]
-    pub fn for_each_within(&self, q: &[f64; 2], sq_radius: f64, mut f: impl FnMut(u32, f64)) {
-        if !self.points.is_empty() {
-            self.within_in(q, sq_radius, 0, 0, self.points.len(), [0.0; 2], 0.0, &mut f);
-        }
+    pub fn for_each_within(&self, q: &[f64; 2], sq_radius: f64, f: impl FnMut(u32, f64)) {
+        self.descend(q, &mut Within { sq_radius, f });
     }
 
     /// The points within `sq_radius` (squared, inclusive) of `q`, in no particular order.
@@ -220,25 +149,31 @@ impl Tree2 {
         out
     }
 
+    /// The one descent of every query: from the root, the child on `q`'s side of the split first,
+    /// then the other child when `visit` may want a point at its distance; `visit` sees the leaves.
+    #[inline]
+    fn descend<V: Visit>(&self, q: &[f64; 2], visit: &mut V) {
+        if !self.points.is_empty() {
+            self.descend_in(q, 0, 0, self.points.len(), [0.0; 2], 0.0, visit);
+        }
+    }
+
+    /// [`Tree2::descend`] below `node`, which covers `[lo, hi)`. `off` holds, per axis, how far
+    /// `q` lies outside the node's cell along it (0 inside), and `rd` is their sum of squares: the
+    /// squared distance from `q` to the cell, a bound no point of the node can beat.
     #[allow(clippy::too_many_arguments)]
-    fn within_in(
+    fn descend_in<V: Visit>(
         &self,
         q: &[f64; 2],
-        sq_radius: f64,
         node: usize,
         lo: usize,
         hi: usize,
         mut off: [f64; 2],
         rd: f64,
-        f: &mut impl FnMut(u32, f64),
+        visit: &mut V,
     ) {
         if hi - lo <= LEAF {
-            for (p, &item) in self.points[lo..hi].iter().zip(&self.items[lo..hi]) {
-                let d = sq_dist(q, p);
-                if d <= sq_radius {
-                    f(item, d);
-                }
-            }
+            visit.leaf(q, &self.points[lo..hi], &self.items[lo..hi]);
             return;
         }
         let axis = self.axes[node] as usize;
@@ -249,12 +184,152 @@ impl Tree2 {
         } else {
             ((2 * node + 2, mid, hi), (2 * node + 1, lo, mid))
         };
-        self.within_in(q, sq_radius, near.0, near.1, near.2, off, rd, f);
+        self.descend_in(q, near.0, near.1, near.2, off, rd, visit);
         let far_rd = rd - off[axis] * off[axis] + diff * diff;
-        if far_rd <= sq_radius {
+        if visit.reaches(far_rd) {
             off[axis] = diff.abs();
-            self.within_in(q, sq_radius, far.0, far.1, far.2, off, far_rd, f);
+            self.descend_in(q, far.0, far.1, far.2, off, far_rd, visit);
         }
+    }
+}
+
+/// What one kind of query does with the leaves a descent reaches, and how far it looks.
+trait Visit {
+    /// Takes in the points of a leaf (with their items), in tree order.
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]);
+    /// Whether a node at squared distance `rd` from the query may hold a point the query wants.
+    fn reaches(&self, rd: f64) -> bool;
+}
+
+/// [`Tree2::nearest_one`]: the first point met at the smallest distance.
+struct Nearest {
+    best: Neighbour,
+}
+
+impl Visit for Nearest {
+    #[inline(always)]
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]) {
+        for (p, &item) in points.iter().zip(items) {
+            let d = sq_dist(q, p);
+            if d < self.best.distance {
+                self.best = Neighbour { item, distance: d };
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn reaches(&self, rd: f64) -> bool {
+        rd < self.best.distance
+    }
+}
+
+/// [`Tree2::nearest_n`]: the `k` nearest so far, ordered by distance, then index.
+struct NearestN {
+    k: usize,
+    found: Vec<Neighbour>,
+    examined: usize,
+}
+
+impl Visit for NearestN {
+    #[inline(always)]
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]) {
+        // Ordered by distance, then index: among points at the k-th distance the lowest indices
+        // are kept, whatever the tree's layout.
+        let before = |n: &Neighbour, d: f64, item: u32| n.distance < d || (n.distance == d && n.item < item);
+        let (k, found) = (self.k, &mut self.found);
+        self.examined += points.len();
+        for (p, &item) in points.iter().zip(items) {
+            let d = sq_dist(q, p);
+            let candidate = Neighbour { item, distance: d };
+            if found.len() < k || before(&candidate, found[k - 1].distance, found[k - 1].item) {
+                let at = found.partition_point(|n| before(n, d, item));
+                found.insert(at, candidate);
+                found.truncate(k);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn reaches(&self, rd: f64) -> bool {
+        // Beyond a split exactly at the k-th distance may lie a tie of lower index, unless that
+        // distance is 0: points on the query itself are taken as met (so that copies of a point
+        // cost no more than one).
+        let bound = if self.found.len() < self.k { f64::INFINITY } else { self.found[self.k - 1].distance };
+        rd < bound || (rd == bound && bound > 0.0)
+    }
+}
+
+/// A point [`Tree2::nearest_n_with_ties`] keeps, and when the descent met it.
+struct Met {
+    neighbour: Neighbour,
+    met: u32,
+}
+
+/// [`Tree2::nearest_n_with_ties`]: every point met within `widen` times the `k`-th distance so
+/// far, ordered by distance (the `k`-th only shrinks, so what is dropped stays out).
+struct NearestWithTies {
+    k: usize,
+    widen: f64,
+    found: Vec<Met>,
+    met: u32,
+}
+
+impl NearestWithTies {
+    /// The squared distance within which points are kept: infinite until `k` are met.
+    #[inline(always)]
+    fn reach(&self) -> f64 {
+        match self.found.get(self.k - 1) {
+            Some(kth) => kth.neighbour.distance * self.widen,
+            None => f64::INFINITY,
+        }
+    }
+}
+
+impl Visit for NearestWithTies {
+    #[inline(always)]
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]) {
+        for (p, &item) in points.iter().zip(items) {
+            let d = sq_dist(q, p);
+            let met = self.met;
+            self.met += 1;
+            if d <= self.reach() {
+                let at = self.found.partition_point(|t| t.neighbour.distance <= d);
+                self.found.insert(at, Met { neighbour: Neighbour { item, distance: d }, met });
+                if self.found.len() > self.k {
+                    let reach = self.reach();
+                    let keep = self.found.partition_point(|t| t.neighbour.distance <= reach);
+                    self.found.truncate(keep);
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn reaches(&self, rd: f64) -> bool {
+        rd <= self.reach()
+    }
+}
+
+/// [`Tree2::for_each_within`]: every point within the radius, handed to `f`.
+struct Within<F> {
+    sq_radius: f64,
+    f: F,
+}
+
+impl<F: FnMut(u32, f64)> Visit for Within<F> {
+    #[inline(always)]
+    fn leaf(&mut self, q: &[f64; 2], points: &[[f64; 2]], items: &[u32]) {
+        for (p, &item) in points.iter().zip(items) {
+            let d = sq_dist(q, p);
+            if d <= self.sq_radius {
+                (self.f)(item, d);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn reaches(&self, rd: f64) -> bool {
+        rd <= self.sq_radius
     }
 }
 
@@ -334,6 +409,38 @@ mod tests {
                 within.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let expected: Vec<(f64, u32)> = all.iter().copied().filter(|&(d, _)| d <= r2).collect();
                 assert_eq!(within, expected);
+            }
+        }
+    }
+
+    /// The query that keeps ties at the k-th distance returns what a k-nearest query and a radius
+    /// query at the k-th distance (widened by the tolerance) return together, in the radius
+    /// query's order; all points when there are fewer than k.
+    #[test]
+    fn nearest_with_ties_is_knn_then_a_radius_query() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for points in point_sets() {
+            let tree = Tree2::new_from_slice(&points);
+            for _ in 0..300 {
+                let q = if rng.random_bool(0.5) && !points.is_empty() {
+                    points[rng.random_range(0..points.len())]
+                } else {
+                    [rng.random_range(-2.0..22.0), rng.random_range(-2.0..22.0)]
+                };
+                for (k, tolerance) in [(1, 0.0), (6, 1e-9), (6, 0.0), (20, 1e-3)] {
+                    let got = tree.nearest_n_with_ties(&q, k, tolerance);
+                    let knn = tree.nearest_n(&q, k);
+                    if knn.len() < k {
+                        let mut all: Vec<u32> = got.iter().map(|n| n.item).collect();
+                        all.sort_unstable();
+                        assert_eq!(all, (0..points.len() as u32).collect::<Vec<_>>());
+                        continue;
+                    }
+                    let reach = knn[k - 1].distance * (1.0 + tolerance);
+                    assert_eq!(got, tree.within_unsorted(&q, reach), "k {k}, {q:?}");
+                    let brute = brute(&points, &q);
+                    assert_eq!(got.len(), brute.iter().filter(|&&(d, _)| d <= reach).count());
+                }
             }
         }
     }

@@ -12,6 +12,10 @@ use crate::maps::kd_tree::Tree2;
 /// Neighbours used to fit a wall direction at a plan point.
 pub const NORMAL_NEIGHBOURS: usize = 6;
 
+/// Points farther than the sixth neighbour by at most this share of its squared distance are its
+/// ties, and take part in the fit too.
+pub const TIE_TOLERANCE: f64 = 1e-9;
+
 /// Unit normal of the plan's wall at every point (least-squares line through the point's
 /// [`NORMAL_NEIGHBOURS`] nearest plan points and every other point as near as the last of them);
 /// `[0, 0]` where no direction can be fitted.
@@ -29,16 +33,17 @@ pub fn estimate_normals(map_points: &[[f64; 2]], tree: &Tree2, cancel: Cancel<'_
 
 /// The wall normal at `p` (see [`estimate_normals`]).
 fn normal_at(map_points: &[[f64; 2]], tree: &Tree2, p: &[f64; 2]) -> [f64; 2] {
-    let mut nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
+    // On a plan's pixel lattice the sixth neighbour is often one of several at the same distance:
+    // take them all (to a relative TIE_TOLERANCE, the rounding of lattice coordinates), so that the
+    // fit is symmetric and does not depend on which of the ties a query keeps.
+    let mut nn = tree.nearest_n_with_ties(p, NORMAL_NEIGHBOURS, TIE_TOLERANCE);
     if nn.len() < 3 {
         return [0.0, 0.0];
     }
-    if nn.len() == NORMAL_NEIGHBOURS {
-        // On a plan's pixel lattice the sixth neighbour is often one of several at the same
-        // distance: take them all (to a relative 1e-9, the rounding of lattice coordinates), so
-        // that the fit is symmetric and does not depend on which of the ties a query keeps.
-        let reach = nn[NORMAL_NEIGHBOURS - 1].distance * (1.0 + 1e-9);
-        nn = tree.within_unsorted(p, reach);
+    if nn.len() < NORMAL_NEIGHBOURS {
+        // Fewer plan points than neighbours: all of them, summed nearest first (as before the
+        // query kept ties, so that the normals stay the same to the last bit).
+        nn.sort_unstable_by(|a, b| a.distance.total_cmp(&b.distance).then(a.item.cmp(&b.item)));
     }
     let inv = 1.0 / nn.len() as f64;
     let (mut mx, mut my) = (0.0, 0.0);
@@ -105,5 +110,57 @@ mod tests {
         // Along the middle of a straight stretch the fit is symmetric: the normal is the wall's.
         let mid = pts.iter().position(|p| (p[0] - 1.5).abs() < 1e-9 && p[1] == 0.0).unwrap();
         assert!(normals[mid][0].abs() < 1e-9, "{:?}", normals[mid]);
+    }
+
+    /// The fit as it was written before the tree had a query that keeps ties: the six nearest,
+    /// then every point within the sixth's distance (to the tolerance) by a radius query.
+    fn neighbours_by_two_queries(map_points: &[[f64; 2]], tree: &Tree2, p: &[f64; 2]) -> Vec<u32> {
+        let mut nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
+        if nn.len() == NORMAL_NEIGHBOURS {
+            nn = tree.within_unsorted(p, nn[NORMAL_NEIGHBOURS - 1].distance * (1.0 + TIE_TOLERANCE));
+        }
+        assert!(nn.iter().all(|n| (n.item as usize) < map_points.len()));
+        nn.iter().map(|n| n.item).collect()
+    }
+
+    /// One query that keeps the ties at the sixth distance finds the very points (in the same
+    /// order) that the kNN query and the radius query found together, on lattices full of ties,
+    /// and the normals are the same to the last bit.
+    #[test]
+    fn the_query_with_ties_finds_what_knn_and_a_radius_query_found() {
+        let lattice: Vec<[f64; 2]> =
+            (0..1600).map(|i| [(i % 40) as f64 * 0.05, (i / 40) as f64 * 0.05]).collect();
+        let mut thick_l = Vec::new();
+        for i in 0..60 {
+            for j in 0..3 {
+                thick_l.push([i as f64 * 0.05, j as f64 * 0.05]);
+                thick_l.push([j as f64 * 0.05, 0.15 + i as f64 * 0.05]);
+            }
+        }
+        let mut copies = vec![[1.0, 1.0]; 9];
+        copies.extend((0..20).map(|i| [1.0 + i as f64 * 0.1, 1.0]));
+        for pts in [lattice, thick_l, copies, vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]] {
+            let tree = Tree2::new_from_slice(&pts);
+            let mut tied = 0;
+            for p in &pts {
+                let found: Vec<u32> = tree
+                    .nearest_n_with_ties(p, NORMAL_NEIGHBOURS, TIE_TOLERANCE)
+                    .iter()
+                    .map(|n| n.item)
+                    .collect();
+                let mut expected = neighbours_by_two_queries(&pts, &tree, p);
+                if expected.len() < NORMAL_NEIGHBOURS {
+                    // All points: the same set, in the order of the descent.
+                    let mut sorted = found.clone();
+                    sorted.sort_unstable();
+                    expected.sort_unstable();
+                    assert_eq!(sorted, expected, "{p:?}");
+                } else {
+                    assert_eq!(found, expected, "{p:?}");
+                }
+                tied += usize::from(found.len() > NORMAL_NEIGHBOURS);
+            }
+            assert!(pts.len() < 10 || tied * 4 > pts.len(), "{tied} of {} points with ties", pts.len());
+        }
     }
 }
