@@ -12,7 +12,8 @@ import pytest
 from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
 from planicp import sim as syn
 from planicp.tracking.fusion_rule import finite_covariance
-from planicp.tracking.recovery import Recovery, RecoveryConfig, student_t_quantile
+from planicp.tracking.recovery import Recovery, RecoveryConfig
+from planicp.tracking.student_t import student_t_quantile
 
 DEG = math.pi / 180.0
 Pose = tuple[float, float, float]
