@@ -112,8 +112,9 @@ mod tests {
         assert!(normals[mid][0].abs() < 1e-9, "{:?}", normals[mid]);
     }
 
-    /// The fit as it was written before the tree had a query that keeps ties: the six nearest,
-    /// then every point within the sixth's distance (to the tolerance) by a radius query.
+    /// The neighbours of the fit as they were found before the tree had a query that keeps ties:
+    /// the six nearest, then every point within the sixth's distance (to the tolerance) by a
+    /// radius query.
     fn neighbours_by_two_queries(map_points: &[[f64; 2]], tree: &Tree2, p: &[f64; 2]) -> Vec<u32> {
         let mut nn = tree.nearest_n(p, NORMAL_NEIGHBOURS);
         if nn.len() == NORMAL_NEIGHBOURS {
@@ -124,8 +125,8 @@ mod tests {
     }
 
     /// One query that keeps the ties at the sixth distance finds the very points (in the same
-    /// order) that the kNN query and the radius query found together, on lattices full of ties,
-    /// and the normals are the same to the last bit.
+    /// order) that the kNN query and the radius query found together, on lattices full of ties:
+    /// the normals, summed in that order, are the same to the last bit.
     #[test]
     fn the_query_with_ties_finds_what_knn_and_a_radius_query_found() {
         let lattice: Vec<[f64; 2]> =

@@ -10,7 +10,7 @@ use crate::search::global_search::{Candidate, GlobalMatcher, SearchOutcome, NODE
 use crate::search::likelihood_field::LikelihoodPyramid;
 use std::collections::BinaryHeap;
 
-/// A branch-and-bound search in progress (see the module documentation), made by
+/// A branch-and-bound search in progress (see [`crate::search::global_search`]), made by
 /// [`GlobalMatcher::start`]: each [`SearchRun::advance`] scores up to a budget of nodes and stops
 /// where it is, so a search of seconds can be spread over many short calls (a tracker's updates).
 /// The roots (every rotation's coarsest blocks) are scored first, in order; then the node with the
