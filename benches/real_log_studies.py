@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 import planicp
-from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, localize, relocalize
+from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, SearchInSteps, localize, relocalize
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
@@ -71,6 +71,7 @@ def load(harness: Any, name: str, out: str, seed: int = 7) -> tuple[Any, list[np
 def search_study(harness: Any, logs: list[str], out: str) -> None:
     print("| log | settings | right | nodes (median) | nodes (most) | out of nodes |")
     print("|---|---|---|---|---|---|")
+    steps: list[tuple[str, list[float]]] = []
     for name in logs:
         plan, scans, ref, _ = load(harness, name, out)
         pm = PlanMap.from_ros_map(plan.yaml_path)
@@ -90,6 +91,30 @@ def search_study(harness: Any, logs: list[str], out: str) -> None:
                 f"{max(nodes) / 1e3:.0f}k | {short} |",
                 flush=True,
             )
+        steps.append((name, step_times(pm, [scans[k] for k in picked])))
+    print()
+    print(f"One step of {STEP_NODES:,} nodes of a search of the whole plan, the defaults (the `Localizer`'s")
+    print("budget per update): median and most over the 12 scans, ms")
+    print()
+    print("| log | median | most |")
+    print("|---|---|---|")
+    for name, spent in steps:
+        print(f"| {name} | {1e3 * np.median(spent):.1f} | {1e3 * max(spent):.1f} |")
+
+
+STEP_NODES = 20_000
+"""The search nodes a `Localizer` update may score (`RecoveryConfig.search_nodes`)."""
+
+
+def step_times(pm: PlanMap, scans: list[np.ndarray]) -> list[float]:
+    """Seconds of the first `STEP_NODES`-node step of a search of the whole plan for each scan."""
+    spent = []
+    for scan in scans:
+        steps = SearchInSteps(scan, pm)
+        start = time.perf_counter()
+        steps.advance(STEP_NODES)
+        spent.append(time.perf_counter() - start)
+    return spent
 
 
 def track(

@@ -81,7 +81,7 @@ class RecoveryConfig(Settings):
             robot a recovery adopted a place 21 m away before this check. Needs the occlusion
             rule's ray casting (the `Localizer`'s default).
         search_nodes: most branch-and-bound nodes all the searches of one update score together
-            (`SearchBudget`; >= 1), so that an update never stalls: 20,000 take 8-9 ms on the
+            (`SearchBudget`; >= 1), so that an update never stalls: 20,000 take 2-3 ms on the
             real logs' plans (docs/benchmarks.md). A search that needs more goes on over the next
             updates (the recovery's), or finds nothing (the search around a prediction, whose
             fit's own place then waits for the next scan). A whole-plan search of a 100 x 120 m
