@@ -471,3 +471,19 @@ def test_student_t_quantiles() -> None:
     assert student_t_quantile(0.975, 5) == pytest.approx(2.571, abs=2e-3)
     assert student_t_quantile(0.995, 10) == pytest.approx(3.169, abs=2e-3)
     assert student_t_quantile(0.975, 1000) == pytest.approx(1.962, abs=2e-3)
+
+
+def test_a_plan_whose_index_cannot_be_built_is_still_tracked(
+    office: Any, path: list[Pose], scans: list[np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Making a `Localizer` builds the plan's nearest-wall index; a plan it cannot be built for
+    gets a `Localizer` all the same, whose alignments go through the KD-tree instead."""
+    from planicp import _core
+
+    def refuse(self: PlanMap) -> None:
+        raise _core.PlanicpError("the nearest-wall index would be too large")
+
+    monkeypatch.setattr(PlanMap, "prepare_index", refuse)
+    _, estimates, _ = track(PlanMap.from_points(office.wall_points()), path, scans)
+    assert all(e.accepted for e in estimates)
+    assert max(error(e.pose, p)[0] for e, p in zip(estimates, path)) < 0.05

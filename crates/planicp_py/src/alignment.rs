@@ -1,7 +1,7 @@
 //! `planicp._core.align` with its `IcpSettings` and `Alignment`: one ICP alignment of a scan to the
 //! plan (`icp_core::icp`). `planicp.localize` wraps them.
 
-use crate::conversions::{points_from, unsigned_arg};
+use crate::conversions::{count_arg, points_from};
 use crate::errors::core_error;
 use crate::interrupt::interruptible;
 use crate::point_map::{PyPointMap, WallView};
@@ -25,7 +25,7 @@ pub(crate) struct IcpSettings {
 #[derive(FromPyObject)]
 struct IcpConfigFields<'py> {
     max_correspondence_distance: f64,
-    // Through unsigned_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
+    // Through count_arg: a negative int is a PlanicpError, not pyo3's OverflowError.
     max_iterations: Bound<'py, PyAny>,
     trim_ratio: f64,
     auto_trim: bool,
@@ -54,17 +54,14 @@ impl IcpSettings {
                 )))
             }
         };
-        let count = |what: &str, v: &Bound<'_, PyAny>| {
-            unsigned_arg(what, v).map(|n| usize::try_from(n).unwrap_or(usize::MAX))
-        };
         let inner = IcpConfig {
             max_correspondence_distance: config.max_correspondence_distance,
-            max_iterations: count("max_iterations", &config.max_iterations)?,
+            max_iterations: count_arg("max_iterations", &config.max_iterations)?,
             trim_ratio: config.trim_ratio,
             auto_trim: config.auto_trim,
             translation_tolerance: config.translation_tolerance,
             rotation_tolerance: config.rotation_tolerance,
-            subsample: count("subsample", &config.subsample)?,
+            subsample: count_arg("subsample", &config.subsample)?,
             correspondence_schedule: config.correspondence_schedule,
             use_visibility: config.use_visibility,
             accelerate: config.accelerate,
