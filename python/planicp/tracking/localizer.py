@@ -207,7 +207,7 @@ class Localizer:
         self._wide_config = self.config.replace(correspondence_search="kd_tree")
         # The recovery aligns every place it follows, often several per update: with the index and
         # its visibility masks, made once for the plan, instead of a ray cast from each place
-        # (docs/design.md#finding-the-robot-again).
+        # (docs/design.md, "Recovery and relocalization use the index").
         self._recovery = Recovery(
             plan,
             recovery if recovery is not None else RecoveryConfig(),
@@ -221,7 +221,7 @@ class Localizer:
         prepare_search(plan, self._recovery.config.search)
         # So is the nearest-wall index the recovery and the searches align with (seconds on a
         # large plan; the KD-tree search of tracking goes through it too). A plan it cannot be
-        # built for (too large an extent) is aligned through the KD-tree there instead.
+        # built for (more wall points than it holds) is aligned through the KD-tree there instead.
         with contextlib.suppress(_core.PlanicpError):
             plan.prepare_index()
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
