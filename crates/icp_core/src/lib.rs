@@ -8,6 +8,7 @@
 //! - [`pose`]: SE(2) poses (x, y, yaw), their composition and the one angle wrap.
 //! - [`error`]: every way the core can refuse its input.
 //! - [`cancel`]: the hook through which a caller stops a long computation (Ctrl-C).
+//! - [`parallel`]: one-time preparation spread over the cores, in chunks, stoppable.
 //! - [`grids`]: rasters and beams through them: cell traversal, clearance, the wall raster, the
 //!   simulated LIDAR, the log-odds occupancy grid.
 //! - [`visibility`]: which wall points a LIDAR at a pose can see (ray casting), the ranges to the
@@ -24,6 +25,7 @@ pub mod error;
 pub mod grids;
 pub mod icp;
 pub mod maps;
+pub mod parallel;
 pub mod pose;
 pub mod search;
 pub mod visibility;

@@ -12,7 +12,7 @@ use std::path::Path;
 
 /// The layers, lowest first, by top-level module.
 const LAYERS: [&[&str]; 6] =
-    [&["error", "cancel", "pose"], &["grids"], &["visibility"], &["maps"], &["icp"], &["search"]];
+    [&["error", "cancel", "parallel", "pose"], &["grids"], &["visibility"], &["maps"], &["icp"], &["search"]];
 
 /// A module's source without comments, split into its code and its test module.
 struct Source {

@@ -17,6 +17,10 @@
 use crate::cancel::{self, Cancel};
 use crate::error::Result;
 use crate::grids::wall_raster::WallRaster;
+use crate::parallel;
+
+/// Points per chunk of work (the chunks run on every core, see [`crate::parallel`]).
+const MASK_CHUNK: usize = cancel::POLL_EVERY;
 
 /// Directions per point.
 pub const SECTORS: usize = 16;
@@ -32,7 +36,8 @@ pub const SEEN_FROM_EVERYWHERE: u16 = u16::MAX;
 /// cell and a half of the point's own wall line are the wall itself (a rotated wall's raster
 /// staircase), not an occluder.
 ///
-/// `cancel` is polled every [`cancel::POLL_EVERY`] points; when it returns true the marches stop
+/// The points are marched in chunks on every core ([`crate::parallel`]); `cancel` is polled
+/// before each chunk of [`cancel::POLL_EVERY`] points; when it returns true the marches stop
 /// with [`crate::error::IcpError::Interrupted`] ([`cancel::NEVER`]: they cannot be stopped, and
 /// never fail).
 pub fn visibility_masks(
@@ -47,20 +52,25 @@ pub fn visibility_masks(
             [a.cos(), a.sin()]
         })
         .collect();
-    let mut masks = Vec::with_capacity(points.len());
-    for (chunk, chunk_normals) in points.chunks(cancel::POLL_EVERY).zip(normals.chunks(cancel::POLL_EVERY)) {
-        cancel::check(cancel)?;
-        masks.extend(chunk.iter().zip(chunk_normals).map(|(&p, &n)| {
-            directions.iter().enumerate().fold(0u16, |mask, (k, &d)| {
-                if occluded(raster, p, n, d) {
-                    mask
-                } else {
-                    mask | (1 << k)
-                }
+    // Chunks of points on every core: each point's mask is its own.
+    let chunk = MASK_CHUNK;
+    let masks = parallel::map_chunks(points.len().div_ceil(chunk), cancel, |c| {
+        let range = c * chunk..((c + 1) * chunk).min(points.len());
+        Ok(points[range.clone()]
+            .iter()
+            .zip(&normals[range])
+            .map(|(&p, &n)| {
+                directions.iter().enumerate().fold(0u16, |mask, (k, &d)| {
+                    if occluded(raster, p, n, d) {
+                        mask
+                    } else {
+                        mask | (1 << k)
+                    }
+                })
             })
-        }));
-    }
-    Ok(masks)
+            .collect::<Vec<u16>>())
+    })?;
+    Ok(masks.concat())
 }
 
 /// Whether a march from `p` along the unit direction `d` meets a wall cell past the free cells

@@ -9,7 +9,23 @@ use crate::maps::nearest_wall_index::{
     NearestWallIndex, Site, ALTERNATIVE_REACH, BLOCK, BLOCK_CELLS, EMPTY, LIST, MAX_INDEX_CELLS,
     MAX_INDEX_POINTS,
 };
+use crate::parallel;
 use crate::visibility::wall_facing::SEEN_FROM_EVERYWHERE;
+use std::ops::Range;
+
+/// Block rows per chunk of work (the chunks run on every core, see [`crate::parallel`]).
+const ROWS_PER_BAND: usize = 4;
+
+/// What [`NearestWallIndex::fill_band`] made of a band of block rows.
+#[derive(Default)]
+struct Band {
+    /// Block indices of the stored blocks, row-major.
+    stored: Vec<usize>,
+    /// Their cells, [`BLOCK_CELLS`] per block, as the index's `building` holds them.
+    cells: Vec<[u32; 3]>,
+    /// The cells' lists; a cell's offset counts from the band's first.
+    lists: Vec<u32>,
+}
 
 impl NearestWallIndex {
     /// Builds the index of `points` (the plan's wall points, metres, map frame; `tree` is their
@@ -108,11 +124,6 @@ impl NearestWallIndex {
         let half_diagonal = cell * std::f64::consts::FRAC_1_SQRT_2;
         let block_size = cell * BLOCK as f64;
         let block_half_diagonal = block_size * std::f64::consts::FRAC_1_SQRT_2;
-        // Per cell in a block: (squared distance to the cell's centre, plan index) of the block's
-        // points.
-        let mut nearby: Vec<(f64, u32)> = Vec::new();
-        let mut list: Vec<(f64, u32)> = Vec::new();
-        let mut kept: Vec<u32> = Vec::new();
         let block_rows = self.blocks.len() / self.block_cols;
         let sentinel = points.len() as u32;
         // Block 0: every cell empty.
@@ -136,17 +147,62 @@ impl NearestWallIndex {
                 }
             }
         }
-        let mut visited = 0usize;
-        for brow in 0..block_rows {
+        // Bands of block rows on every core, each with its own lists; stitched in row order, so
+        // the index is the same whatever the number of threads.
+        let bands = block_rows.div_ceil(ROWS_PER_BAND);
+        let filled = parallel::map_chunks(bands, cancel, |band| {
+            let rows = band * ROWS_PER_BAND..((band + 1) * ROWS_PER_BAND).min(block_rows);
+            Ok(self.fill_band(points, tree, &near, rows))
+        })?;
+        for band in filled {
+            let first_block = (self.building.len() / BLOCK_CELLS) as u32;
+            let list_offset = self.lists_len()?;
+            for (j, &b) in band.stored.iter().enumerate() {
+                self.blocks[b] = first_block + j as u32;
+            }
+            self.building.extend(band.cells.iter().map(|&[a, b, alt]| {
+                if a & LIST != 0 {
+                    [a, b + list_offset, alt]
+                } else {
+                    [a, b, alt]
+                }
+            }));
+            self.lists.extend_from_slice(&band.lists);
+        }
+        self.lists_len()?;
+        for b in &mut self.blocks {
+            if *b == EMPTY {
+                *b = 0;
+            }
+        }
+        self.renumber();
+        self.slots = self.building.iter().map(|&[a, b, _]| [a, b]).collect();
+        self.alternatives = self.building.iter().map(|c| c[2]).collect();
+        self.building = Vec::new();
+        self.lists.shrink_to_fit();
+        Ok(())
+    }
+
+    /// The cells of the blocks in block `rows` that are `near` a wall (row-major), with their
+    /// lists (offsets into the band's own `lists`).
+    fn fill_band(&self, points: &[[f64; 2]], tree: &Tree2, near: &[bool], rows: Range<usize>) -> Band {
+        let cell = self.cell;
+        let half_diagonal = cell * std::f64::consts::FRAC_1_SQRT_2;
+        let block_size = cell * BLOCK as f64;
+        let block_half_diagonal = block_size * std::f64::consts::FRAC_1_SQRT_2;
+        let sentinel = points.len() as u32;
+        let mut band = Band::default();
+        // Per cell in a block: (squared distance to the cell's centre, plan index) of the block's
+        // points.
+        let mut nearby: Vec<(f64, u32)> = Vec::new();
+        let mut list: Vec<(f64, u32)> = Vec::new();
+        let mut kept: Vec<u32> = Vec::new();
+        for brow in rows {
             for bcol in 0..self.block_cols {
                 if !near[brow * self.block_cols + bcol] {
                     continue;
                 }
                 // A block costs about a KD-tree query and 64 short scans: tens of microseconds.
-                visited += 1;
-                if visited % (cancel::POLL_EVERY / 64) == 0 {
-                    cancel::check(cancel)?;
-                }
                 let corner =
                     [self.origin[0] + bcol as f64 * block_size, self.origin[1] + brow as f64 * block_size];
                 let centre = [corner[0] + 0.5 * block_size, corner[1] + 0.5 * block_size];
@@ -161,8 +217,7 @@ impl NearestWallIndex {
                 nearby.clear();
                 tree.for_each_within(&centre, radius * radius, |item, d2| nearby.push((d2, item)));
                 nearby.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                let stored = (self.building.len() / BLOCK_CELLS) as u32;
-                self.blocks[brow * self.block_cols + bcol] = stored;
+                band.stored.push(brow * self.block_cols + bcol);
                 for r in 0..BLOCK {
                     for c in 0..BLOCK {
                         let q = [corner[0] + (c as f64 + 0.5) * cell, corner[1] + (r as f64 + 0.5) * cell];
@@ -245,28 +300,19 @@ impl NearestWallIndex {
                                 [only] => [only, only, alt],
                                 [a, b] => [a, b, alt],
                                 _ => {
-                                    let offset = self.lists_len()?;
-                                    self.lists.extend_from_slice(&kept);
+                                    // Checked against LIST when the bands are stitched.
+                                    let offset = band.lists.len() as u32;
+                                    band.lists.extend_from_slice(&kept);
                                     [LIST | kept.len() as u32, offset, alt]
                                 }
                             };
                         }
-                        self.building.push(slot);
+                        band.cells.push(slot);
                     }
                 }
             }
         }
-        for b in &mut self.blocks {
-            if *b == EMPTY {
-                *b = 0;
-            }
-        }
-        self.renumber();
-        self.slots = self.building.iter().map(|&[a, b, _]| [a, b]).collect();
-        self.alternatives = self.building.iter().map(|c| c[2]).collect();
-        self.building = Vec::new();
-        self.lists.shrink_to_fit();
-        Ok(())
+        band
     }
 
     /// Renumbers the sites (still in plan order) in the order the cells name them, and drops
