@@ -42,8 +42,11 @@ impl OccupancyGrid {
         let cells = typed.readonly();
         let shape = cells.shape();
         let (rows, cols) = (shape[0], shape[1]);
-        // Logical (row-major) order, whatever the array's memory layout.
-        let flat: Vec<bool> = cells.as_array().iter().copied().collect();
+        // Logical (row-major) order, whatever the array's memory layout (one copy when C-contiguous).
+        let flat: Vec<bool> = match cells.as_slice() {
+            Ok(contiguous) => contiguous.to_vec(),
+            Err(_) => cells.as_array().iter().copied().collect(),
+        };
         let origin = [origin.0, origin.1];
         let raster = py.detach(|| {
             guarded(|| {

@@ -13,56 +13,58 @@
 pub const SKIP_MIN_CLEARANCE: u8 = 6;
 
 /// Chebyshev distance of every cell to the nearest occupied cell, capped at 255 (0 when occupied):
-/// the exact two-pass chessboard distance transform.
+/// the exact two-pass chessboard distance transform. Each pass takes a row at a time: the three
+/// cells of the row before (after, going back) for every cell at once, then the one dependency
+/// along the row, the cell before it.
 pub fn chebyshev_clearance(cells: &[bool], rows: usize, cols: usize) -> Vec<u8> {
     let mut d: Vec<u8> = cells.iter().map(|&o| if o { 0 } else { u8::MAX }).collect();
+    if rows == 0 || cols == 0 {
+        return d;
+    }
+    let mut across = vec![u8::MAX; cols];
+    // Forward: from the cell to the left and the three cells of the row below.
     for r in 0..rows {
-        for c in 0..cols {
-            let k = r * cols + c;
-            if d[k] == 0 {
-                continue;
-            }
-            let mut m = d[k];
-            if c > 0 {
-                m = m.min(d[k - 1].saturating_add(1));
-            }
-            if r > 0 {
-                let up = k - cols;
-                m = m.min(d[up].saturating_add(1));
-                if c > 0 {
-                    m = m.min(d[up - 1].saturating_add(1));
-                }
-                if c + 1 < cols {
-                    m = m.min(d[up + 1].saturating_add(1));
-                }
-            }
-            d[k] = m;
+        let (done, rest) = d.split_at_mut(r * cols);
+        let row = &mut rest[..cols];
+        if r > 0 {
+            neighbours_plus_one(&done[(r - 1) * cols..], &mut across);
+        }
+        let mut before = u8::MAX;
+        for (v, &a) in row.iter_mut().zip(&across) {
+            *v = (*v).min(a).min(before.saturating_add(1));
+            before = *v;
         }
     }
+    // Backward: from the cell to the right and the three cells of the row above.
+    across.fill(u8::MAX);
     for r in (0..rows).rev() {
-        for c in (0..cols).rev() {
-            let k = r * cols + c;
-            if d[k] == 0 {
-                continue;
-            }
-            let mut m = d[k];
-            if c + 1 < cols {
-                m = m.min(d[k + 1].saturating_add(1));
-            }
-            if r + 1 < rows {
-                let down = k + cols;
-                m = m.min(d[down].saturating_add(1));
-                if c > 0 {
-                    m = m.min(d[down - 1].saturating_add(1));
-                }
-                if c + 1 < cols {
-                    m = m.min(d[down + 1].saturating_add(1));
-                }
-            }
-            d[k] = m;
+        let (head, done) = d.split_at_mut((r + 1) * cols);
+        let row = &mut head[r * cols..];
+        if r + 1 < rows {
+            neighbours_plus_one(&done[..cols], &mut across);
+        }
+        let mut after = u8::MAX;
+        for (v, &a) in row.iter_mut().zip(&across).rev() {
+            *v = (*v).min(a).min(after.saturating_add(1));
+            after = *v;
         }
     }
     d
+}
+
+/// `out[c]` = 1 + the least of `row[c - 1]`, `row[c]` and `row[c + 1]` (those that exist),
+/// saturating at 255.
+fn neighbours_plus_one(row: &[u8], out: &mut [u8]) {
+    let n = out.len();
+    if n == 1 {
+        out[0] = row[0].saturating_add(1);
+        return;
+    }
+    out[0] = row[0].min(row[1]).saturating_add(1);
+    out[n - 1] = row[n - 2].min(row[n - 1]).saturating_add(1);
+    for (o, w) in out[1..n - 1].iter_mut().zip(row[..n].windows(3)) {
+        *o = w[0].min(w[1]).min(w[2]).saturating_add(1);
+    }
 }
 
 /// The crossings of one axis's grid lines along a beam, in cells: crossing `k` (0-based) is at
@@ -123,23 +125,26 @@ mod tests {
 
     #[test]
     fn clearance_is_the_chebyshev_distance() {
-        let (rows, cols) = (37, 53);
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.01)).collect();
-        let d = chebyshev_clearance(&cells, rows, cols);
-        for r in 0..rows {
-            for c in 0..cols {
-                let mut best = 255usize;
-                for rr in 0..rows {
-                    for cc in 0..cols {
-                        if cells[rr * cols + cc] {
-                            best = best.min(r.abs_diff(rr).max(c.abs_diff(cc)));
+        // Rows and columns of one cell take the passes' edge cases.
+        for (rows, cols) in [(37, 53), (1, 1), (1, 9), (9, 1), (2, 2), (5, 300)] {
+            let cells: Vec<bool> = (0..rows * cols).map(|_| rng.random_bool(0.01)).collect();
+            let d = chebyshev_clearance(&cells, rows, cols);
+            for r in 0..rows {
+                for c in 0..cols {
+                    let mut best = 255usize;
+                    for rr in 0..rows {
+                        for cc in 0..cols {
+                            if cells[rr * cols + cc] {
+                                best = best.min(r.abs_diff(rr).max(c.abs_diff(cc)));
+                            }
                         }
                     }
+                    assert_eq!(d[r * cols + c] as usize, best.min(255), "({rows}, {cols}) at ({r}, {c})");
                 }
-                assert_eq!(d[r * cols + c] as usize, best.min(255));
             }
         }
         assert!(chebyshev_clearance(&[false; 6], 2, 3).iter().all(|&v| v == 255));
+        assert_eq!(chebyshev_clearance(&[true], 1, 1), vec![0]);
     }
 }
