@@ -659,6 +659,28 @@ def test_a_view_gives_the_alignment_its_visible_points() -> None:
     assert bare.ranges.shape == (0,)
     with pytest.raises(ValueError, match="without ranges"):
         bare.classify(ahead, 0.2)
+    # Only as far as the returns can pair (returns within 2 m ahead, pairing up to 0.5 m): the
+    # corridor's end wall, 5 m ahead, is not among the visible points; every visible point
+    # within 0.5 m of a return is.
+    from planicp import _core
+
+    near = ahead[np.hypot(*ahead.T) < 2.0]
+    pair = _core.largest_pair_distance(config._native)
+    assert pair == pytest.approx(config.max_correspondence_distance * max(config.correspondence_schedule))
+    reached = plan.view_from(pose, 8.0, 720, scan=near, ranges=False, pair_distance=0.5)
+    seen = plan.points[reached.visible_indices]
+    assert len(seen) and seen[:, 0].max() < 5.0 + 2.0 + 0.5 + 0.1
+    assert (plan.points[bare.visible_indices][:, 0] > 9.9).any() and not (seen[:, 0] > 9.9).any()
+    returns = near + np.array(pose[:2])
+    for i in bare.visible_indices:
+        if np.hypot(*(returns - plan.points[i]).T).min() <= 0.5:
+            assert i in set(reached.visible_indices.tolist())
+    with pytest.raises(ValueError, match="pass scan= and ranges=False"):
+        plan.view_from(pose, 8.0, 720, scan=near, pair_distance=0.5)
+    with pytest.raises(ValueError, match="pass scan= and ranges=False"):
+        plan.view_from(pose, 8.0, 720, ranges=False, pair_distance=0.5)
+    with pytest.raises(ValueError, match="pair_distance must be a positive"):
+        plan.view_from(pose, 8.0, 720, scan=near, ranges=False, pair_distance=0.0)
     with pytest.raises(ValueError, match="was cast from"):
         localize(scan, plan, (5.5, 1.0, 0.0), config, view=view)
     with pytest.raises(TypeError, match="view must be a planicp.WallView"):

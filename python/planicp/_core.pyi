@@ -25,6 +25,7 @@ __all__ = [
     "__version__",
     "_panic_for_tests",
     "align",
+    "largest_pair_distance",
     "relocalize",
     "visibility_range",
 ]
@@ -69,6 +70,7 @@ class PointMap:
         directions: int,
         scan: NDArray[np.float64] | None = None,
         ranges: bool = True,
+        pair_distance: float | None = None,
     ) -> WallView: ...
 
 @final
@@ -215,6 +217,7 @@ def align(
     view: WallView | None = None,
 ) -> Alignment: ...
 def visibility_range(scan: NDArray[np.float64], settings: IcpSettings) -> float: ...
+def largest_pair_distance(settings: IcpSettings) -> float: ...
 def _panic_for_tests() -> None: ...
 
 class _SearchFields(Protocol):

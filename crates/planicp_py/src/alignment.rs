@@ -160,6 +160,14 @@ pub(crate) fn align(
     Ok(Alignment { inner })
 }
 
+/// The farthest (metres) a scan point and a plan point can be apart and still be paired by an
+/// alignment with `settings`: the largest schedule factor (at least 1) times
+/// `max_correspondence_distance`.
+#[pyfunction]
+pub(crate) fn largest_pair_distance(settings: &IcpSettings) -> f64 {
+    icp_core::icp::largest_pair_distance(&settings.inner)
+}
+
 /// The range (metres) an alignment with `settings` casts its visibility to for `scan` (N, 2,
 /// robot frame): the farthest scan point plus the largest stage distance, or the settings' own.
 #[pyfunction]

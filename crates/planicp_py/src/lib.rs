@@ -43,6 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(global_search::relocalize, m)?)?;
     m.add_function(wrap_pyfunction!(alignment::align, m)?)?;
     m.add_function(wrap_pyfunction!(alignment::visibility_range, m)?)?;
+    m.add_function(wrap_pyfunction!(alignment::largest_pair_distance, m)?)?;
     m.add_function(wrap_pyfunction!(errors::_panic_for_tests, m)?)?;
     Ok(())
 }

@@ -4,6 +4,7 @@
 use crate::conversions::{count_arg, points_from, points_to_array, BoolPair};
 use crate::errors::{guarded, PlanicpError};
 use crate::interrupt::interruptible;
+use icp_core::visibility::wall_view::ViewScan;
 use icp_core::{PointMap, Pose2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -81,8 +82,9 @@ impl PyPointMap {
 
     /// The plan as seen from pose (x, y, yaw), within max_range metres, in `directions` evenly
     /// spaced directions: one ray cast for the visible points and each direction's wall range;
-    /// with `scan` (N, 2, base frame), only over the arc its returns span.
-    #[pyo3(signature = (pose, max_range, directions, scan=None, ranges=true))]
+    /// with `scan` (N, 2, base frame), only over the arc its returns span, and with
+    /// `pair_distance` (metres; only without ranges) only as far as its returns can pair.
+    #[pyo3(signature = (pose, max_range, directions, scan=None, ranges=true, pair_distance=None))]
     #[allow(clippy::too_many_arguments)]
     fn view_from(
         &self,
@@ -92,13 +94,23 @@ impl PyPointMap {
         directions: &Bound<'_, PyAny>,
         scan: Option<PyReadonlyArray2<'_, f64>>,
         ranges: bool,
+        pair_distance: Option<f64>,
     ) -> PyResult<WallView> {
         let directions = count_arg("directions", directions)?;
         let scan = scan.map(|s| points_from("scan", &s)).transpose()?;
+        if pair_distance.is_some() && scan.is_none() {
+            return Err(PlanicpError::new_err(
+                "pair_distance limits a cast to what a scan's returns can pair with: pass the scan too",
+            ));
+        }
         let map = Arc::clone(&self.inner);
         let pose = Pose2 { x: pose.0, y: pose.1, yaw: pose.2 };
-        let view =
-            py.detach(|| guarded(|| map.view_from(pose, max_range, directions, scan.as_deref(), ranges)))?;
+        let view = py.detach(|| {
+            guarded(|| {
+                let scan = scan.as_deref().map(|returns| ViewScan { returns, pair_distance });
+                map.view_from(pose, max_range, directions, scan, ranges)
+            })
+        })?;
         Ok(WallView { inner: Arc::new(view) })
     }
 }

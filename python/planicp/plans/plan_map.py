@@ -377,7 +377,13 @@ class PlanMap:
         return self._points[self.visible_indices(pose, max_range)]
 
     def view_from(
-        self, pose: Any, max_range: float = 30.0, directions: int = 1440, scan: Any = None, ranges: bool = True
+        self,
+        pose: Any,
+        max_range: float = 30.0,
+        directions: int = 1440,
+        scan: Any = None,
+        ranges: bool = True,
+        pair_distance: float | None = None,
     ) -> _core.WallView:
         """What a LIDAR at `pose` sees of the plan, in one ray cast: the visible wall points (as
         `visible_indices`) and, in `directions` evenly spaced directions, the range to the wall
@@ -396,6 +402,12 @@ class PlanMap:
                 scan casts 80 % of the circle).
             ranges: False casts only what the visible points need (no halfway directions, no
                 ranges): `ranges` is then empty and `classify` refuses.
+            pair_distance: metres, with `scan` and `ranges=False` only: how far from a return a
+                wall point can be paired with it (`IcpConfig`'s largest stage distance,
+                `planicp._core.largest_pair_distance`). Each direction is then cast only as far
+                as a return could pair with a wall there: the farthest return within
+                `asin(pair_distance / range)` of it, widened by the arc's 10 degrees, plus
+                `pair_distance`. The visible points are those an alignment of the scan can use.
 
         Returns:
             A `planicp.WallView`: `visible_indices`, `ranges` (metres, to about one raster
@@ -404,12 +416,20 @@ class PlanMap:
         """
         x, y, yaw = as_pose(pose, "pose")
         points = None if scan is None else as_points(scan, "scan", allow_empty=True)
+        if pair_distance is not None:
+            if points is None or ranges:
+                raise ValueError(
+                    "pair_distance limits the visible points of a cast for a scan: pass scan= and ranges=False "
+                    "(the ranges of a cast stop at the walls, however far)"
+                )
+            pair_distance = positive(pair_distance, "pair_distance", "metres")
         return self._native.view_from(
             (x, y, yaw),
             positive(max_range, "max_range", "metres"),
             whole_number(directions, "directions", 8, 1 << 20),
             points,
             bool(ranges),
+            pair_distance,
         )
 
     def __len__(self) -> int:

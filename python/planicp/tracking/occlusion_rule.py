@@ -67,10 +67,20 @@ class OcclusionFilter:
 
     def view(self, points: NDArray[np.float64], pose: Pose, config: IcpConfig) -> _core.WallView:
         """The plan as seen from `pose` (T_map_base) over the arc the base-frame `points` span
-        (see `PlanMap.view_from`), far enough to align them with `config`: its visible points
-        serve `localize(..., view=...)` for the KD-tree search."""
-        reach = _core.visibility_range(points, config._native) if len(points) else 1.0
-        return self._plan._native.view_from((pose[0], pose[1], pose[2]), reach, self.rule.beams, points, False)
+        (see `PlanMap.view_from`), in each direction as far as one of them could pair with a wall
+        when aligned with `config`: its visible points serve `localize(..., view=...)` for the
+        KD-tree search."""
+        if not len(points):
+            return self._plan._native.view_from((pose[0], pose[1], pose[2]), 1.0, self.rule.beams, points, False)
+        native = config._native
+        return self._plan._native.view_from(
+            (pose[0], pose[1], pose[2]),
+            _core.visibility_range(points, native),
+            self.rule.beams,
+            points,
+            False,
+            _core.largest_pair_distance(native),
+        )
 
     def in_front(self, points: NDArray[np.float64], pose: Pose) -> NDArray[np.bool_]:
         """(N,) bool: which base-frame `points` lie more than `margin` short of the plan's wall in

@@ -11,14 +11,22 @@ pub fn visibility_range(scan: &[[f64; 2]], config: &IcpConfig) -> f64 {
     let range = match config.visibility_range {
         Some(r) => r,
         None => {
-            let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
             let farthest = scan.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
-            farthest + largest_factor * config.max_correspondence_distance
+            farthest + largest_pair_distance(config)
         }
     };
     // A huge correspondence distance can make the sum overflow; nothing lies beyond a few times
     // the coordinate limit anyway (found by the fuzz target).
     range.min(4.0 * crate::error::MAX_COORDINATE)
+}
+
+/// The farthest a scan point and a plan point can be apart and still be paired by an alignment
+/// with `config` (metres): the largest schedule factor (at least 1) times
+/// `max_correspondence_distance`; no stage rejects farther (the spacing floor of
+/// [`stage_distance`] never exceeds `max_correspondence_distance`).
+pub fn largest_pair_distance(config: &IcpConfig) -> f64 {
+    let largest_factor = config.correspondence_schedule.iter().copied().fold(1.0, f64::max);
+    largest_factor * config.max_correspondence_distance
 }
 
 /// A stage's rejection distance: `factor * max_distance`, but never below `SPACING_FLOOR` plan

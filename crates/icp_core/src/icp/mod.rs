@@ -23,4 +23,4 @@ pub mod termination;
 pub mod visible_through_index;
 
 pub use alignment::{align, IcpResult};
-pub use icp_config::{visibility_range, CorrespondenceSearch, IcpConfig};
+pub use icp_config::{largest_pair_distance, visibility_range, CorrespondenceSearch, IcpConfig};

@@ -10,7 +10,7 @@ use crate::maps::wall_normals::estimate_normals;
 use crate::pose::Pose2;
 use crate::visibility::visible_points::visible_points;
 use crate::visibility::wall_facing::visibility_masks;
-use crate::visibility::wall_view::WallView;
+use crate::visibility::wall_view::{ViewScan, WallView};
 use std::sync::{Mutex, OnceLock};
 
 /// Largest number of points a map may hold (indices are `u32`).
@@ -248,13 +248,14 @@ impl PointMap {
 
     /// The plan as seen from `pose` (`T_map_base`) within `max_range` metres: the visible points and
     /// the range to the first wall in `directions` evenly spaced directions, over the arc `scan`
-    /// spans when given; only the visible points without `with_ranges`. See [`WallView::cast`].
+    /// spans when given (and only as far as its returns can pair, with its pair distance); only
+    /// the visible points without `with_ranges`. See [`WallView::cast`].
     pub fn view_from(
         &self,
         pose: Pose2,
         max_range: f64,
         directions: usize,
-        scan: Option<&[[f64; 2]]>,
+        scan: Option<ViewScan<'_>>,
         with_ranges: bool,
     ) -> Result<WallView> {
         WallView::cast(&self.raster, &self.points, pose, max_range, directions, scan, with_ranges)

@@ -32,7 +32,7 @@ pub const MAX_REFINEMENT_DEPTH: u32 = 6;
 pub fn visible_points(raster: &WallRaster, position: [f64; 2], max_range: f64) -> Result<Vec<u32>> {
     check_cast(position, max_range)?;
     let mut hit_cells = Vec::new();
-    visible_cells(raster, position, max_range, RayFan::circle(0.0, BASE_RAYS), &mut hit_cells, None);
+    visible_cells(raster, position, max_range, RayFan::circle(0.0, BASE_RAYS), &mut hit_cells, None, None);
     Ok(raster.points_in_cells(&hit_cells))
 }
 
@@ -60,6 +60,28 @@ pub struct RayFan {
     pub span: usize,
 }
 
+/// How far rays are cast in each direction (metres), by map angle: `reach[j]` for the angles in
+/// `[first_angle + j w, first_angle + (j + 1) w)`, `w = TAU / reach.len()`, all within the cast's
+/// own range.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DirectionalReach {
+    /// Map angle where bin 0 starts, radians.
+    pub first_angle: f64,
+    /// Metres per bin.
+    pub reach: Vec<f64>,
+}
+
+impl DirectionalReach {
+    /// The reach at map angle `angle`, metres.
+    #[inline]
+    pub fn at(&self, angle: f64) -> f64 {
+        let n = self.reach.len();
+        let turns = (angle - self.first_angle) / TAU;
+        let j = ((turns - turns.floor()) * n as f64) as usize;
+        self.reach[j.min(n - 1)]
+    }
+}
+
 impl RayFan {
     /// The full circle of `rays` base rays from `first_angle`.
     pub fn circle(first_angle: f64, rays: usize) -> Self {
@@ -83,6 +105,7 @@ pub fn visible_cells(
     fan: RayFan,
     out: &mut Vec<usize>,
     ranges: Option<RangeOutput<'_>>,
+    reach: Option<&DirectionalReach>,
 ) {
     out.clear();
     let res = raster.resolution();
@@ -120,7 +143,13 @@ pub fn visible_cells(
         };
         Ray { angle, dir, hit: None }
     };
-    let cast = |ray: Ray| Ray { hit: caster.cast(ray.dir), ..ray };
+    let cast = |ray: Ray| {
+        let hit = match reach {
+            None => caster.cast(ray.dir),
+            Some(reach) => caster.cast_within(ray.dir, reach.at(ray.angle) / res),
+        };
+        Ray { hit, ..ray }
+    };
     let first = cast(base(0, &Ray { angle: 0.0, dir: (1.0, 0.0), hit: None }));
     let mut previous = first;
     let mut previous_range = ranges.as_mut().map_or(f64::NAN, |(_, surface)| surface.range(&first));

@@ -17,7 +17,7 @@ use crate::error::{invalid, Result};
 use crate::grids::ray_casting::{cast_ranges, LidarModel, OccupancyRaster};
 use crate::grids::wall_raster::WallRaster;
 use crate::pose::Pose2;
-use crate::visibility::visible_points::{check_cast, visible_cells, RangeOutput, RayFan};
+use crate::visibility::visible_points::{check_cast, visible_cells, DirectionalReach, RangeOutput, RayFan};
 use std::f64::consts::{PI, TAU};
 
 /// How far (radians) a view cast for a scan reaches beyond the directions the scan's returns span:
@@ -55,23 +55,40 @@ pub struct ReturnClasses {
     pub beyond: Vec<bool>,
 }
 
+/// The scan a [`WallView`] is cast for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewScan<'a> {
+    /// The scan's returns, base frame, metres: the cast covers the arc they span.
+    pub returns: &'a [[f64; 2]],
+    /// How far from a return a wall point can be paired with it (metres; see
+    /// [`crate::icp::largest_pair_distance`]): when given, each direction is cast only as far as
+    /// a return could pair with a wall there. `None`: every direction to the cast's range.
+    pub pair_distance: Option<f64>,
+}
+
 impl WallView {
     /// Casts the view from `pose` (`T_map_base`) through `raster`, built from the wall `points`,
-    /// within `max_range` metres. With `scan` (base-frame returns), only the directions the
-    /// returns span, widened by [`ARC_MARGIN`] on either side, are cast: the visible points are
-    /// those seen in that arc, and the other directions' ranges are NaN (a return there is neither
-    /// in front nor beyond). A 270-degree scan casts 80 % of the circle. Without `with_ranges`
-    /// only the visible points are cast (the base rays and their refinement): `ranges` is empty.
+    /// within `max_range` metres. With `scan`, only the directions its returns span, widened by
+    /// [`ARC_MARGIN`] on either side, are cast: the visible points are those seen in that arc, and
+    /// the other directions' ranges are NaN (a return there is neither in front nor beyond). A
+    /// 270-degree scan casts 80 % of the circle. With the scan's `pair_distance` too (only for a
+    /// cast without ranges), each direction is cast only as far as a return could pair with a
+    /// wall point there (see `directional_reach`): a wall no return can reach is no alignment's
+    /// partner, and on a plan seen out to 80 m, past trees and posts, most of the rays' length
+    /// and refinement is spared. Without `with_ranges` only the visible points are cast (the base
+    /// rays and their refinement): `ranges` is empty.
     ///
     /// Errors: a pose that is not finite, a range that is not positive and finite, a number of
-    /// directions outside [[`MIN_DIRECTIONS`], [`MAX_DIRECTIONS`]].
+    /// directions outside [[`MIN_DIRECTIONS`], [`MAX_DIRECTIONS`]], a pair distance that is not
+    /// positive and finite, or one given for a cast with ranges (its ranges would stop short of
+    /// the walls).
     pub fn cast(
         raster: &WallRaster,
         points: &[[f64; 2]],
         pose: Pose2,
         max_range: f64,
         directions: usize,
-        scan: Option<&[[f64; 2]]>,
+        scan: Option<ViewScan<'_>>,
         with_ranges: bool,
     ) -> Result<Self> {
         check_cast([pose.x, pose.y], max_range)?;
@@ -81,16 +98,31 @@ impl WallView {
         if !(MIN_DIRECTIONS..=MAX_DIRECTIONS).contains(&directions) {
             return Err(invalid("directions", directions, "must be between 8 and 2^20"));
         }
-        let ScanFan { fan, every, first_direction, arc } = ScanFan::new(pose, directions, scan);
+        let pair_distance = scan.and_then(|s| s.pair_distance);
+        if let Some(d) = pair_distance {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(invalid("pair_distance", d, "must be a positive finite number of metres"));
+            }
+            if with_ranges {
+                return Err(invalid(
+                    "pair_distance",
+                    d,
+                    "limits a cast without ranges only: cast the ranges without it",
+                ));
+            }
+        }
+        let returns = scan.map(|s| s.returns);
+        let ScanFan { fan, every, first_direction, arc } = ScanFan::new(pose, directions, returns);
         let (n, span) = (directions, fan.span);
         let mut cells = Vec::new();
         if !with_ranges {
-            visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, None);
+            let reach = returns.zip(pair_distance).map(|(r, d)| directional_reach(r, pose, max_range, d));
+            visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, None, reach.as_ref());
             return Ok(Self { pose, visible: raster.points_in_cells(&cells), ranges: Vec::new() });
         }
         let mut cast = Vec::with_capacity(2 * span + 1);
         let output = RangeOutput { ranges: &mut cast, points };
-        visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(output));
+        visible_cells(raster, [pose.x, pose.y], max_range, fan, &mut cells, Some(output), None);
         let ranges = if !arc {
             cast.into_iter().step_by(every).collect()
         } else {
@@ -296,6 +328,42 @@ fn spanned_arc(scan: &[[f64; 2]], n: usize, margin: usize) -> Option<(usize, usi
     }
     // The arc starts at the used direction after the widest gap, less the margin.
     Some(((widest_end + n - margin % n) % n, count))
+}
+
+/// Bins of a cast's reach over the full circle (a quarter of a degree each).
+const REACH_BINS: usize = 1440;
+
+/// How far a cast for `scan` (base frame, metres) from `pose` reaches in each direction: the
+/// farthest range plus `pair_distance` of the returns that could pair with a wall point in that
+/// direction, within `max_range`. A return at range `rho` pairs with wall points up to
+/// `pair_distance` from it, which lie within `asin(pair_distance / rho)` of its bearing (any
+/// bearing when `rho <= pair_distance`), and the alignment may still turn it by [`ARC_MARGIN`]
+/// (the margin the arc of the cast takes for the same reason). A direction no return can pair in
+/// reaches nowhere.
+fn directional_reach(scan: &[[f64; 2]], pose: Pose2, max_range: f64, pair_distance: f64) -> DirectionalReach {
+    let n = REACH_BINS;
+    let bin = TAU / n as f64;
+    let mut reach = vec![0.0f64; n];
+    for p in scan {
+        let rho = p[0].hypot(p[1]);
+        if !rho.is_finite() {
+            continue;
+        }
+        let far = (rho + pair_distance).min(max_range);
+        let half = if rho <= pair_distance { PI } else { (pair_distance / rho).asin() } + ARC_MARGIN;
+        if half >= PI {
+            reach.iter_mut().for_each(|r| *r = r.max(far));
+            continue;
+        }
+        // Bin j holds base bearings [-pi + j bin, -pi + (j + 1) bin).
+        let centre = (bearing(p[1], p[0]) + PI) / bin;
+        let (lo, hi) = ((centre - half / bin).floor() as i64, (centre + half / bin).floor() as i64);
+        for j in lo..=hi {
+            let k = j.rem_euclid(n as i64) as usize;
+            reach[k] = reach[k].max(far);
+        }
+    }
+    DirectionalReach { first_angle: pose.yaw - PI, reach }
 }
 
 #[cfg(test)]

@@ -51,15 +51,22 @@ impl RayCaster<'_> {
     /// start cell when the position is inside the raster, from the cell where the ray enters it
     /// otherwise.
     #[inline]
-    pub(super) fn cast(&self, (dx, dy): (f64, f64)) -> Hit {
+    pub(super) fn cast(&self, dir: (f64, f64)) -> Hit {
+        self.cast_within(dir, self.max_t)
+    }
+
+    /// As [`Self::cast`], within `max_t` cells (at most the caster's own).
+    #[inline]
+    pub(super) fn cast_within(&self, (dx, dy): (f64, f64), max_t: f64) -> Hit {
+        let max_t = max_t.min(self.max_t);
         let (cols, rows) = (self.shape.0 as f64, self.shape.1 as f64);
         let (ox, oy) = self.origin;
         if (0.0..cols).contains(&ox) && (0.0..rows).contains(&oy) {
             let start = (ox.floor() as i64, oy.floor() as i64);
-            return first_wall_cell(self.raster, self.origin, start, (dx, dy), self.max_t, self.shape);
+            return first_wall_cell(self.raster, self.origin, start, (dx, dy), max_t, self.shape);
         }
         // Outside: clip the ray to the raster's box (slab method) and start where it enters.
-        let (mut t_in, mut t_out) = (0.0f64, self.max_t);
+        let (mut t_in, mut t_out) = (0.0f64, max_t);
         for (o, d, size) in [(ox, dx, cols), (oy, dy, rows)] {
             if d == 0.0 {
                 if !(0.0..size).contains(&o) {
@@ -82,7 +89,7 @@ impl RayCaster<'_> {
         if self.raster.is_wall(cell.0, cell.1) {
             return Some(Stop { cell, came_from: None });
         }
-        first_wall_cell(self.raster, entry, cell, (dx, dy), self.max_t - t_in, self.shape)
+        first_wall_cell(self.raster, entry, cell, (dx, dy), max_t - t_in, self.shape)
     }
 }
 

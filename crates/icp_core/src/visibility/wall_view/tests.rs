@@ -169,7 +169,16 @@ fn a_view_over_the_scan_arc_classifies_as_the_full_circle() {
             [r * a.cos(), r * a.sin()]
         })
         .collect();
-    let arc = WallView::cast(&raster, &pts, pose, 10.0, 1440, Some(&scan), true).unwrap();
+    let arc = WallView::cast(
+        &raster,
+        &pts,
+        pose,
+        10.0,
+        1440,
+        Some(ViewScan { returns: &scan, pair_distance: None }),
+        true,
+    )
+    .unwrap();
     assert_eq!(arc.ranges.len(), 1440);
     let cast = arc.ranges.iter().filter(|r| !r.is_nan()).count();
     assert!(cast < 1440 * 6 / 10, "{cast} directions cast for a half circle");
@@ -206,4 +215,74 @@ fn bad_casts_are_refused() {
     );
     assert!(WallView::cast(&raster, &pts, Pose2 { x: 1.0, y: 1.0, yaw: f64::INFINITY }, 5.0, 16, None, true)
         .is_err());
+}
+
+/// The room with a wall 8 m beyond its doorway (x = 12, y in [-2, 6]), seen through it.
+fn room_and_far_wall() -> (Vec<[f64; 2]>, WallRaster) {
+    let (mut pts, _) = room();
+    pts.extend((0..=160).map(|i| [12.0, -2.0 + 0.05 * i as f64]));
+    let raster = WallRaster::new(&pts, 0.075).unwrap();
+    (pts, raster)
+}
+
+#[test]
+fn a_view_for_a_scan_reaches_only_as_far_as_its_returns_can_pair() {
+    let (pts, raster) = room_and_far_wall();
+    let pose = Pose2::new(1.0, 2.0, 0.0);
+    let pair = 0.5;
+    // Returns on the room's walls ahead and to the sides (base frame = map frame shifted by the
+    // pose), none through the doorway.
+    let mut scan: Vec<[f64; 2]> = Vec::new();
+    for i in 0..=40 {
+        let y = 0.1 * i as f64;
+        if !(1.4..=2.6).contains(&y) {
+            scan.push([3.0, y - 2.0]);
+        }
+    }
+    scan.extend((0..=30).map(|i| [0.1 * i as f64, -2.0]));
+    scan.extend((0..=30).map(|i| [0.1 * i as f64, 2.0]));
+    let cast = |scan: &[[f64; 2]], pair_distance| {
+        WallView::cast(
+            &raster,
+            &pts,
+            pose,
+            15.0,
+            1440,
+            Some(ViewScan { returns: scan, pair_distance }),
+            false,
+        )
+        .unwrap()
+    };
+    let far = |view: &WallView| view.visible.iter().filter(|&&i| pts[i as usize][0] > 11.0).count();
+    let full = cast(&scan, None);
+    let reached = cast(&scan, Some(pair));
+    assert!(far(&full) > 10, "the far wall is seen through the doorway");
+    assert_eq!(far(&reached), 0, "no return can pair with the far wall");
+    // Every point the full cast sees within the pair distance of a return (at the pose) is seen.
+    let near_a_return =
+        |p: [f64; 2]| scan.iter().any(|q| (q[0] + pose.x - p[0]).hypot(q[1] + pose.y - p[1]) <= pair);
+    for &i in &full.visible {
+        if near_a_return(pts[i as usize]) {
+            assert!(reached.visible.binary_search(&i).is_ok(), "point {:?} lost", pts[i as usize]);
+        }
+    }
+    // A return on the far wall, through the doorway: the wall near it is seen, not all of it.
+    scan.push([11.0, 0.0]);
+    let through = cast(&scan, Some(pair));
+    let seen: Vec<[f64; 2]> =
+        through.visible.iter().map(|&i| pts[i as usize]).filter(|p| p[0] > 11.0).collect();
+    assert!(!seen.is_empty() && seen.iter().all(|p| (p[1] - 2.0).abs() < 2.5), "{seen:?}");
+    assert!(seen.len() <= far(&full));
+}
+
+#[test]
+fn a_pair_distance_is_refused_for_a_cast_with_ranges_or_without_a_positive_value() {
+    let (pts, raster) = room();
+    let pose = Pose2::new(1.0, 2.0, 0.0);
+    let scan = [[1.0, 0.0]];
+    for (pair_distance, with_ranges) in [(0.5, true), (0.0, false), (f64::NAN, false), (-1.0, false)] {
+        let view = ViewScan { returns: &scan, pair_distance: Some(pair_distance) };
+        let err = WallView::cast(&raster, &pts, pose, 10.0, 1440, Some(view), with_ranges).unwrap_err();
+        assert!(err.to_string().contains("pair_distance"), "{err}");
+    }
 }
