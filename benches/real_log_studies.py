@@ -6,6 +6,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py seeds        # the Localizer over other draws of the odometry
     python benches/real_log_studies.py nees         # how honest Estimate.covariance is on real logs
     python benches/real_log_studies.py alignments   # one alignment: ray-cast view against the index's masks
+    python benches/real_log_studies.py views        # tracking's view cast, to the scan's range or per direction
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -21,7 +22,12 @@ the chi-square's, 2.366 (the reference poses' own error counts as the estimator'
 by a normal error (0.15 m per axis, 2.3 degrees; the size of a search candidate's or a followed
 place's error) with the `Localizer`'s settings, once through the view ray cast from the guess (the
 KD-tree search) and once through the nearest-wall index's visibility masks (no cast), and gives the
-time per alignment and the share of fits left more than 0.3 m off.
+time per alignment and the share of fits left more than 0.3 m off. `views` casts the view a
+tracking update casts (`OcclusionFilter.view`: the scan's arc, its visible points only) from the
+reference pose of every 10th tracked scan, once out to the scan's farthest return plus the largest
+stage distance in every direction and once only as far as a return could pair in each direction
+(`pair_distance`), and gives the median time and the visible points of each; then it times making
+a `Localizer` on a fresh copy of the plan (its nearest-wall index and occlusion grid).
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -220,9 +226,38 @@ def alignments_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
+def views_study(harness: Any, logs: list[str], out: str) -> None:
+    from planicp import _core
+
+    print("| log | cast | ms per view (median) | visible points (mean) | making the Localizer, s |")
+    print("|---|---|---|---|---|")
+    config = IcpConfig.for_tracking()
+    pair = _core.largest_pair_distance(config._native)
+    for name in logs:
+        plan, scans, ref, _ = load(harness, name, out)
+        start = time.perf_counter()
+        Localizer(PlanMap.from_ros_map(plan.yaml_path, cache=False), tuple(map(float, ref[0])))
+        made = time.perf_counter() - start
+        pm = PlanMap.from_ros_map(plan.yaml_path)
+        for label, reach in (("to the scan's range", None), ("per direction (default)", pair)):
+            spent, visible = [], []
+            for k in range(0, len(scans), 10):
+                points = np.ascontiguousarray(scans[k])
+                pose = tuple(map(float, ref[k]))
+                start = time.perf_counter()
+                view = pm.view_from(pose, _core.visibility_range(points, config._native), 1440, points, False, reach)
+                spent.append(time.perf_counter() - start)
+                visible.append(len(view.visible_indices))
+            print(
+                f"| {name} | {label} | {1e3 * np.median(spent):.2f} | {np.mean(visible):.0f} | "
+                f"{f'{made:.2f}' if reach is not None else ''} |",
+                flush=True,
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments"))
+    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments", "views"))
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
@@ -242,6 +277,8 @@ def main() -> None:
             nees_study(harness, args.logs, out)
         elif args.study == "alignments":
             alignments_study(harness, args.logs, out)
+        elif args.study == "views":
+            views_study(harness, args.logs, out)
         else:
             (search_study if args.study == "search" else visibility_study)(harness, args.logs, out)
 
