@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, se2
+from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, localize, se2
 from planicp import sim as syn
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig
@@ -441,6 +441,40 @@ def test_returns_through_walls_are_judged_against_what_sound_tracking_showed(
     assert not recovery._contradicted(through(0.3), path[20])
     assert recovery._contradicted(through(0.6), path[20])
     recovery.beyond_shares.clear()
+
+
+def test_returns_through_walls_are_weighed_over_the_scans_that_confirm_a_place(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A followed place is dropped when the scans it has explained show, on average, more returns
+    beyond its walls than the limit: one scan through whose walls many returns pass does not drop a
+    place that the scans before showed none through (in a SLAM map beams pass sparse cells at the
+    true place by an amount that varies from scan to scan), a second one in a row does."""
+    from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
+    from planicp.tracking.recovery import Hypothesis
+
+    recovery = Recovery(
+        plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate(), OcclusionFilter(plan, OcclusionRule())
+    )
+    assert recovery.beyond_limit == pytest.approx(0.15)
+    scan = scans[21]
+    ranges = np.hypot(scan[:, 0], scan[:, 1])[:, None]
+    through = scan.copy()
+    n = int(0.35 * len(scan))
+    through[:n] *= (ranges[:n] + 2.0) / ranges[:n]
+    motion = se2.between(path[20], path[21])
+    assert recovery._beyond_share(scan, path[21]) < 0.02
+    spike = recovery._beyond_share(through, path[21])
+    assert 0.18 < spike < 0.4
+    fit = localize(scans[20], plan, path[20], recovery.icp)
+    # Two scans with no return through its walls, then one with a fifth or more of them: kept.
+    clean = Hypothesis(path[20], fit, 2, 2 * fit.inlier_ratio, True, 0.0)
+    followed = recovery._follow(clean, through, motion)
+    assert followed is not None and followed.streak == 3
+    assert followed.mean_beyond == pytest.approx(spike / 3, abs=0.01)
+    # A place found with as many of its scan's returns through its walls, and the same again: dropped.
+    contradicted = Hypothesis(path[20], fit, 1, fit.inlier_ratio, True, spike)
+    assert recovery._follow(contradicted, through, motion) is None
 
 
 def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked(plan: PlanMap) -> None:
