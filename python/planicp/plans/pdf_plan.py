@@ -40,7 +40,16 @@ from .._validation import one_line, positive
 from .plan_formats import missing_extra
 from .print_scale import find_print_scale, parse_print_scale
 
-__all__ = ["DARK_CHANNEL", "POINT_METRES", "PdfWalls", "StrokeClass", "pdf_raster", "pdf_scale", "pdf_walls"]
+__all__ = [
+    "DARK_CHANNEL",
+    "POINT_METRES",
+    "PdfWalls",
+    "StrokeClass",
+    "pdf_raster",
+    "pdf_scale",
+    "pdf_stroke_classes",
+    "pdf_walls",
+]
 
 POINT_METRES = 0.0254 / 72.0
 """One PDF point (1/72 inch) on paper, metres."""
@@ -389,6 +398,20 @@ def pdf_walls(
     keep = np.hypot(*(segments[:, 1] - segments[:, 0]).T) > 0.0
     segments = np.ascontiguousarray(segments[keep] if keep.any() else segments[:1])
     return PdfWalls(segments, metres, source, tuple(chosen), tuple(classes), all_layers)
+
+
+def pdf_stroke_classes(path: str | PathLike[str], *, page: int = 1) -> tuple[list[StrokeClass], list[str]]:
+    """The stroke classes of a PDF page, longest first, and its layers (optional content groups):
+    what `pdf_walls` chooses from (`planicp plan FILE --list-layers`)."""
+    file = Path(path)
+    _require_pdf(file)
+    try:
+        paths, _ = _read_paths(file, page - 1)
+    except (ValueError, ImportError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - as in pdf_walls
+        raise ValueError(f"PDF file {str(file)!r} could not be read as PDF: {one_line(str(exc))}") from None
+    return _classes(paths)[1], sorted({p.layer for p in paths if p.layer})
 
 
 def pdf_scale(

@@ -17,7 +17,7 @@ __all__ = ["EXTRAS", "missing_extra", "plan_format", "unsupported_format"]
 EXTRAS: dict[str, tuple[str, tuple[str, ...]]] = {
     # format -> (the optional extra that reads it, the importable modules it installs)
     "dxf": ("cad", ("ezdxf",)),
-    "pdf": ("pdf", ("pdfplumber", "pypdfium2")),
+    "pdf": ("pdf", ("pdfminer", "pypdfium2")),
     "svg": ("svg", ("svgelements",)),
 }
 """The optional extra each drawing format needs (IFC needs none: planicp reads it itself)."""

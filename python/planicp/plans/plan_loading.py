@@ -227,3 +227,51 @@ def _ifc_plan(path: Path, storey: str | int | None, cut_height: float, spacing: 
     walls = ifc_walls(path, storey=storey, cut_height=cut_height)
     plan = _segments_plan(walls.segments, spacing, f"IFC file {str(path)!r}")
     return LoadedPlan(plan, "ifc", walls.notes)
+
+
+def plan_layers(source: str | Path, *, page: int = 1) -> list[str]:
+    """What a drawing's walls can be chosen by, one line each (`planicp plan FILE --list-layers`):
+    a DXF's layers with their state and entity counts, a PDF page's layers and stroke classes, an
+    SVG's classes and layers with their shape counts, an IFC model's storeys.
+
+    Raises:
+        FileNotFoundError: no such file. ImportError: the format's extra is missing.
+        ValueError: a format without layers (images, maps), or a file the reader rejects.
+    """
+    path = Path(source)
+    if not path.exists():
+        raise FileNotFoundError(f"plan {path} does not exist")
+    kind = plan_format(path)
+    refusal = unsupported_format(kind, path)
+    if refusal is not None:
+        raise ValueError(refusal)
+    missing = missing_extra(kind, path)
+    if missing is not None:
+        raise ImportError(missing)
+    if kind == "dxf":
+        from .dxf_plan import dxf_layers
+
+        return [
+            f"{layer.name}: {layer.state}; {', '.join(f'{n} {t}' for t, n in layer.entities.items()) or 'empty'}"
+            + ("" if layer.read_by_default else " (not read unless named with --layer)")
+            for layer in dxf_layers(path)
+        ]
+    if kind == "pdf":
+        from .pdf_plan import pdf_stroke_classes
+
+        classes, layers = pdf_stroke_classes(path, page=page)
+        lines = [f"layer {layer}" for layer in layers]
+        walls = next((c for c in classes if c.dark), None)
+        return lines + [f"{c.describe()}{' <- walls by default' if c is walls else ''}" for c in classes]
+    if kind == "svg":
+        from .svg_plan import svg_names
+
+        return [f"{name}: {n} shapes" for name, n in svg_names(path)]
+    if kind == "ifc":
+        from .ifc_plan import ifc_storeys
+
+        return [
+            f"storey {i + 1}: {s.name!r} at {s.elevation:.2f} m, {s.walls} walls"
+            for i, s in enumerate(ifc_storeys(path))
+        ]
+    raise ValueError(f"plan {path} is a {kind.replace('_', ' ')}, which has no layers: --list-layers is for drawings")

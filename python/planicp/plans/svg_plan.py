@@ -44,7 +44,7 @@ from .plan_formats import missing_extra
 from .print_scale import parse_print_scale
 from .region_outline import region_outline
 
-__all__ = ["SvgWalls", "svg_walls"]
+__all__ = ["SvgWalls", "svg_names", "svg_walls"]
 
 PIXEL_METRES = 0.0254 / 96.0
 """One SVG (CSS) pixel on paper, metres."""
@@ -273,6 +273,28 @@ def svg_walls(
         + (f"; {len(holes)} door and window areas taken away from the wall areas" if holes else ""),
     )
     return SvgWalls(segments, metres, selected, (len(chosen), len(shapes)), notes)
+
+
+def svg_names(path: str | PathLike[str]) -> list[tuple[str, int]]:
+    """The classes ("class Wall"), and layers ("layer Walls") of an SVG drawing's shapes with how
+    many shapes each covers: what `svg_walls` can select (`planicp plan FILE --list-layers`)."""
+    file = Path(path)
+    message = missing_extra("svg", file)
+    if message is not None:
+        raise ImportError(message)
+    from svgelements import SVG  # type: ignore[import-untyped,unused-ignore]
+
+    try:
+        shapes = list(_walk(SVG.parse(str(file), reify=True), frozenset(), "", frozenset()))
+    except Exception as exc:  # noqa: BLE001 - as in svg_walls
+        raise ValueError(f"SVG file {str(file)!r} could not be read as SVG: {one_line(str(exc))}") from None
+    counts: dict[str, int] = {}
+    for s in shapes:
+        for c in s.classes:
+            counts[f"class {c}"] = counts.get(f"class {c}", 0) + 1
+        for layer in s.layers:
+            counts[f"layer {layer}"] = counts.get(f"layer {layer}", 0) + 1
+    return sorted(counts.items())
 
 
 def _dominant_dark(shapes: list[_Shape]) -> tuple[list[_Shape], str]:
