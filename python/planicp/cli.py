@@ -306,7 +306,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--scale", default=None, help="print scale of a PDF or SVG: '1:100', '1\"=24\\'' (default: the PDF's own)"
     )
     plan.add_argument("--page", type=int, default=1, help="page of a PDF, from 1")
-    plan.add_argument("--raster", action="store_true", help="read a PDF page as an image (a scanned drawing)")
+    plan.add_argument(
+        "--raster",
+        type=float,
+        nargs="?",
+        const=0.025,
+        default=False,
+        metavar="M_PER_PX",
+        help="read a PDF page as an image (a scanned drawing), rendered at M_PER_PX metres per pixel (0.025)",
+    )
     plan.add_argument("--storey", default=None, help="IFC storey: name or number from 1 (default: lowest with walls)")
     plan.add_argument("--cut-height", type=float, default=1.0, help="IFC: cut the walls this high above the floor, m")
     plan.add_argument("--spacing", type=float, default=0.02, help="point spacing for vector plans, metres")

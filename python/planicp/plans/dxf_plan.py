@@ -66,7 +66,7 @@ class DxfWalls:
 
     Attributes:
         segments: (M, 2, 2) segments [[x0, y0], [x1, y1]], metres, map frame.
-        layers: the layers read.
+        layers: the layers the walls were read from.
         skipped_layers: the layers left out, with why ("Doors: frozen").
         door_swings: how many door swings (arc and leaf) were left out.
         block_entities: how many wall entities came from block references.
@@ -265,6 +265,7 @@ def dxf_walls(
 
     tol_units = tolerance / scale
     items: list[tuple[Any, NDArray[np.float64], str]] = []
+    used: set[str] = set()
     from_blocks = 0
     for entity, layer, kind, in_block in entities:
         if layer not in read:
@@ -279,6 +280,7 @@ def dxf_walls(
             ) from None
         if polyline is not None:
             items.append((entity, polyline, kind))
+            used.add(layer)
             from_blocks += in_block
     doors = set() if keep_door_swings else _door_swings(items, scale)
     pieces = [np.stack([chain[:-1], chain[1:]], axis=1) for i, (_, chain, _) in enumerate(items) if i not in doors]
@@ -298,8 +300,8 @@ def dxf_walls(
     swings = sum(1 for i in doors if items[i][2] == "ARC")
     notes = (
         f"scale: $INSUNITS = {code}: {scale:g} m per drawing unit",
-        f"walls: {len(segments)} segments from layers {', '.join(sorted(read)) or 'none'}"
+        f"walls: {len(segments)} segments from layers {', '.join(sorted(used)) or 'none'}"
         + (f" ({from_blocks} entities from block references)" if from_blocks else ""),
         f"dropped: layers {'; '.join(skipped) if skipped else 'none'}; {swings} door swings (arc and leaf)",
     )
-    return DxfWalls(np.ascontiguousarray(segments), tuple(sorted(read)), skipped, swings, from_blocks, notes)
+    return DxfWalls(np.ascontiguousarray(segments), tuple(sorted(used)), skipped, swings, from_blocks, notes)

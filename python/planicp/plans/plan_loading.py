@@ -58,7 +58,7 @@ def load_plan(
     page: int = 1,
     storey: str | int | None = None,
     cut_height: float = 1.0,
-    raster: bool = False,
+    raster: bool | float = False,
     **image_options: Any,
 ) -> PlanMap:
     """The plan in `source`, chosen by its first bytes and its suffix (see `read_plan_file`)."""
@@ -90,7 +90,7 @@ def read_plan_file(
     page: int = 1,
     storey: str | int | None = None,
     cut_height: float = 1.0,
-    raster: bool = False,
+    raster: bool | float = False,
     **image_options: Any,
 ) -> LoadedPlan:
     """The plan in `source`, with what its reader decided. The format is recognised by the file's
@@ -105,7 +105,8 @@ def read_plan_file(
     * `.pdf`: a vector PDF (`pdf_plan.pdf_walls`): `layers` its optional content groups, `scale`
       the print scale (default: the one the drawing states), `resolution` metres per point
       instead, `page` from 1; `raster=True` (or a page with no dark line work) renders the page
-      and reads it as an image; needs `planicp[pdf]`;
+      at 0.025 m per pixel (`raster=` a number: that many metres per pixel) and reads it as an
+      image; needs `planicp[pdf]`;
     * `.svg`: an SVG drawing (`svg_plan.svg_walls`): `layers` the classes, ids or layer names of
       the wall elements, `resolution` metres per user unit or `scale` a print scale; needs
       `planicp[svg]`;
@@ -173,7 +174,7 @@ def _pdf_plan(
     page: int,
     layers: Sequence[str] | None,
     spacing: float,
-    raster: bool,
+    raster: bool | float,
     origin: Sequence[float],
     cache: CacheSetting,
     image_options: dict[str, Any],
@@ -194,7 +195,8 @@ def _pdf_plan(
             why = "it has no dark line work"
     if walls is None:
         metres, source = pdf_scale(path, scale=scale, resolution=resolution, page=page)
-        gray, pixel = pdf_raster(path, metres, page=page)
+        wanted = 0.025 if isinstance(raster, bool) else float(raster)
+        gray, pixel = pdf_raster(path, metres, page=page, resolution=wanted)
         plan = PlanMap.from_image(gray, pixel, tuple(origin), cache=cache, **image_options)
         rendered = f"page {page} rendered at {pixel:.4g} m per pixel and read as an image ({why})"
         notes: tuple[str, ...] = (f"scale: {source}", rendered)
@@ -274,4 +276,5 @@ def plan_layers(source: str | Path, *, page: int = 1) -> list[str]:
             f"storey {i + 1}: {s.name!r} at {s.elevation:.2f} m, {s.walls} walls"
             for i, s in enumerate(ifc_storeys(path))
         ]
-    raise ValueError(f"plan {path} is a {kind.replace('_', ' ')}, which has no layers: --list-layers is for drawings")
+    what = {"image": "an image", "ros_map": "a ROS map", "house_expo": "a HouseExpo plan"}.get(kind, kind)
+    raise ValueError(f"plan {path} is {what}, which has no layers: --list-layers is for drawings (DXF, PDF, SVG, IFC)")

@@ -12,9 +12,9 @@ Which shapes are walls (`svg_walls`):
   class "Wall", but the window group nested in the wall group, with its own class "Window", does
   not); it matches a layer when any enclosing Inkscape layer (a group with
   `inkscape:groupmode="layer"`) has that label or id. Compared case-insensitively.
-* by default, the shapes of class, id or layer "wall" or "walls" where the drawing names any
-  (CubiCasa and BIM exports do); otherwise the dark colour class with the greatest total length,
-  as for PDFs (`pdf_plan`).
+* by default, the shapes of class or id "wall" or "walls" where the drawing names any (CubiCasa
+  and BIM exports do), else those on a layer of that name; otherwise the dark colour class with
+  the greatest total length, as for PDFs (`pdf_plan`).
 
 A filled shape's outline is its wall surface (a wall drawn as a filled polygon gives both faces).
 When every wall shape is a filled area, the outline of their union is taken (`region_outline`:
@@ -188,8 +188,9 @@ def svg_walls(
 
     Args:
         path: the SVG file.
-        select: class, id or layer names of the wall shapes (a str is one); None: those named
-            "wall"/"walls" if any, else the longest dark colour class.
+        select: class, id or layer names of the wall shapes (a str is one); None: the shapes of
+            class or id "wall"/"walls", else of layer "wall"/"walls", else the longest dark colour
+            class.
         resolution: metres in the building per SVG pixel (user unit after the viewBox).
         scale: instead, the drawing's print scale ("1:100", '1"=8\\'', or the ratio).
         openings: when the walls are filled areas, outline their union and take away the areas
@@ -242,8 +243,11 @@ def svg_walls(
         selected = f"class, id or layer {', '.join(sorted(wanted))}"
     else:
         wanted = frozenset({"wall", "walls"})
-        chosen = [s for s in shapes if _matches(s, wanted)]
-        selected = "class, id or layer 'wall' (the drawing names its walls)"
+        chosen = [s for s in shapes if s.classes & wanted or s.ident in wanted]
+        selected = "class or id 'wall' (the drawing names its walls)"
+        if not chosen:
+            chosen = [s for s in shapes if s.layers & wanted]
+            selected = "layer 'walls' (the drawing names its wall layer)"
         if not chosen:
             chosen, selected = _dominant_dark(shapes)
     if not chosen:
