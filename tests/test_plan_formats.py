@@ -640,3 +640,27 @@ def _png(tmp_path: Path) -> Path:
     path = tmp_path / "plan.png"
     cv2.imwrite(str(path), np.full((10, 10), 255, dtype=np.uint8))
     return path
+
+
+def test_damaged_drawings_are_refused_naming_the_file(tmp_path: Path) -> None:
+    from planicp.plans.ifc_plan import ifc_walls
+
+    damaged = tmp_path / "damaged.ifc"
+    damaged.write_text(
+        "ISO-10303-21;\nHEADER;FILE_SCHEMA(('IFC4'));ENDSEC;\nDATA;\n"
+        "#1=IFCBUILDINGSTOREY('s',$,'Ground');\n#2=IFCRELCONTAINEDINSPATIALSTRUCTURE('c',$,$,$,(#9),#1);\n"
+        "#9=IFCWALL('w',$,'Wall',$,$,#77,#78,$);\nENDSEC;\n"
+    )
+    with pytest.raises(ValueError, match=rf"{damaged.name}'.*(damaged|no wall)"):
+        ifc_walls(damaged)
+    assert cli_main(["plan", str(damaged), "--out", str(tmp_path / "o")]) == 2
+    if HAS_PDF:
+        pdf = tmp_path / "broken.pdf"
+        pdf.write_bytes(b"%PDF-1.4\n1 0 obj << /Type /Catalog >> endobj\ntrailer << /Root 1 0 R >>\n%%EOF")
+        with pytest.raises(ValueError, match=r"PDF file '.*broken.pdf' (could not be read as PDF|has no pages)"):
+            load_plan(pdf, scale="1:100")
+    if HAS_SVG:
+        svg = tmp_path / "broken.svg"
+        svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><polygon points="0,0 10,0')
+        with pytest.raises(ValueError, match=r"SVG file '.*broken.svg' (could not be read as SVG|has no drawn shape)"):
+            load_plan(svg, resolution=0.01)

@@ -178,6 +178,8 @@ class _Model:
         if cached is not None:
             return cached
         kind = self.step.type_of(ref)
+        if not kind:
+            raise ValueError(f"its placement #{ref.id} is not in the file")
         if kind != "IFCLOCALPLACEMENT":
             raise ValueError(f"placement #{ref.id} is an {kind}, not read")
         self._placements[ref.id] = np.eye(4)  # a cycle reads as the identity instead of recursing
@@ -356,10 +358,21 @@ def _open(path: str | PathLike[str]) -> tuple[_Model, str]:
         raise ValueError(f"{name}: its units could not be read ({type(exc).__name__}: {one_line(str(exc))})") from None
 
 
+_DAMAGED = (KeyError, IndexError, TypeError, AttributeError, ValueError, ZeroDivisionError, OverflowError)
+"""What reading a damaged model raises (a reference to nothing, an attribute missing or of the wrong kind)."""
+
+
 def ifc_storeys(path: str | PathLike[str]) -> list[IfcStorey]:
-    """The storeys of an IFC model, lowest first (`planicp plan FILE --list-layers`)."""
-    model, _ = _open(path)
-    return [s for s, _ in _storeys(model)[0]]
+    """The storeys of an IFC model, lowest first (`planicp plan FILE --list-layers`).
+
+    Raises:
+        FileNotFoundError: no such file. ValueError: not an IFC model, or a damaged one.
+    """
+    model, name = _open(path)
+    try:
+        return [s for s, _ in _storeys(model)[0]]
+    except _DAMAGED as exc:
+        raise ValueError(f"{name} is damaged: {type(exc).__name__}: {one_line(str(exc))}") from None
 
 
 def ifc_walls(path: str | PathLike[str], *, storey: str | int | None = None, cut_height: float = 1.0) -> IfcWalls:
@@ -383,6 +396,16 @@ def ifc_walls(path: str | PathLike[str], *, storey: str | int | None = None, cut
     """
     height = positive(real_number(cut_height, "cut_height"), "cut_height", "metres")
     model, name = _open(path)
+    try:
+        return _cut(model, name, storey, height)
+    except _DAMAGED as exc:
+        if type(exc) is ValueError and str(exc).startswith(name):
+            raise
+        raise ValueError(f"{name} is damaged: {type(exc).__name__}: {one_line(str(exc))}") from None
+
+
+def _cut(model: _Model, name: str, storey: str | int | None, height: float) -> IfcWalls:
+    """`ifc_walls` once the file is open."""
     step = model.step
     storeys, contained = _storeys(model)
     listing = ", ".join(
