@@ -9,7 +9,7 @@ sides). Shared faces of abutting walls and the inner ends of walls that run into
 therefore not boundary; the jambs of a door (opening edges inside a wall) are.
 
 Coordinates are metres in the map frame; the work is O(E^2) in the number of edges E (a storey of
-a house: a few hundred).
+a house: a few hundred; of a large building, a few thousand: seconds), the memory O(E).
 """
 
 from __future__ import annotations
@@ -20,6 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ["region_outline"]
+
+_BLOCK = 256
+"""Edges whose crossings with all others are found at once (memory: 256 x E values per array)."""
 
 
 def _edges(polygons: Sequence[NDArray[np.float64]]) -> NDArray[np.float64]:
@@ -77,29 +80,32 @@ def region_outline(
     length = np.hypot(d[:, 0], d[:, 1])
     keep = length > tolerance
     a, b, d, length = a[keep], b[keep], d[keep], length[keep]
-    # Where edge j crosses edge i: a_i + t d_i = a_j + u d_j.
-    den = d[:, None, 0] * d[None, :, 1] - d[:, None, 1] * d[None, :, 0]
-    w = a[None, :, :] - a[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * d[None, :, 1] - w[..., 1] * d[None, :, 0]) / den
-        u = (w[..., 0] * d[:, None, 1] - w[..., 1] * d[:, None, 0]) / den
-    eps_t = tolerance / length[:, None]
-    eps_u = tolerance / length[None, :]
-    crossing = (np.abs(den) > 1e-12) & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
-    # Where an end of edge j lies on edge i (T-junctions, overlapping collinear edges).
     splits: list[list[float]] = [[0.0, 1.0] for _ in range(len(a))]
-    rows, cols = np.nonzero(crossing)
-    for i, j in zip(rows.tolist(), cols.tolist()):
-        splits[i].append(float(t[i, j]))
     unit = d / length[:, None]
-    for end in (a, b):
-        rel = end[None, :, :] - a[:, None, :]  # (i, j, 2)
-        along = (rel * unit[:, None, :]).sum(axis=2)
-        off = np.abs(rel[..., 0] * unit[:, None, 1] - rel[..., 1] * unit[:, None, 0])
-        on = (off <= tolerance) & (along > tolerance) & (along < length[:, None] - tolerance)
-        rows, cols = np.nonzero(on)
+    for lo in range(0, len(a), _BLOCK):  # rows in blocks: memory O(_BLOCK x E), not O(E^2)
+        hi = min(lo + _BLOCK, len(a))
+        ai, di, li, ui = a[lo:hi], d[lo:hi], length[lo:hi], unit[lo:hi]
+        # Where edge j crosses edge i: a_i + t d_i = a_j + u d_j.
+        den = di[:, None, 0] * d[None, :, 1] - di[:, None, 1] * d[None, :, 0]
+        w = a[None, :, :] - ai[:, None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (w[..., 0] * d[None, :, 1] - w[..., 1] * d[None, :, 0]) / den
+            u = (w[..., 0] * di[:, None, 1] - w[..., 1] * di[:, None, 0]) / den
+        eps_t = tolerance / li[:, None]
+        eps_u = tolerance / length[None, :]
+        crossing = (np.abs(den) > 1e-12) & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
+        rows, cols = np.nonzero(crossing)
         for i, j in zip(rows.tolist(), cols.tolist()):
-            splits[i].append(float(along[i, j] / length[i]))
+            splits[lo + i].append(float(t[i, j]))
+        # Where an end of edge j lies on edge i (T-junctions, overlapping collinear edges).
+        for end in (a, b):
+            rel = end[None, :, :] - ai[:, None, :]  # (i, j, 2)
+            along = (rel * ui[:, None, :]).sum(axis=2)
+            off = np.abs(rel[..., 0] * ui[:, None, 1] - rel[..., 1] * ui[:, None, 0])
+            on = (off <= tolerance) & (along > tolerance) & (along < li[:, None] - tolerance)
+            rows, cols = np.nonzero(on)
+            for i, j in zip(rows.tolist(), cols.tolist()):
+                splits[lo + i].append(float(along[i, j] / li[i]))
     starts, ends = [], []
     for i, ts in enumerate(splits):
         params = np.unique(np.asarray(ts))
