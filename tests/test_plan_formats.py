@@ -189,6 +189,20 @@ def test_pdf_walls_are_the_longest_dark_class_in_metres_at_the_stated_scale(tmp_
 
 
 @needs_pdf
+def test_pdf_black_hatching_longer_than_the_walls_is_not_taken_for_them(tmp_path: Path) -> None:
+    from planicp.plans.pdf_plan import pdf_walls
+
+    # Black hatching (0.3 pt), three times as long as the walls: single strokes, meeting nothing.
+    content = room_content().replace("0 0 1 RG 0.5 w", "0 0 0 RG 0.3 w")
+    walls = pdf_walls(write_pdf(tmp_path / "hatched.pdf", content))
+    assert walls.classes[0].length > 3 * walls.wall_classes[0].length
+    # The room's outline is closed; the partition's two strokes meet it mid-side, not end to end.
+    assert walls.classes[0].connected == 0.0 and walls.wall_classes[0].connected == pytest.approx(36 * M)
+    assert walls.wall_classes[0].width == pytest.approx(2.0)
+    assert distance_to_segments(walls.segments.reshape(-1, 2), room_walls_m()).max() < 1e-5
+
+
+@needs_pdf
 def test_pdf_scale_given_colours_widths_and_layers(tmp_path: Path) -> None:
     from planicp.plans.pdf_plan import pdf_walls
 

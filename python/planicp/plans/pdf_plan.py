@@ -5,10 +5,13 @@ paths: sequences of lines and Bezier curves, each stroked (with a colour and a l
 filled. `pdf_walls` reads one page's paths with pdfminer.six, groups them into *stroke classes*
 (stroked paths of one colour and width; filled paths of one colour) and keeps the wall class:
 
-* by default the class with the greatest total length among the DARK classes (every RGB channel
-  at most `DARK_CHANNEL`): architectural drawings draw walls in black or dark grey, and walls are
-  the line work that runs furthest; colour fills, coloured hatching and room tags are not dark, and
-  text is glyphs, not paths;
+* by default (`default_wall_class`), among the DARK classes (every RGB channel at most
+  `DARK_CHANNEL`) whose line work is mostly CONNECTED (paths that are closed, turn a corner, or
+  meet another path of the class end to end), the longest: architectural drawings draw walls in
+  black or dark grey, as outlines and runs meeting at corners, and walls are the line work that
+  runs furthest; colour fills, coloured hatching and room tags are not dark, black hatching and
+  dimension strokes are mostly single strokes whose ends meet nothing of their kind, and text is
+  glyphs, not paths;
 * or every path matching what the caller names: `colours`, `widths` (points) and `layers` (the
   PDF's optional content groups, the layers a CAD program exports).
 
@@ -45,6 +48,7 @@ __all__ = [
     "POINT_METRES",
     "PdfWalls",
     "StrokeClass",
+    "default_wall_class",
     "pdf_raster",
     "pdf_scale",
     "pdf_stroke_classes",
@@ -73,6 +77,8 @@ class StrokeClass:
         length: total length of its paths on the page, points.
         paths: how many paths.
         layers: the optional content groups (layers) its paths are on ("" for none).
+        connected: the length of its connected line work, points: paths that are closed, turn a
+            corner, or meet another path of the class end to end (walls do; hatching does not).
     """
 
     kind: str
@@ -81,6 +87,7 @@ class StrokeClass:
     length: float
     paths: int
     layers: tuple[str, ...]
+    connected: float = 0.0
 
     @property
     def dark(self) -> bool:
@@ -274,11 +281,58 @@ def _classes(paths: list[_Path]) -> tuple[dict[tuple[Any, ...], list[_Path]], li
         groups.setdefault(key, []).append(p)
     classes = []
     for (kind, colour, width), members in groups.items():
-        length = sum(float(np.hypot(*np.diff(ch, axis=0).T).sum()) for p in members for ch in p.chains)
+        chains = [ch for p in members for ch in p.chains]
+        length = sum(_length(ch) for ch in chains)
         layers = tuple(sorted({p.layer for p in members}))
-        classes.append(StrokeClass(kind, colour, width, length, len(members), layers))
+        classes.append(StrokeClass(kind, colour, width, length, len(members), layers, _connected_length(chains)))
     classes.sort(key=lambda c: -c.length)
     return groups, classes
+
+
+def default_wall_class(classes: Sequence[StrokeClass]) -> StrokeClass | None:
+    """The class `pdf_walls` takes as walls when told nothing: among the dark classes whose line
+    work is mostly connected (at least `CONNECTED_SHARE` of their length), the longest; if none is,
+    the dark class with the most connected length; None without dark classes."""
+    dark = [c for c in classes if c.dark]
+    if not dark:
+        return None
+    runs = [c for c in dark if c.connected >= CONNECTED_SHARE * c.length]
+    if runs:
+        return max(runs, key=lambda c: c.length)
+    return max(dark, key=lambda c: (c.connected, c.length))
+
+
+CONNECTED_SHARE = 0.5
+"""The share of a class's length that must be connected line work for it to count as walls first:
+the CMU drawing's walls are 96 % connected, its hatching 21-23 %, its thin black labels' strokes 15 %."""
+
+
+def _length(chain: NDArray[np.float64]) -> float:
+    return float(np.hypot(*np.diff(chain, axis=0).T).sum())
+
+
+CONNECT_TOLERANCE = 0.5
+"""Ends of two paths closer than this (points on the page, 0.18 mm) join them."""
+
+
+def _connected_length(chains: list[NDArray[np.float64]]) -> float:
+    """Length of the chains that are part of connected line work: closed, turning a corner (three
+    or more vertices), or meeting another chain of the class end to end (within
+    `CONNECT_TOLERANCE`). Walls are drawn so, as outlines and runs meeting at corners; hatching
+    and dimension strokes are single straight strokes whose ends meet nothing of their own kind."""
+    ends: dict[tuple[int, ...], int] = {}
+    keys = []
+    for chain in chains:
+        pair = [tuple(int(v) for v in np.floor(chain[k] / CONNECT_TOLERANCE)) for k in (0, -1)]
+        keys.append(pair)
+        for key in set(pair):
+            ends[key] = ends.get(key, 0) + 1
+    total = 0.0
+    for chain, pair in zip(chains, keys):
+        closed = len(chain) >= 3 and bool(np.allclose(chain[0], chain[-1]))
+        if closed or len(chain) >= 3 or any(ends[key] > (2 if pair[0] == pair[1] else 1) for key in pair):
+            total += _length(chain)
+    return total
 
 
 def _parse_colour(value: Any) -> tuple[float, float, float]:
@@ -324,8 +378,8 @@ def pdf_walls(
         layers: keep only paths on these optional content groups (the PDF's layers), compared
             case-insensitively.
 
-    With none of `colours`, `widths` and `layers`, the wall class is the dark class (stroked or
-    filled) with the greatest total length.
+    With none of `colours`, `widths` and `layers`, the wall class is `default_wall_class`: the
+    longest dark class (stroked or filled) whose line work is mostly connected.
 
     Returns:
         `PdfWalls`: segments (metres, map frame), the scale and where it came from, and the page's
@@ -357,13 +411,13 @@ def pdf_walls(
     all_layers = tuple(sorted({p.layer for p in paths if p.layer}))
     listing = "; ".join(c.describe() for c in classes[:8]) or "none"
     if colours is None and widths is None and layers is None:
-        dark = [c for c in classes if c.dark]
-        if not dark:
+        wall_class = default_wall_class(classes)
+        if wall_class is None:
             raise ValueError(
                 f"{name}, page {page} has no dark line work (paths: {listing}): if it is a scanned drawing, "
                 "read it as a raster (raster=True, planicp plan --raster); otherwise name the wall colour or layer"
             )
-        chosen = [dark[0]]
+        chosen = [wall_class]
     else:
         want_colours = [_parse_colour(c) for c in colours] if colours is not None else None
         want_widths = [positive(w, "width", "points") for w in widths] if widths is not None else None

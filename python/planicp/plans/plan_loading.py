@@ -259,11 +259,11 @@ def plan_layers(source: str | Path, *, page: int = 1) -> list[str]:
             for layer in dxf_layers(path)
         ]
     if kind == "pdf":
-        from .pdf_plan import pdf_stroke_classes
+        from .pdf_plan import default_wall_class, pdf_stroke_classes
 
         classes, layers = pdf_stroke_classes(path, page=page)
         lines = [f"layer {layer}" for layer in layers]
-        walls = next((c for c in classes if c.dark), None)
+        walls = default_wall_class(classes)
         return lines + [f"{c.describe()}{' <- walls by default' if c is walls else ''}" for c in classes]
     if kind == "svg":
         from .svg_plan import svg_names
