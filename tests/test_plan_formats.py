@@ -94,7 +94,9 @@ OFFSET = 50.0  # the room's lower-left corner on the page, points
 ROOM = (10.0, 8.0)  # metres
 
 
-def write_pdf(path: Path, content: str, *, layers: tuple[str, ...] = (), size: tuple[int, int] = (400, 320)) -> Path:
+def write_pdf(
+    path: Path, content: str, *, layers: tuple[str, ...] = (), size: tuple[int, int] = (400, 320), rotate: int = 0
+) -> Path:
     """A one-page PDF with `content` as its content stream, Helvetica as /F1, and optional
     content groups `layers` named /OC0, /OC1, ... in the page's properties."""
     first_layer = 6
@@ -106,7 +108,7 @@ def write_pdf(path: Path, content: str, *, layers: tuple[str, ...] = (), size: t
         f"<< /Type /Catalog /Pages 2 0 R{oc} >>".encode(),
         b"<< /Type /Pages /Kids [3 0 R] /Count 1 >>",
         (
-            f"<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {size[0]} {size[1]}] /Contents 4 0 R "
+            f"<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {size[0]} {size[1]}] /Rotate {rotate} /Contents 4 0 R "
             f"/Resources << /Font << /F1 5 0 R >> /Properties << {props} >> >> >>"
         ).encode(),
         f"<< /Length {len(stream)} >>\nstream\n".encode() + stream + b"\nendstream",
@@ -262,6 +264,22 @@ def test_pdf_raster_fallback_renders_the_page_in_the_same_frame(tmp_path: Path) 
     # two pixels.
     line = 3 * PT * 25
     assert (xmax - xmin, ymax - ymin) == pytest.approx((160 * PT * 25 + line, 120 * PT * 25 + line), abs=0.05)
+
+
+@needs_pdf
+def test_pdf_page_rotation_is_applied_alike_to_vectors_and_raster(tmp_path: Path) -> None:
+    from planicp.plans.pdf_plan import pdf_walls
+
+    # An L of two walls on a page turned a quarter (/Rotate 90): shown, the page is 320 wide, 400 high.
+    content = "0 0 0 RG 4 w 100 100 m 300 100 l 300 250 l S BT /F1 8 Tf 150 150 Td (1:100) Tj ET"
+    path = write_pdf(tmp_path / "turned.pdf", content, rotate=90)
+    ends = pdf_walls(path, scale=100).segments.reshape(-1, 2) / (PT * RATIO)  # back to points
+    # Turned clockwise for display: (x, y) -> (y, 400 - x).
+    np.testing.assert_allclose(np.sort(ends, axis=0)[[0, -1]], [[100, 100], [250, 300]], atol=1e-6)
+    raster = read_plan_file(path, scale=100, raster=0.05, cache=False).plan
+    lo, hi = np.array(raster.extent[:2]), np.array(raster.extent[2:])
+    np.testing.assert_allclose(lo / (PT * RATIO), [100, 100], atol=3.5)  # within a pixel and the line's half width
+    np.testing.assert_allclose(hi / (PT * RATIO), [250, 300], atol=3.5)
 
 
 @needs_pdf
@@ -518,21 +536,27 @@ def test_dxf_hidden_layers_blocks_and_door_swings(tmp_path: Path, capsys: pytest
     # A door swing on the wall layer: a 90-degree arc and its leaf from the hinge.
     msp.add_arc((2, 0), 0.9, 0, 90, dxfattribs={"layer": "WALLS"})
     msp.add_line((2, 0), (2, 0.9), dxfattribs={"layer": "WALLS"})
+    # A door symbol in one closed polyline: hinge, leaf end, swing back to the wall (a wedge).
+    bulge = math.tan(math.radians(90) / 4)
+    msp.add_lwpolyline(
+        [(6, 0, 0), (6, 0.8, bulge), (6.8, 0, 0)], format="xyb", close=True, dxfattribs={"layer": "WALLS"}
+    )
     path = tmp_path / "floor.dxf"
     doc.saveas(path)
 
     walls = dxf_walls(path)
     np.testing.assert_allclose(walls.segments, [[[0, 0], [4, 0]], [[10, 0], [10, 2]]], atol=1e-9)
     assert walls.layers == ("WALLS",) and walls.door_swings == 1 and walls.block_entities == 1
+    assert "1 door swings (arc and leaf), 1 door symbols" in walls.notes[2]
     assert set(walls.skipped_layers) >= {"HIDDEN: frozen", "SWITCHED: off", "Doors: door layer"}
     kept = dxf_walls(path, keep_door_swings=True)
-    assert len(kept.segments) > len(walls.segments) + 2  # the arc's chords and the leaf
+    assert len(kept.segments) > len(walls.segments) + 4  # the arc's chords and the leaf, the wedge
     named = dxf_walls(path, ["walls", "hidden"])
     assert [[0.0, 5.0], [4.0, 5.0]] in named.segments.tolist()  # a layer named is read whatever its state
     assert cli_main(["plan", str(path), "--list-layers"]) == 0
     listing = capsys.readouterr().out.splitlines()
     assert "HIDDEN: frozen; 1 LINE (not read unless named with --layer)" in listing
-    assert "WALLS: on; 1 ARC, 3 LINE" in listing
+    assert "WALLS: on; 1 ARC, 3 LINE, 1 LWPOLYLINE" in listing
 
 
 # --------------------------------------------------------------------------------------------------

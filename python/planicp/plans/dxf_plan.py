@@ -9,8 +9,8 @@ What a CAD drawing shows is what its walls are read from (`dxf_walls`):
   too (ezdxf's virtual entities), so walls drawn as blocks count; an entity of a block on layer
   "0" takes the layer of the reference, as CAD programs draw it;
 * a door swing (an ARC of 60-120 degrees whose centre and one end are joined by a LINE, the door
-  leaf) is left out, arc and leaf, on any layer: an open door is no wall, and an arc is never
-  closed into a wedge.
+  leaf; or a polyline of leaf and swing in one piece, the wedge of a door symbol) is left out, on
+  any layer: an open door is no wall, and an arc is never closed into a wedge.
 
 `dxf_layers` lists a drawing's layers with their state and entity counts (`planicp plan FILE
 --list-layers`). The geometry (chords of arcs, bulges, units from `$INSUNITS`) is
@@ -20,6 +20,7 @@ What a CAD drawing shows is what its walls are read from (`dxf_walls`):
 
 from __future__ import annotations
 
+import math
 import re
 from collections import Counter
 from collections.abc import Iterable, Iterator
@@ -68,7 +69,8 @@ class DxfWalls:
         segments: (M, 2, 2) segments [[x0, y0], [x1, y1]], metres, map frame.
         layers: the layers the walls were read from.
         skipped_layers: the layers left out, with why ("Doors: frozen").
-        door_swings: how many door swings (arc and leaf) were left out.
+        door_swings: how many door swings (arc and leaf) were left out (door symbols drawn as one
+            polyline are counted in `notes`).
         block_entities: how many wall entities came from block references.
         notes: what was read and left out, one line each (for `planicp plan`).
     """
@@ -182,12 +184,15 @@ def _door_swings(items: list[tuple[Any, NDArray[np.float64], str]], scale: float
     """Indices into `items` (entity, chain in drawing units, type) of door swings: an ARC of 60 to
     120 degrees and 0.4 to 2.5 m radius, and the LINE (the leaf) from its centre to one of its ends."""
     from ezdxf.entities.arc import Arc  # type: ignore[import-not-found,unused-ignore]
+    from ezdxf.entities.lwpolyline import LWPolyline  # type: ignore[import-not-found,unused-ignore]
 
+    found: set[int] = {
+        i for i, (entity, _, _) in enumerate(items) if isinstance(entity, LWPolyline) and _door_symbol(entity, scale)
+    }
     lines = [(i, chain) for i, (_, chain, kind) in enumerate(items) if kind == "LINE"]
     if not lines:
-        return set()
+        return found
     ends = np.array([[c[0], c[-1]] for _, c in lines])  # (L, 2, 2)
-    found: set[int] = set()
     for i, (entity, chain, kind) in enumerate(items):
         if kind != "ARC" or not isinstance(entity, Arc):
             continue
@@ -206,6 +211,30 @@ def _door_swings(items: list[tuple[Any, NDArray[np.float64], str]], scale: float
     return found
 
 
+def _door_symbol(entity: Any, scale: float) -> bool:
+    """Whether a polyline is a door drawn in one piece: at most four vertices, one bulge of 60 to
+    120 degrees (the swing, 0.4 to 2.5 m radius) and a straight side as long as its radius (the
+    leaf). Closed, it is the wedge a door symbol draws."""
+    xyb = [(float(x), float(y), float(b)) for x, y, b in entity.get_points("xyb")]
+    if not 3 <= len(xyb) <= 4:
+        return False
+    closed = bool(entity.closed)
+    pairs = list(zip(xyb, xyb[1:] + (xyb[:1] if closed else [])))
+    bulged = [(p, q) for p, q in pairs if p[2] != 0.0]
+    if len(bulged) != 1:
+        return False
+    (x0, y0, bulge), (x1, y1, _) = bulged[0]
+    sweep = 4.0 * math.atan(abs(bulge))
+    chord = math.hypot(x1 - x0, y1 - y0)
+    if not (math.radians(60) <= sweep <= math.radians(120)) or chord == 0.0:
+        return False
+    radius = chord / (2.0 * math.sin(sweep / 2.0))
+    if not 0.4 <= radius * scale <= 2.5:
+        return False
+    sides = [math.hypot(q[0] - p[0], q[1] - p[1]) for p, q in pairs if p[2] == 0.0]
+    return any(abs(side - radius) <= 0.1 * radius for side in sides)
+
+
 def dxf_walls(
     path: str | PathLike[str],
     layers: str | Iterable[str] | None = None,
@@ -221,7 +250,7 @@ def dxf_walls(
         layers: the wall layers, compared case-insensitively (a str is one layer), read whatever
             their state; None: every layer that is on, thawed, plotted and not a door layer.
         arc_tolerance: largest sagitta of a chord replacing an arc, metres.
-        keep_door_swings: keep door swings (arc and leaf) as walls.
+        keep_door_swings: keep door swings (arc and leaf, or a door symbol's polyline) as walls.
 
     Raises:
         ImportError: ezdxf is not installed.
@@ -298,10 +327,12 @@ def dxf_walls(
     if not np.isfinite(segments).all():
         raise ValueError(f"{name} has a non-finite coordinate in its wall entities")
     swings = sum(1 for i in doors if items[i][2] == "ARC")
+    symbols = sum(1 for i in doors if items[i][2] == "LWPOLYLINE")
     notes = (
         f"scale: $INSUNITS = {code}: {scale:g} m per drawing unit",
         f"walls: {len(segments)} segments from layers {', '.join(sorted(used)) or 'none'}"
         + (f" ({from_blocks} entities from block references)" if from_blocks else ""),
-        f"dropped: layers {'; '.join(skipped) if skipped else 'none'}; {swings} door swings (arc and leaf)",
+        f"dropped: layers {'; '.join(skipped) if skipped else 'none'}; {swings} door swings (arc and leaf), "
+        f"{symbols} door symbols (polyline wedges)",
     )
     return DxfWalls(np.ascontiguousarray(segments), tuple(sorted(used)), skipped, swings, from_blocks, notes)
