@@ -65,6 +65,8 @@ def plan_format(path: Path) -> str:
 
 def _sniff(path: Path) -> str | None:
     try:
+        if not path.is_file():  # a folder, a device, a pipe (whose opening would wait for a writer)
+            return None
         with open(path, "rb") as f:
             head = f.read(4096)
     except OSError:
