@@ -48,6 +48,8 @@ __all__ = [
     "POINT_METRES",
     "PdfWalls",
     "StrokeClass",
+    "chain_length",
+    "connected_length",
     "default_wall_class",
     "pdf_raster",
     "pdf_scale",
@@ -282,9 +284,9 @@ def _classes(paths: list[_Path]) -> tuple[dict[tuple[Any, ...], list[_Path]], li
     classes = []
     for (kind, colour, width), members in groups.items():
         chains = [ch for p in members for ch in p.chains]
-        length = sum(_length(ch) for ch in chains)
+        length = sum(chain_length(ch) for ch in chains)
         layers = tuple(sorted({p.layer for p in members}))
-        classes.append(StrokeClass(kind, colour, width, length, len(members), layers, _connected_length(chains)))
+        classes.append(StrokeClass(kind, colour, width, length, len(members), layers, connected_length(chains)))
     classes.sort(key=lambda c: -c.length)
     return groups, classes
 
@@ -307,7 +309,8 @@ CONNECTED_SHARE = 0.5
 the CMU drawing's walls are 96 % connected, its hatching 21-23 %, its thin black labels' strokes 15 %."""
 
 
-def _length(chain: NDArray[np.float64]) -> float:
+def chain_length(chain: NDArray[np.float64]) -> float:
+    """Length of a (K, 2) chain of points, in its units."""
     return float(np.hypot(*np.diff(chain, axis=0).T).sum())
 
 
@@ -315,7 +318,7 @@ CONNECT_TOLERANCE = 0.5
 """Ends of two paths closer than this (points on the page, 0.18 mm) join them."""
 
 
-def _connected_length(chains: list[NDArray[np.float64]]) -> float:
+def connected_length(chains: list[NDArray[np.float64]]) -> float:
     """Length of the chains that are part of connected line work: closed, turning a corner (three
     or more vertices), or meeting another chain of the class end to end (within
     `CONNECT_TOLERANCE`). Walls are drawn so, as outlines and runs meeting at corners; hatching
@@ -331,7 +334,7 @@ def _connected_length(chains: list[NDArray[np.float64]]) -> float:
     for chain, pair in zip(chains, keys):
         closed = len(chain) >= 3 and bool(np.allclose(chain[0], chain[-1]))
         if closed or len(chain) >= 3 or any(ends[key] > (2 if pair[0] == pair[1] else 1) for key in pair):
-            total += _length(chain)
+            total += chain_length(chain)
     return total
 
 

@@ -13,8 +13,8 @@ Which shapes are walls (`svg_walls`):
   not); it matches a layer when any enclosing Inkscape layer (a group with
   `inkscape:groupmode="layer"`) has that label or id. Compared case-insensitively.
 * by default, the shapes of class or id "wall" or "walls" where the drawing names any (CubiCasa
-  and BIM exports do), else those on a layer of that name; otherwise the dark colour class with
-  the greatest total length, as for PDFs (`pdf_plan`).
+  and BIM exports do), else those on a layer of that name; otherwise the wall colour class as for
+  PDFs (`pdf_plan.default_wall_class`: the longest dark class whose line work is mostly connected).
 
 A filled shape's outline is its wall surface (a wall drawn as a filled polygon gives both faces).
 When every wall shape is a filled area, the outline of their union is taken (`region_outline`:
@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import one_line, positive
-from .pdf_plan import DARK_CHANNEL
+from .pdf_plan import StrokeClass, chain_length, connected_length, default_wall_class
 from .plan_formats import missing_extra
 from .print_scale import parse_print_scale
 from .region_outline import region_outline
@@ -302,20 +302,21 @@ def svg_names(path: str | PathLike[str]) -> list[tuple[str, int]]:
 
 
 def _dominant_dark(shapes: list[_Shape]) -> tuple[list[_Shape], str]:
-    totals: dict[tuple[Any, ...], float] = {}
+    """The shapes of the wall colour class, chosen as for PDFs (`pdf_plan.default_wall_class`: the
+    longest dark class whose line work is mostly connected), and how they were chosen."""
+    groups: dict[tuple[Any, ...], list[_Shape]] = {}
     for s in shapes:
-        if s.colour is None or max(s.colour) > DARK_CHANNEL:
-            continue
-        key = (s.kind, tuple(round(c, 2) for c in s.colour), round(s.width, 2))
-        totals[key] = totals.get(key, 0.0) + sum(float(np.hypot(*np.diff(c, axis=0).T).sum()) for c in s.chains)
-    if not totals:
+        if s.colour is not None:
+            groups.setdefault((s.kind, tuple(round(c, 2) for c in s.colour), round(s.width, 2)), []).append(s)
+    classes = {}
+    for key, members in groups.items():
+        chains = [c for s in members for c in s.chains]
+        length = sum(chain_length(c) for c in chains)
+        classes[key] = StrokeClass(key[0], key[1], key[2], length, len(members), (), connected_length(chains))
+    best = default_wall_class(list(classes.values()))
+    if best is None:
         return [], "the longest dark colour class (the drawing has no dark shape)"
-    best = max(totals, key=lambda k: totals[k])
-    kind, colour, width = best
-    chosen = [
-        s
-        for s in shapes
-        if s.colour is not None and (s.kind, tuple(round(c, 2) for c in s.colour), round(s.width, 2)) == best
-    ]
-    hexcolour = "#" + "".join(f"{round(c * 255):02x}" for c in colour)
-    return chosen, f"the longest dark colour class ({kind} {hexcolour}{f' {width:g} px' if kind == 'stroke' else ''})"
+    key = next(k for k, c in classes.items() if c is best)
+    hexcolour = "#" + "".join(f"{round(c * 255):02x}" for c in best.colour)
+    width = f" {best.width:g} px" if best.kind == "stroke" else ""
+    return groups[key], f"the longest dark colour class ({best.kind} {hexcolour}{width})"
