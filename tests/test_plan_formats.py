@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from numpy.typing import NDArray
 
 from planicp import PlanMap
@@ -702,3 +704,18 @@ def test_damaged_drawings_are_refused_naming_the_file(tmp_path: Path) -> None:
         svg.write_text('<svg xmlns="http://www.w3.org/2000/svg"><polygon points="0,0 10,0')
         with pytest.raises(ValueError, match=r"SVG file '.*broken.svg' (could not be read as SVG|has no drawn shape)"):
             load_plan(svg, resolution=0.01)
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(cut=st.integers(min_value=0, max_value=6000), junk=st.binary(max_size=40))
+def test_ifc_reader_refuses_any_damage_with_a_value_error(tmp_path: Path, cut: int, junk: bytes) -> None:
+    """The house cut short anywhere, with bytes of junk after: read, or refused naming the file."""
+    from planicp.plans.ifc_plan import ifc_storeys, ifc_walls
+
+    path = tmp_path / "damaged.ifc"
+    path.write_bytes(ifc_house().encode()[:cut] + junk)
+    for read in (ifc_walls, ifc_storeys):
+        try:
+            read(path)
+        except ValueError as exc:
+            assert "damaged.ifc" in str(exc) or "cut_height" in str(exc)
