@@ -31,20 +31,34 @@ def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .plans.plan_figure import plot_plan_overlay
-    from .plans.plan_loading import load_plan
+    from .plans.plan_loading import plan_layers, read_plan_file
 
     source = Path(args.image)
-    plan = load_plan(
+    if args.list_layers:
+        for line in plan_layers(source, page=args.page):
+            print(line)
+        return 0
+    if args.out is None:
+        raise ValueError("planicp plan needs --out FOLDER (or --list-layers to list a drawing's layers)")
+    loaded = read_plan_file(
         source,
         resolution=args.resolution,
         origin=args.origin,
         cache=not args.no_cache,
         spacing=args.spacing,
         layers=args.layer,
+        scale=args.scale,
+        page=args.page,
+        storey=_storey(args.storey),
+        cut_height=args.cut_height,
+        raster=args.raster,
         threshold=args.threshold,
         open_px=args.open_px,
         close_px=args.close_px,
     )
+    plan = loaded.plan
+    for note in loaded.notes:
+        print(f"{source.name}: {note}")
     out: Path = args.out
     points_path, overlay_path = out / "wall_points.csv", out / "overlay.png"
     _refuse_to_overwrite(_input_files(source), [points_path, overlay_path, out / "plan.yaml", out / "plan.pgm"])
@@ -62,6 +76,11 @@ def _plan(args: argparse.Namespace) -> int:
     )
     print(f"wrote {points_path}, {overlay_path}, {yaml_path} (+ {yaml_path.with_suffix('.pgm').name})")
     return 0
+
+
+def _storey(value: str | None) -> str | int | None:
+    """--storey: a number from 1, or a storey's name."""
+    return int(value) if value is not None and value.isdigit() else value
 
 
 def _input_files(source: Path) -> list[Path]:
@@ -253,9 +272,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="extract wall points from a plan; write the points, an overlay figure and a ROS map",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    plan.add_argument("image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON or DXF")
     plan.add_argument(
-        "--resolution", type=float, help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own)"
+        "image", help="plan image (PNG, JPG, PGM, BMP), ROS map YAML, HouseExpo JSON, DXF, PDF, SVG or IFC"
+    )
+    plan.add_argument(
+        "--resolution",
+        type=float,
+        help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own); metres per "
+        "point of a PDF, per pixel of an SVG",
     )
     plan.add_argument(
         "--origin",
@@ -269,9 +293,32 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--open-px", type=int, default=0, help="remove dark specks up to this many pixels")
     plan.add_argument("--close-px", type=int, default=0, help="close wall gaps up to this many pixels")
     plan.add_argument("--no-cache", action="store_true", help="do not read or write the plan cache")
-    plan.add_argument("--layer", action="append", default=[], help="DXF layer holding walls (repeatable)")
+    plan.add_argument(
+        "--layer",
+        action="append",
+        default=[],
+        help="layer holding walls (repeatable): a DXF layer, a PDF layer, an SVG class, id or layer",
+    )
+    plan.add_argument(
+        "--list-layers", action="store_true", help="list the drawing's layers (DXF, PDF, SVG) or storeys (IFC) and stop"
+    )
+    plan.add_argument(
+        "--scale", default=None, help="print scale of a PDF or SVG: '1:100', '1\"=24\\'' (default: the PDF's own)"
+    )
+    plan.add_argument("--page", type=int, default=1, help="page of a PDF, from 1")
+    plan.add_argument(
+        "--raster",
+        type=float,
+        nargs="?",
+        const=0.025,
+        default=False,
+        metavar="M_PER_PX",
+        help="read a PDF page as an image (a scanned drawing), rendered at M_PER_PX metres per pixel (0.025)",
+    )
+    plan.add_argument("--storey", default=None, help="IFC storey: name or number from 1 (default: lowest with walls)")
+    plan.add_argument("--cut-height", type=float, default=1.0, help="IFC: cut the walls this high above the floor, m")
     plan.add_argument("--spacing", type=float, default=0.02, help="point spacing for vector plans, metres")
-    plan.add_argument("--out", type=Path, required=True, help="output folder")
+    plan.add_argument("--out", type=Path, default=None, help="output folder (required unless --list-layers)")
     plan.set_defaults(func=_plan)
     replay = sub.add_parser(
         "replay",

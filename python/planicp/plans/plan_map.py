@@ -142,7 +142,8 @@ class PlanMap:
         """A plan from an image of it (PNG, JPG, PGM, BMP, ... or an array).
 
         Args:
-            source: image path, or a grey/colour array (row 0 is the top of the plan).
+            source: image path, or a grey/colour array (row 0 is the top of the plan). A photo is
+                turned upright by its EXIF orientation first.
             resolution: metres per pixel (see `resolution_from_pixels` to measure it).
             origin: (x, y, yaw) of the image's lower-left corner in the map frame, exactly as a
                 ROS map YAML's `origin`, so that a plan and a ROS map of it give the same points.
@@ -175,6 +176,7 @@ class PlanMap:
             "open_px": open_px,
             "close_px": close_px,
             "edge_detector": edge_detector,
+            "orientation": "exif",  # photos turned upright by their EXIF orientation (entries before were not)
         }
 
         def build() -> dict[str, NDArray[Any]]:

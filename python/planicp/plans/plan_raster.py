@@ -251,7 +251,11 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
         except cv2.error as exc:
             raise ValueError(f"{what} {path} could not be read as an image: {str(exc).strip()[-200:]}") from None
         if image is None:
-            raise ValueError(f"{what} {path} could not be read as an image (unsupported or corrupt file)")
+            raise ValueError(
+                f"{what} {path} could not be read as an image (unsupported or corrupt file; plans are read "
+                "from PNG, JPEG, TIFF, BMP, PGM and the drawing formats DXF, PDF, SVG and IFC)"
+            )
+        image = _upright(image, exif_orientation(path))
         name = str(path)
     else:
         image = np.asarray(source)
@@ -278,6 +282,46 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
     top = 1.0 if values.max() <= 1.0 else 255.0
     out: NDArray[np.uint8] = np.clip(np.round(values * 255.0 / top), 0, 255).astype(np.uint8)
     return out
+
+
+EXIF_ORIENTATION_TAG = 0x0112
+"""The EXIF tag that says how a camera held the picture: 1 upright, 3 upside down, 6 and 8 turned
+a quarter, 2, 4, 5 and 7 mirrored."""
+
+
+def exif_orientation(path: Path) -> int:
+    """The EXIF orientation (1..8) of an image file, read with Pillow (a dependency of matplotlib);
+    1 (upright) when the file has none, Pillow cannot read it, or the value is not 1..8."""
+    try:
+        from PIL import Image, UnidentifiedImageError
+    except ImportError:  # pragma: no cover - matplotlib requires Pillow
+        return 1
+    try:
+        with Image.open(path) as image:
+            value = image.getexif().get(EXIF_ORIENTATION_TAG, 1)
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError, Image.DecompressionBombError):
+        return 1
+    return int(value) if isinstance(value, int) and 1 <= value <= 8 else 1
+
+
+def _upright(image: NDArray[Any], orientation: int) -> NDArray[Any]:
+    """`image` (rows, cols[, channels]) turned as EXIF `orientation` says the picture is seen: what
+    Pillow's ImageOps.exif_transpose does, on the array OpenCV decoded (which keeps 16-bit depth)."""
+    if orientation == 2:
+        image = image[:, ::-1]
+    elif orientation == 3:
+        image = image[::-1, ::-1]
+    elif orientation == 4:
+        image = image[::-1, :]
+    elif orientation == 5:
+        image = np.swapaxes(image, 0, 1)
+    elif orientation == 6:
+        image = np.rot90(image, k=-1)
+    elif orientation == 7:
+        image = np.rot90(image, k=-1)[:, ::-1]
+    elif orientation == 8:
+        image = np.rot90(image, k=1)
+    return np.ascontiguousarray(image)
 
 
 def wall_mask(

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import brief, one_line, positive
+from .._validation import brief, positive
 
 if TYPE_CHECKING:
     # ezdxf is optional: without it (no 'cad' extra) mypy sees Any here, with it the real types.
@@ -198,8 +198,10 @@ def dxf_segments(
 
     The file is read with `ezdxf.recover.readfile`, which repairs what it can of damaged files.
     Walls are the LINE, LWPOLYLINE (closed flag and bulge arcs), 2D POLYLINE, ARC and CIRCLE
-    entities of the modelspace on the chosen layers; everything else (text, hatches, dimensions,
-    3D polylines, meshes, and entities inside block references) is skipped. Arcs, circles and
+    entities of the modelspace on the chosen layers, block references expanded; everything else
+    (text, hatches, dimensions, 3D polylines, meshes) is skipped, and so are door swings (an arc
+    and its leaf). Without `layers`, frozen, off, non-plotting and door layers are skipped
+    (`dxf_plan.dxf_walls`, which also says what it read and left out). Arcs, circles and
     bulges become chords whose sagitta (largest gap between chord and true arc) is at most
     `arc_tolerance`; the chord ends lie on the true arc, and segment endpoints are kept exactly.
 
@@ -212,7 +214,8 @@ def dxf_segments(
     Args:
         path: the DXF file.
         layers: names of the wall layers, compared case-insensitively (a single str is one
-            layer); None takes every layer.
+            layer), read whatever their state; None takes every layer that is shown (on, thawed,
+            plotted) and not a door layer.
         arc_tolerance: largest sagitta of a chord replacing an arc, metres.
 
     Returns:
@@ -227,76 +230,9 @@ def dxf_segments(
             entity was found, the file is not a readable DXF, its `$INSUNITS` is unknown, or
             `arc_tolerance` <= 0; each message names the file.
     """
-    try:
-        import ezdxf.recover  # type: ignore[import-not-found,unused-ignore]
-        from ezdxf.lldxf.const import DXFError  # type: ignore[import-not-found,unused-ignore]
-    except ImportError as exc:
-        raise ImportError(_EZDXF_MISSING) from exc
+    from .dxf_plan import dxf_walls
 
-    tolerance = positive(arc_tolerance, "arc_tolerance", "metres")
-    wanted = _layer_names(layers)
-    file = Path(path)
-    name = f"DXF file {str(file)!r}"
-    if not file.is_file():
-        raise FileNotFoundError(f"{name} does not exist" if not file.exists() else f"{name} is not a file")
-    try:
-        doc, _auditor = ezdxf.recover.readfile(file)
-    except MemoryError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - ezdxf's recovery raises what its parsing meets (IndexError, ...)
-        known = isinstance(exc, (DXFError, OSError, UnicodeDecodeError))
-        reason = str(exc) if known else f"{type(exc).__name__}: {exc}"
-        raise ValueError(f"{name} could not be read as DXF: {one_line(reason)}") from None
-
-    try:
-        code = doc.header.get("$INSUNITS", 0)
-        msp = doc.modelspace()
-        entities = [(entity, str(entity.dxf.layer), str(entity.dxftype())) for entity in msp]
-        existing = {str(layer.dxf.name) for layer in doc.layers}
-    except _DAMAGED as exc:
-        raise ValueError(
-            f"{name} could not be read as DXF: its header, layers or modelspace are damaged "
-            f"({type(exc).__name__}: {one_line(str(exc))})"
-        ) from None
-    if isinstance(code, bool) or not isinstance(code, int) or code not in _METRES_PER_UNIT:
-        raise ValueError(f"{name} has unknown drawing units $INSUNITS = {brief(code)}")
-    scale = _METRES_PER_UNIT[code]
-    existing.update(layer for _, layer, _ in entities)
-    if wanted is not None:
-        folded = {layer.casefold() for layer in existing}
-        missing = sorted(layer for layer in wanted if layer not in folded)
-        if missing:
-            raise ValueError(
-                f"{name} has no layer {', '.join(map(repr, missing))}; its layers are: "
-                f"{one_line(', '.join(sorted(existing)), 300)}"
-            )
-
-    tol_units = tolerance / scale
-    pieces: list[NDArray[np.float64]] = []
-    for entity, layer, kind in entities:
-        if wanted is not None and layer.casefold() not in wanted:
-            continue
-        try:
-            polyline = _entity_polyline(entity, tol_units)
-        except _DAMAGED as exc:  # besides the ValueErrors here: a value ezdxf's recovery left unset (a None point)
-            reason = str(exc) if type(exc) is ValueError else f"damaged ({type(exc).__name__}: {exc})"
-            raise ValueError(
-                f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
-                f"{one_line(layer, 60)}: {one_line(reason)}"
-            ) from None
-        if polyline is not None:
-            pieces.append(np.stack([polyline[:-1], polyline[1:]], axis=1))
-    if not pieces:
-        where = "any layer" if wanted is None else f"layer(s) {', '.join(sorted(wanted))}"
-        types = sorted({kind for _, _, kind in entities})
-        raise ValueError(
-            f"{name} has no wall entities ({', '.join(_WALL_TYPES)}) on {where} of its modelspace; "
-            f"entity types there: {one_line(', '.join(types), 300) if types else 'none'}"
-        )
-    segments = np.concatenate(pieces) * scale
-    if not np.isfinite(segments).all():
-        raise ValueError(f"{name} has a non-finite coordinate in its wall entities")
-    return np.ascontiguousarray(segments)
+    return dxf_walls(path, layers, arc_tolerance=arc_tolerance).segments
 
 
 _DAMAGED = (AttributeError, TypeError, IndexError, KeyError, ZeroDivisionError, OverflowError, ValueError)
