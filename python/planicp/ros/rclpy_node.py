@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 import traceback
 from collections import OrderedDict
 from collections.abc import Sequence
@@ -101,6 +102,9 @@ Publisher: Any = _ros["rclpy.publisher"].Publisher
 Service: Any = _ros["rclpy.service"].Service
 Subscription: Any = _ros["rclpy.subscription"].Subscription
 Timer: Any = _ros["rclpy.timer"].Timer
+
+WARN_EVERY = 5.0
+"""Seconds between two logs of the same warning."""
 
 NODE_NAME = "planicp"
 """The node's default name (a Nav2 launch names it `amcl`, for the lifecycle manager's node list)."""
@@ -166,7 +170,7 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
         self._laser_mounts: dict[str, tuple[Pose, bool]] = {}
         self._stamps: OrderedDict[float, Any] = OrderedDict()
         self._pending_initial: tuple[float, Pose, list[float]] | None = None
-        self._warned: set[str] = set()
+        self._warned_at: dict[str, float] = {}
         self._pose_pub: Any = None
         self._tf_pub: Any = None
         self._plan_pub: Any = None
@@ -295,7 +299,7 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
                 elif child != s.odom_frame:
                     self._tree.set(parent, child, (tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
         except (TypeError, ValueError) as exc:
-            self.get_logger().warning(f"tf refused: {exc}", throttle_duration_sec=5.0)
+            self._warn(f"tf refused: {exc}")
         except Exception:
             self.get_logger().error(f"tf callback failed:\n{traceback.format_exc()}")
         self._publish(outputs)
@@ -334,7 +338,7 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
                 laser_pose=laser_pose,
             )
         except (TypeError, ValueError) as exc:
-            self.get_logger().warning(str(exc), throttle_duration_sec=5.0)
+            self._warn(str(exc))
             return
         except Exception:  # never let one message stop the node
             self.get_logger().error(f"scan callback failed:\n{traceback.format_exc()}")
@@ -524,6 +528,16 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
             f"in {s.base_frame}" + (" (upside down)" if mount[1] else "")
         )
         return mount
+
+    def _warn(self, message: str) -> None:
+        """Logs a warning, each distinct message at most once per `WARN_EVERY` seconds (a stream of
+        malformed messages does not flood the log; different problems are each seen)."""
+        now = time.monotonic()
+        if now - self._warned_at.get(message, -math.inf) >= WARN_EVERY:
+            if len(self._warned_at) > 256:
+                self._warned_at.clear()
+            self._warned_at[message] = now
+            self.get_logger().warning(message)
 
     def _remember(self, stamp: float, ros_stamp: Any) -> None:
         self._stamps[stamp] = ros_stamp
