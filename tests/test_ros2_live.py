@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp.ros import covariance_from_6x6, quaternion_to_yaw, yaw_to_quaternion
+from planicp.ros import covariance_from_6x6, quaternion_to_yaw, ros2_launch_path, yaw_to_quaternion
 from planicp.se2 import between, compose
 
 DRIVE_S = 28.0
@@ -287,8 +287,6 @@ def _drive(start: Callable[[str, list[str]], subprocess.Popen[bytes]], tf_messag
     o.x, o.y, o.z, o.w = yaw_to_quaternion(grid.origin[2])
     m.data = grid.data.ravel().tolist()
     map_pub.publish(m)
-
-    from planicp.ros.rclpy_node import ros2_launch_path
 
     node_process = start(
         "node",

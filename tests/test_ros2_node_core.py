@@ -19,14 +19,14 @@ import yaml
 
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
-from planicp.ros import NodeSettings, PlanicpNodeCore, plan_occupancy_grid
+from planicp.ros import NodeSettings, PlanicpNodeCore, plan_occupancy_grid, ros2_launch_path
 from planicp.ros.plan_grid import plan_from_occupancy_grid
 from planicp.ros.ros2_parameters import NAV2_DEFAULTS, settings_from_ros2
 from planicp.ros.transform_tree import TransformTree, planar
 from planicp.se2 import compose, yaw_to_quaternion
 from planicp.sim.experiment import ExperimentConfig, Recording, run_experiment
 
-SHARE = Path(__import__("planicp.ros", fromlist=["x"]).__file__).parent / "share" / "planicp_ros2"
+SHARE = ros2_launch_path()
 
 
 @pytest.fixture(scope="module")

@@ -46,7 +46,8 @@ def plan_from_occupancy_grid(
 
     Args:
         data: the `width * height` cell values, row 0 at the origin (lowest y), -1 unknown.
-        width, height: cells per row, rows.
+        width: cells per row.
+        height: rows.
         resolution: metres per cell.
         origin: (x, y, yaw) of the grid's lower-left corner in the map frame.
         occupied: the lowest value that is a wall (map_server: 65 for an occupied threshold of 0.65).

@@ -34,7 +34,7 @@ and `request_nomotion_update` (std_srvs/Empty: planicp aligns every scan, moving
 acknowledges), as nav2_amcl names them.
 
 Run: `planicp-ros2-node --ros-args -p plan:=/maps/floor3.yaml -p autostart:=true`, or include the
-launch description `ros2_launch_path() / "planicp.launch.py"` in a Nav2 launch file.
+launch description `planicp.ros.ros2_launch_path() / "planicp.launch.py"` in a Nav2 launch file.
 """
 
 from __future__ import annotations
@@ -45,7 +45,6 @@ import time
 import traceback
 from collections import OrderedDict
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
@@ -118,12 +117,6 @@ TF_STATIC_QOS = _qos.QoSProfile(
     depth=100, durability=_qos.DurabilityPolicy.TRANSIENT_LOCAL, reliability=_qos.ReliabilityPolicy.RELIABLE
 )
 DEFAULT_QOS = _qos.QoSProfile(depth=10)
-
-
-def ros2_launch_path() -> Path:
-    """The folder of the ROS 2 launch description (`planicp.launch.py`) and parameter file
-    (`planicp.yaml`) shipped with planicp."""
-    return Path(__file__).resolve().parent / "share" / "planicp_ros2"
 
 
 def stamp_seconds(stamp: Any) -> float:

@@ -2,10 +2,10 @@
 
     from launch.actions import IncludeLaunchDescription
     from launch.launch_description_sources import PythonLaunchDescriptionSource
-    import planicp.ros.rclpy_node as planicp_node
+    from planicp.ros import ros2_launch_path
 
     IncludeLaunchDescription(
-        PythonLaunchDescriptionSource(str(planicp_node.ros2_launch_path() / "planicp.launch.py")),
+        PythonLaunchDescriptionSource(str(ros2_launch_path() / "planicp.launch.py")),
         launch_arguments={"params_file": params_file, "use_sim_time": use_sim_time}.items(),
     )
 
