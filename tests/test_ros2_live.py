@@ -123,6 +123,7 @@ class LiveRun:
     malformed_sent: tuple[float, float] = (math.nan, math.nan)
     reset: tuple[float, tuple[float, float, float]] | None = None
     global_call: float = math.nan
+    nomotion_answered: bool = False
     node_alive_at_end: bool = False
     node_log: str = ""
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -266,6 +267,7 @@ def _drive(start: Callable[[str, list[str]], subprocess.Popen[bytes]], tf_messag
     get_state = node.create_client(GetState, f"/{NODE}/get_state")
     change_state = node.create_client(ChangeState, f"/{NODE}/change_state")
     global_localization = node.create_client(Empty, "/reinitialize_global_localization")
+    nomotion_update = node.create_client(Empty, "/request_nomotion_update")
     executor = SingleThreadedExecutor()
     executor.add_node(node)
 
@@ -364,6 +366,9 @@ def _drive(start: Callable[[str, list[str]], subprocess.Popen[bytes]], tf_messag
     run.global_call = node.get_clock().now().nanoseconds * 1e-9
     _call(global_localization, Empty.Request())
 
+    _call(nomotion_update, Empty.Request())  # nav2_amcl's service: acknowledged
+    run.nomotion_answered = True
+
     at(RESET_AT_S)
     key, truth = latest_truth()
     wrong = compose(truth, RESET_OFFSET)
@@ -426,6 +431,7 @@ def test_lifecycle_transitions_and_states(live: LiveRun) -> None:
         ("shutdown", True, "finalized"),
     ], live.node_log[-3000:]
     assert "ignored: ['alpha1']" in live.node_log
+    assert live.nomotion_answered
 
 
 def test_an_inactive_node_publishes_nothing(live: LiveRun) -> None:
