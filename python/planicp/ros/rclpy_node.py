@@ -289,6 +289,12 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
                     transform = self._odom_to_base(child, (tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
                     if transform is not None:
                         outputs += core.add_odometry(stamp_seconds(t.header.stamp), planar(transform))
+                    else:
+                        self._warn(
+                            f"/tf has {s.odom_frame} -> {child} but no transforms from {child} down to "
+                            f"base_frame_id {s.base_frame!r} (yet): set base_frame_id to the robot's frame "
+                            "(nav2_amcl's default is base_footprint)"
+                        )
                 elif child != s.odom_frame:
                     self._tree.set(parent, child, (tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w))
         except (TypeError, ValueError) as exc:

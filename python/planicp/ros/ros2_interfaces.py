@@ -174,13 +174,18 @@ def ensure_tf2_msgs() -> Path | None:
             missing, or the build failed (the message names which, with the compiler's output).
     """
     with contextlib.suppress(ImportError):
-        importlib.import_module("tf2_msgs.msg")
-        return None
+        if _is_ros2_message(importlib.import_module("tf2_msgs.msg").TFMessage):
+            return None
     folder = interfaces_folder() / f"tf2_msgs-{build_key()}"
     if not (folder / "tf2_msgs" / "msg" / "__init__.py").is_file():
         _build(folder)
-    if str(folder) not in sys.path:
-        sys.path.insert(0, str(folder))
+    # First on the path, and any other tf2_msgs forgotten: ROS 1's (genpy) may sit in the same
+    # environment and cannot be published with rclpy.
+    if str(folder) in sys.path:
+        sys.path.remove(str(folder))
+    sys.path.insert(0, str(folder))
+    for name in [m for m in sys.modules if m == "tf2_msgs" or m.startswith("tf2_msgs.")]:
+        del sys.modules[name]
     importlib.invalidate_caches()
     try:
         importlib.import_module("tf2_msgs.msg")
@@ -189,6 +194,11 @@ def ensure_tf2_msgs() -> Path | None:
             f"tf2_msgs built in {folder} does not import ({exc}); delete that folder to build it again"
         ) from exc
     return folder
+
+
+def _is_ros2_message(cls: object) -> bool:
+    """Whether `cls` is a message class of rosidl_generator_py (ROS 2), not of genpy (ROS 1)."""
+    return hasattr(type(cls), "__import_type_support__")
 
 
 def _build(folder: Path) -> None:
