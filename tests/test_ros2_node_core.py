@@ -112,6 +112,58 @@ def test_nav2_names_and_defaults_become_node_settings() -> None:
     assert ignored == ["alpha1", "max_particles"]
 
 
+NAV2_AMCL_SECTION = """
+amcl:
+  ros__parameters:
+    use_sim_time: True
+    alpha1: 0.2
+    alpha2: 0.2
+    alpha3: 0.2
+    alpha4: 0.2
+    alpha5: 0.2
+    base_frame_id: "base_footprint"
+    beam_skip_distance: 0.5
+    beam_skip_error_threshold: 0.9
+    beam_skip_threshold: 0.3
+    do_beamskip: false
+    global_frame_id: "map"
+    lambda_short: 0.1
+    laser_likelihood_max_dist: 2.0
+    laser_max_range: 100.0
+    laser_min_range: -1.0
+    laser_model_type: "likelihood_field"
+    max_beams: 60
+    max_particles: 2000
+    min_particles: 500
+    odom_frame_id: "odom"
+    pf_err: 0.05
+    pf_z: 0.99
+    recovery_alpha_fast: 0.0
+    recovery_alpha_slow: 0.0
+    resample_interval: 1
+    robot_model_type: "nav2_amcl::DifferentialMotionModel"
+    save_pose_rate: 0.5
+    sigma_hit: 0.2
+    tf_broadcast: true
+    transform_tolerance: 1.0
+    update_min_a: 0.2
+    update_min_d: 0.25
+    z_hit: 0.5
+    z_max: 0.05
+    z_rand: 0.5
+    z_short: 0.05
+    scan_topic: scan
+"""
+"""The amcl: section of Nav2's (Jazzy) nav2_params.yaml."""
+
+
+def test_a_nav2_parameter_files_amcl_section_works_unchanged() -> None:
+    params = yaml.safe_load(NAV2_AMCL_SECTION)["amcl"]["ros__parameters"]
+    settings, ignored = settings_from_ros2(params)
+    assert settings == settings_from_ros2({})[0]  # its values are nav2_amcl's defaults, and so planicp's
+    assert "alpha1" in ignored and "robot_model_type" in ignored and len(ignored) == 29
+
+
 @pytest.mark.parametrize(
     ("params", "says"),
     [
