@@ -184,6 +184,9 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
         except (TypeError, ValueError, FileNotFoundError) as exc:
             self.get_logger().error(f"configure failed: {exc}")
             return TransitionCallbackReturn.FAILURE
+        except Exception:  # the plan could not be prepared (e.g. more walls than the index holds)
+            self.get_logger().error(f"configure failed:\n{traceback.format_exc()}")
+            return TransitionCallbackReturn.FAILURE
         if ignored:
             self.get_logger().info(f"nav2_amcl parameters without a meaning for planicp, ignored: {ignored}")
         self.settings, self.core = settings, core
