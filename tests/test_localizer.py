@@ -236,14 +236,20 @@ def test_gate_rejects_non_convergence_only_when_required(
 ) -> None:
     cfg = IcpConfig(max_iterations=1)
     off = se2.compose(path[0], (0.15, -0.1, 2 * DEG))
+    # A start certain enough that the gate vouches for it (no search around it: 3 sigma within
+    # 0.5 m and 10 degrees), so that the one-iteration fit is what is judged.
+    start = np.diag([0.1**2, 0.1**2, (3 * DEG) ** 2])
     strict = AcceptanceGate(require_convergence=True)
-    est = Localizer(plan, off, cfg, gate=strict).update(scans[0], (0.0, 0.0, 0.0))
+    est = Localizer(plan, off, cfg, gate=strict, initial_covariance=start).update(scans[0], (0.0, 0.0, 0.0))
     assert est.result is not None and not est.result.converged
     assert not est.accepted and "did not converge in 1 iterations" in est.reason
-    est = Localizer(plan, off, cfg).update(scans[0], (0.0, 0.0, 0.0))  # the default gate does not require it
+    # The default gate does not require it.
+    est = Localizer(plan, off, cfg, initial_covariance=start).update(scans[0], (0.0, 0.0, 0.0))
     assert est.accepted and math.dist(est.pose[:2], est.result.pose[:2]) < 0.001  # type: ignore[union-attr]
     # without fusion (a wide start prior pulls the fit by a fraction of a millimetre) it is the fit
-    est = Localizer(plan, off, cfg, fusion=FusionRule(max_innovation=0.0)).update(scans[0], (0.0, 0.0, 0.0))
+    est = Localizer(plan, off, cfg, fusion=FusionRule(max_innovation=0.0), initial_covariance=start).update(
+        scans[0], (0.0, 0.0, 0.0)
+    )
     assert est.accepted and est.pose == est.result.pose  # type: ignore[union-attr]
 
 
@@ -339,6 +345,27 @@ def test_an_uncertain_prediction_is_searched_around(plan: PlanMap, path: list[Po
     assert error(path[0], est.pose)[0] < 0.05 and error(path[0], est.pose)[1] < 1 * DEG
 
 
+def test_a_prediction_whose_heading_is_uncertain_beyond_the_gate_is_searched_around(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A prediction whose 3-sigma heading uncertainty exceeds the gate's rotation limit (10
+    degrees; a long turn of the odometry) is searched around, as one whose position uncertainty
+    exceeds its translation limit is: the true correction may lie beyond what the gate accepts.
+    Within the limit, no search."""
+    from planicp.tracking.decisions import SearchDecision
+
+    def cause(heading_std: float) -> Any:
+        off = se2.compose(path[0], (0.05, 0.0, 2 * DEG))
+        covariance = np.diag([0.05**2, 0.05**2, heading_std**2])
+        est = Localizer(plan, off, initial_covariance=covariance).update(scans[0], (0.0, 0.0, 0.0))
+        assert est.accepted and error(path[0], est.pose)[0] < 0.05, est.reason
+        (search,) = [d for d in est.decisions if isinstance(d, SearchDecision)]
+        return search.cause
+
+    assert cause(4 * DEG) == "uncertain"  # 3 sigma = 12 degrees
+    assert cause(3 * DEG) is None  # 9 degrees
+
+
 def test_a_search_for_an_uncertain_prediction_covers_only_what_it_allows(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray], monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -366,7 +393,12 @@ def test_a_search_for_an_uncertain_prediction_covers_only_what_it_allows(
     assert region.yaw_tolerance == pytest.approx(k * 5 * DEG + 2 * 2 * DEG, rel=1e-3)  # + two heading steps
     regions.clear()
     loc = Localizer(plan, path[0])
+    # The default start's 5-degree heading deviation (3 sigma 15 degrees, beyond the gate's 10) is
+    # searched around on the first update, within what it allows.
     loc.update(scans[0], (0.0, 0.0, 0.0))
+    (start,) = regions
+    assert start.yaw_tolerance == pytest.approx(k * 5 * DEG + 2 * 2 * DEG, rel=1e-3)
+    regions.clear()
     loc.update(scans[1], se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG)))
     assert [(r.radius, r.yaw_tolerance) for r in regions] == [(3.0, math.pi)]
 

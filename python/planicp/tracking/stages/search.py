@@ -71,12 +71,18 @@ def search_cause(
 ) -> SearchCause | None:
     """Why the gate cannot vouch for this update, if it cannot: "jump", a good fit rejected
     only for its jump; "uncertain", a prediction whose 3-sigma position uncertainty exceeds
-    the translation limit. None: no search (or the recovery searches no neighbourhood)."""
+    the gate's translation limit, or whose 3-sigma heading uncertainty exceeds its rotation
+    limit (the true correction may lie beyond what the gate accepts, and ICP from a heading
+    that far off can settle in a wrong basin: on freiburg-101, after a 34-degree turn of the
+    odometry, a fit 0.3 m off explained 79 % of the scan against 95 % at the truth and held for
+    8 scans). None: no search (or the recovery searches no neighbourhood)."""
     if rules.recovery.local_radius <= 0.0:
         return None
     if reason != "" and rules.gate.fit_rejection(result) == "":
         return "jump"
     if 3.0 * largest_position_std(predicted_covariance) > rules.gate.max_translation_jump:
+        return "uncertain"
+    if 3.0 * math.sqrt(max(float(predicted_covariance[2, 2]), 0.0)) > rules.gate.max_rotation_jump:
         return "uncertain"
     return None
 
