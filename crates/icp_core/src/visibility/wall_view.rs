@@ -343,7 +343,10 @@ const REACH_BINS: usize = 1440;
 fn directional_reach(scan: &[[f64; 2]], pose: Pose2, max_range: f64, pair_distance: f64) -> DirectionalReach {
     let n = REACH_BINS;
     let bin = TAU / n as f64;
-    let mut reach = vec![0.0f64; n];
+    // Each return's window of bins (bin j holds base bearings [-pi + j bin, -pi + (j + 1) bin)),
+    // farthest first: each bin then takes the first window that covers it, its largest reach,
+    // and is never visited again (the next bin not yet set is found through `next`).
+    let mut windows: Vec<(f64, i64, i64)> = Vec::with_capacity(scan.len());
     for p in scan {
         let rho = p[0].hypot(p[1]);
         if !rho.is_finite() {
@@ -351,16 +354,46 @@ fn directional_reach(scan: &[[f64; 2]], pose: Pose2, max_range: f64, pair_distan
         }
         let far = (rho + pair_distance).min(max_range);
         let half = if rho <= pair_distance { PI } else { (pair_distance / rho).asin() } + ARC_MARGIN;
-        if half >= PI {
-            reach.iter_mut().for_each(|r| *r = r.max(far));
-            continue;
-        }
-        // Bin j holds base bearings [-pi + j bin, -pi + (j + 1) bin).
         let centre = (bearing(p[1], p[0]) + PI) / bin;
-        let (lo, hi) = ((centre - half / bin).floor() as i64, (centre + half / bin).floor() as i64);
-        for j in lo..=hi {
-            let k = j.rem_euclid(n as i64) as usize;
-            reach[k] = reach[k].max(far);
+        let (lo, hi) = if half >= PI {
+            (0, n as i64 - 1)
+        } else {
+            ((centre - half / bin).floor() as i64, (centre + half / bin).floor() as i64)
+        };
+        windows.push((far, lo, hi.min(lo + n as i64 - 1)));
+    }
+    windows.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+    let mut reach = vec![0.0f64; n];
+    // next[k]: the first bin at or after k not yet set (n: none).
+    let mut next: Vec<usize> = (0..=n).collect();
+    fn find(next: &mut [usize], mut k: usize) -> usize {
+        while next[k] != k {
+            next[k] = next[next[k]];
+            k = next[k];
+        }
+        k
+    }
+    let mut unset = n;
+    for (far, lo, hi) in windows {
+        if unset == 0 {
+            break;
+        }
+        let (a, b) = (lo.rem_euclid(n as i64) as usize, hi.rem_euclid(n as i64) as usize);
+        let spans = if hi - lo + 1 >= n as i64 {
+            [(0, n - 1), (1, 0)]
+        } else if a <= b {
+            [(a, b), (1, 0)]
+        } else {
+            [(a, n - 1), (0, b)]
+        };
+        for (first, last) in spans {
+            let mut k = find(&mut next, first);
+            while k <= last {
+                reach[k] = far;
+                unset -= 1;
+                next[k] = k + 1;
+                k = find(&mut next, k + 1);
+            }
         }
     }
     DirectionalReach { first_angle: pose.yaw - PI, reach }

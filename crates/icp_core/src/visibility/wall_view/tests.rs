@@ -286,3 +286,41 @@ fn a_pair_distance_is_refused_for_a_cast_with_ranges_or_without_a_positive_value
         assert!(err.to_string().contains("pair_distance"), "{err}");
     }
 }
+
+#[test]
+fn the_reach_per_direction_is_the_farthest_window_over_it() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for case in 0..20 {
+        let pair = 0.25 + 0.5 * (case % 3) as f64;
+        let scan: Vec<[f64; 2]> = (0..(1 + case * 15))
+            .map(|_| {
+                let (a, r) = (rng.random_range(-PI..PI), rng.random_range(0.1..40.0));
+                [r * a.cos(), r * a.sin()]
+            })
+            .collect();
+        let pose = Pose2::new(1.0, -2.0, rng.random_range(-PI..PI));
+        let got = directional_reach(&scan, pose, 30.0, pair);
+        let n = REACH_BINS;
+        let bin = TAU / n as f64;
+        let mut want = vec![0.0f64; n];
+        for p in &scan {
+            let rho = p[0].hypot(p[1]);
+            let far = (rho + pair).min(30.0);
+            let half = if rho <= pair { PI } else { (pair / rho).asin() } + ARC_MARGIN;
+            let centre = (bearing(p[1], p[0]) + PI) / bin;
+            // Every bin of the window, going round: the plain loop the build replaces.
+            let (lo, hi) = if half >= PI {
+                (0, n as i64 - 1)
+            } else {
+                ((centre - half / bin).floor() as i64, (centre + half / bin).floor() as i64)
+            };
+            for j in lo..=hi {
+                let k = j.rem_euclid(n as i64) as usize;
+                want[k] = want[k].max(far);
+            }
+        }
+        assert_eq!(got.reach, want, "case {case}");
+        assert!((got.first_angle - (pose.yaw - PI)).abs() < 1e-12);
+    }
+}
