@@ -83,7 +83,10 @@ def write_estimate_bag(
         eog: the enhanced occupancy grid (`EnhancedOccupancyGrid.to_occupancy_grid()`), on `/eog`.
         laser_pose: T_base_laser (x, y, yaw; metres, radians), written on `/tf_static`.
         storage: "sqlite3" (rosbag2's default before Iron) or "mcap" (its default since).
-        map_frame, odom_frame, base_frame, laser_frame: the frame ids (REP-105).
+        map_frame: the map frame id (REP-105), of the poses and the grids.
+        odom_frame: the odometry frame id.
+        base_frame: the robot's base frame id.
+        laser_frame: the laser's frame id.
 
     Returns:
         The bag's path.
