@@ -277,3 +277,18 @@ def test_write_estimate_bag_refuses_what_it_cannot_write(recording: Recording, t
     path = write_estimate_bag(tmp_path / "d", tracked)
     assert set(_messages(path)) == {"/amcl_pose", "/tf"}
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_a_rosbags_without_mcap_writing_names_the_upgrade(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import planicp.io.bag as bag
+
+    class OldWriter:  # rosbags' rosbag2 Writer before it took a storage plugin
+        def __init__(self, path: Path) -> None:
+            self.path = path
+
+    monkeypatch.setattr(bag, "Writer2", OldWriter)
+    with pytest.raises(ImportError, match="writes no MCAP bags: pip install -U rosbags"):
+        bag.rosbag2_writer(tmp_path / "x", "mcap")
+    assert isinstance(bag.rosbag2_writer(tmp_path / "y"), OldWriter)
+    with pytest.raises(ValueError, match="storage must be one of sqlite3, mcap"):
+        bag.rosbag2_writer(tmp_path / "z", "zip")
