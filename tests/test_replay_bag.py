@@ -182,7 +182,7 @@ def _occupied_centres(msg: Any) -> np.ndarray:
     )
     local = np.column_stack([(cols + 0.5) * info.resolution, (rows + 0.5) * info.resolution])
     c, s = math.cos(yaw), math.sin(yaw)
-    return local @ np.array([[c, s], [-s, c]]) + [info.origin.position.x, info.origin.position.y]
+    return np.asarray(local @ np.array([[c, s], [-s, c]]) + [info.origin.position.x, info.origin.position.y])
 
 
 def _check_rows_from_the_origin(msg: Any, points: np.ndarray) -> None:
@@ -219,6 +219,7 @@ def _check_against_map_server_files(yaml_path: Path, data: np.ndarray, info: Any
     assert meta["resolution"] == pytest.approx(info.resolution)
     assert meta["origin"][:2] == pytest.approx([info.origin.position.x, info.origin.position.y])
     image = cv2.imread(str(yaml_path.parent / meta["image"]), cv2.IMREAD_UNCHANGED)
+    assert image is not None
     expected = np.full(image.shape, -1, dtype=np.int8)
     expected[image == 254] = 0
     expected[image == 0] = 100
