@@ -40,13 +40,14 @@ def frames(count: int = 12) -> list[ScanFrame]:
     return out
 
 
-@pytest.mark.parametrize("version", [1, 2])
-def test_round_trip(tmp_path: Path, version: int) -> None:
+@pytest.mark.parametrize(("version", "storage"), [(1, "sqlite3"), (2, "sqlite3"), (2, "mcap")])
+def test_round_trip(tmp_path: Path, version: int, storage: str) -> None:
     original = frames()
     path = tmp_path / ("run.bag" if version == 1 else "run")
-    write_bag(path, original, version=version)  # type: ignore[arg-type]
+    write_bag(path, original, version=version, storage=storage)  # type: ignore[arg-type]
     if version == 2:
-        assert (path / "metadata.yaml").is_file()
+        assert f"storage_identifier: {storage}" in (path / "metadata.yaml").read_text()
+        assert len(list(path.glob("*.mcap" if storage == "mcap" else "*.db3"))) == 1
     log = read_bag(path)
     assert log.params["storage"] == f"rosbag{version}"
     assert len(log) == len(original)

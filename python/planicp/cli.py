@@ -137,6 +137,10 @@ def _replay(args: argparse.Namespace) -> int:
     from .plans.plan_loading import load_plan
     from .progress import progress_bar
 
+    if args.out_bag is not None:  # before the long part: a missing rosbags or an existing bag
+        from .ros.estimate_bag import refuse_existing_bag
+
+        refuse_existing_bag(args.out_bag)  # the log itself exists, so it is never written over
     plan = load_plan(args.plan, resolution=args.resolution, origin=args.origin)
     log = _read_log(args)
     grid = None if args.no_eog else EnhancedOccupancyGrid(plan, args.eog_resolution)
@@ -152,7 +156,29 @@ def _replay(args: argparse.Namespace) -> int:
     extra = {"log": str(args.log), "plan": str(args.plan), "skipped": log.skipped, "bad_lines": len(log.bad_lines)}
     metrics = write_outputs(tracked, plan, grid, args.out, extra)
     print_summary(metrics, args.out, sys.stdout)
+    if args.out_bag is not None:
+        _write_estimate_bag(args, tracked, plan, grid, log)
     return 0
+
+
+def _write_estimate_bag(args: argparse.Namespace, tracked: Any, plan: Any, grid: Any, log: Any) -> None:
+    """--out-bag: the poses, map -> odom, the plan and the EOG as a ROS 2 bag (`ros.estimate_bag`)."""
+    from .ros.estimate_bag import write_estimate_bag
+    from .ros.plan_grid import plan_occupancy_grid
+
+    params = getattr(log, "params", {})
+    mounts = {f.laser_pose for f in log}
+    path = write_estimate_bag(
+        args.out_bag,
+        tracked,
+        plan=plan_occupancy_grid(plan, args.eog_resolution),
+        eog=grid.to_occupancy_grid() if grid is not None else None,
+        laser_pose=mounts.pop() if len(mounts) == 1 else None,
+        storage=args.bag_storage,
+        base_frame=params.get("base_frame", "base_link"),
+        laser_frame=params.get("laser_frame", "laser"),
+    )
+    print(f"wrote {path} (ROS 2 bag, {args.bag_storage}: /amcl_pose, /tf, /tf_static, /map, /eog)")
 
 
 def _evaluate_log(args: argparse.Namespace) -> int:
@@ -346,6 +372,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     replay.add_argument("--eog-resolution", type=float, default=0.05, help="cell size of the EOG, metres")
     replay.add_argument("--no-eog", action="store_true", help="do not build the enhanced occupancy grid")
+    replay.add_argument(
+        "--out-bag",
+        type=Path,
+        default=None,
+        metavar="PATH",
+        help="also write a new ROS 2 bag folder with the poses (/amcl_pose), map->odom (/tf), the plan (/map) "
+        "and the EOG (/eog), for RViz or Foxglove; needs pip install 'planicp[ros]'",
+    )
+    replay.add_argument(
+        "--bag-storage", choices=("sqlite3", "mcap"), default="sqlite3", help="storage of the --out-bag bag"
+    )
     replay.set_defaults(func=_replay)
     evaluate = sub.add_parser(
         "evaluate-log",

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -42,6 +42,11 @@ class TrackedLog:
             first scan with odometry).
         reference: (N, 3) T_map_base reference poses (NaN rows where a scan has none), or None.
         seconds: wall time spent in `Localizer.update`, seconds.
+        covariance: (N, 3, 3) covariance of each estimate over map-frame (x, y, yaw): m^2, m rad,
+            rad^2 (empty (0, 3, 3) for a `TrackedLog` made by hand).
+        odom_pose: (N, 3) the odometry pose T_odom_base (odom frame) each update received: the
+            scan's own, else the last one before it, else (0, 0, 0) before the first (empty (0, 3)
+            for a `TrackedLog` made by hand). T_map_odom = estimate * inverse(odom_pose).
     """
 
     times: NDArray[np.float64]
@@ -53,6 +58,8 @@ class TrackedLog:
     odometry: NDArray[np.float64]
     reference: NDArray[np.float64] | None
     seconds: float
+    covariance: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    odom_pose: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
 
     def metrics(self) -> dict[str, Any]:
         """Acceptance, speed and, when a reference exists, the errors of planicp and of odometry."""
@@ -110,6 +117,8 @@ def track_log(
     localizer = Localizer(plan, start, config, gate=gate)
     n = len(frames)
     estimate = np.zeros((n, 3))
+    covariance = np.zeros((n, 3, 3))
+    odom_pose = np.zeros((n, 3))
     odometry = np.full((n, 3), np.nan)
     accepted = np.zeros(n, dtype=bool)
     ratio = np.full(n, np.nan)
@@ -130,6 +139,8 @@ def track_log(
         est = localizer.update(scan, last_odom)
         spent += time.perf_counter() - began
         estimate[k] = est.pose
+        covariance[k] = est.covariance
+        odom_pose[k] = est.odom_pose
         accepted[k] = est.accepted
         reasons.append(est.reason)
         if est.result is not None:
@@ -154,4 +165,6 @@ def track_log(
             [f.reference if f.reference is not None else (np.nan,) * 3 for f in frames], dtype=np.float64
         )
     times = np.array([f.time for f in frames], dtype=np.float64)
-    return TrackedLog(times, estimate, accepted, ratio, rmse, reasons, odometry, reference, spent)
+    return TrackedLog(
+        times, estimate, accepted, ratio, rmse, reasons, odometry, reference, spent, covariance, odom_pose
+    )

@@ -14,7 +14,10 @@ Reading (`read_bag`):
       `laser_pose` the laser sits at the base origin.
 
 Writing (`write_bag`): a real ROS 1 bag (`version=1`, a `.bag` file) or ROS 2 bag (`version=2`, a
-folder, sqlite3 storage) with LaserScan, Odometry and `tf2_msgs/msg/TFMessage` on `/tf_static`.
+folder, sqlite3 or MCAP storage) with LaserScan, Odometry and `tf2_msgs/msg/TFMessage` on `/tf_static`.
+`rosbag2_writer`, `ros2_typestore` and `ros_time_ns` are the pieces other ROS 2 bag writers share
+(`planicp.ros.estimate_bag`). Reading takes either storage: `AnyReader` tells them apart from the
+bag's `metadata.yaml`.
 
 Needs the optional dependency: `pip install planicp[ros]`.
 """
@@ -49,6 +52,8 @@ LASER_SCAN = "sensor_msgs/msg/LaserScan"
 ODOMETRY = "nav_msgs/msg/Odometry"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
 TF_MESSAGE_DEF = "geometry_msgs/TransformStamped[] transforms\n"
+STORAGES = ("sqlite3", "mcap")
+"""Storage formats of ROS 2 bags planicp writes (and reads)."""
 
 
 def _stamp(header: Any) -> float:
@@ -235,6 +240,7 @@ def write_bag(
     base_frame: str = "base_link",
     laser_frame: str = "laser",
     odom_frame: str = "odom",
+    storage: Literal["sqlite3", "mcap"] = "sqlite3",
 ) -> Path:
     """Writes scans (and odometry, and the laser mount on `/tf_static`) as a real ROS bag.
 
@@ -250,6 +256,7 @@ def write_bag(
         base_frame: the robot's frame id written into the headers.
         laser_frame: the laser's frame id written into the headers.
         odom_frame: the odometry frame id written into the headers.
+        storage: a ROS 2 bag's storage, "sqlite3" (rosbag2's default before Iron) or "mcap".
 
     Returns:
         The bag's path.
@@ -257,6 +264,9 @@ def write_bag(
     out = Path(path)
     if version not in (1, 2):
         raise ValueError(f"version must be 1 (ROS 1) or 2 (ROS 2), got {version!r}")
+    _check_storage(storage)
+    if version == 1 and storage != "sqlite3":
+        raise ValueError(f"a ROS 1 bag has one storage format; storage={storage!r} is for ROS 2 bags (version=2)")
     if version == 1 and out.suffix != ".bag":
         raise ValueError(f"a ROS 1 bag's file name must end in .bag, got {out}")
     if out.exists():
@@ -282,7 +292,7 @@ def write_bag(
     if odo_t.ndim != 1 or odo_p.shape != (odo_t.shape[0], 3):
         raise ValueError(f"odometry must be ((K,) times, (K, 3) poses), got {odo_t.shape} and {odo_p.shape}")
 
-    store = get_typestore(Stores.ROS1_NOETIC if version == 1 else Stores.ROS2_HUMBLE)
+    store = get_typestore(Stores.ROS1_NOETIC) if version == 1 else ros2_typestore()
     if TF_MESSAGE not in store.types:
         store.register(get_types_from_msg(TF_MESSAGE_DEF, TF_MESSAGE))
     ser = store.serialize_ros1 if version == 1 else store.serialize_cdr
@@ -290,7 +300,7 @@ def write_bag(
     Time, Header = types["builtin_interfaces/msg/Time"], types["std_msgs/msg/Header"]
 
     def header(t: float, frame_id: str) -> Any:
-        ns = _nanoseconds(t)
+        ns = ros_time_ns(t)
         stamp = Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
         return Header(seq=0, stamp=stamp, frame_id=frame_id) if version == 1 else Header(stamp=stamp, frame_id=frame_id)
 
@@ -308,7 +318,7 @@ def write_bag(
             translation=vector3(x=mount[0], y=mount[1], z=0.0), rotation=quaternion(mount[2])
         ),
     )
-    messages.append((_nanoseconds(t0), "/tf_static", types[TF_MESSAGE](transforms=[transform])))
+    messages.append((ros_time_ns(t0), "/tf_static", types[TF_MESSAGE](transforms=[transform])))
     for f in scan_list:
         scan = types[LASER_SCAN](
             header=header(f.time, laser_frame),
@@ -322,7 +332,7 @@ def write_bag(
             ranges=f.ranges.astype(np.float32),
             intensities=np.zeros(0, dtype=np.float32),
         )
-        messages.append((_nanoseconds(f.time), scan_topic, scan))
+        messages.append((ros_time_ns(f.time), scan_topic, scan))
     zeros36 = np.zeros(36, dtype=np.float64)
     for t, (x, y, yaw) in zip(odo_t.tolist(), odo_p.tolist()):
         pose = types["geometry_msgs/msg/Pose"](position=point(x=x, y=y, z=0.0), orientation=quaternion(yaw))
@@ -335,10 +345,10 @@ def write_bag(
             pose=types["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=zeros36),
             twist=types["geometry_msgs/msg/TwistWithCovariance"](twist=twist, covariance=zeros36),
         )
-        messages.append((_nanoseconds(t), odom_topic, msg))
+        messages.append((ros_time_ns(t), odom_topic, msg))
     messages.sort(key=lambda m: m[0])
     msgtypes = {"/tf_static": TF_MESSAGE, scan_topic: LASER_SCAN, odom_topic: ODOMETRY}
-    writer: Any = Writer1(out) if version == 1 else _writer2(out)
+    writer: Any = Writer1(out) if version == 1 else rosbag2_writer(out, storage)
     with writer:
         conns = {
             topic: writer.add_connection(topic, msgtype, typestore=store)
@@ -350,14 +360,77 @@ def write_bag(
     return out
 
 
-def _writer2(path: Path) -> Any:
+def _check_storage(storage: str) -> None:
+    if storage not in STORAGES:
+        raise ValueError(f"storage must be one of {', '.join(STORAGES)} (a ROS 2 bag's storage), got {storage!r}")
+
+
+def ros2_typestore() -> Any:
+    """rosbags' ROS 2 Humble message definitions (the same as Jazzy's for every type planicp
+    writes), with `tf2_msgs/msg/TFMessage` registered if the store lacks it."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    if TF_MESSAGE not in store.types:
+        store.register(get_types_from_msg(TF_MESSAGE_DEF, TF_MESSAGE))
+    return store
+
+
+def rosbag2_writer(path: Path, storage: str = "sqlite3") -> Any:
+    """An unopened rosbags writer of a new ROS 2 bag folder `path` in `storage` ("sqlite3" or
+    "mcap"), rosbag2 format version 8 (read by Humble, Jazzy and later).
+
+    Raises:
+        ValueError: an unknown storage.
+        ImportError: the installed rosbags cannot write MCAP (the message names the upgrade).
+    """
+    _check_storage(storage)
+    params = inspect.signature(Writer2).parameters
     options: dict[str, Any] = {}
-    if "version" in inspect.signature(Writer2).parameters:
+    if "version" in params:
         options["version"] = 8
+    if storage == "mcap":
+        no_mcap = "the installed rosbags writes no MCAP bags: pip install -U rosbags"
+        try:
+            from rosbags.rosbag2.enums import StoragePlugin
+        except ImportError as exc:
+            raise ImportError(no_mcap) from exc
+        if "storage_plugin" not in params:
+            raise ImportError(no_mcap)
+        options["storage_plugin"] = StoragePlugin.MCAP
     return Writer2(path, **options)
 
 
-def _nanoseconds(t: float) -> int:
+def ros_time_ns(t: float) -> int:
+    """A time in seconds as integer nanoseconds (a ROS stamp, a bag's receive time).
+
+    Raises:
+        ValueError: not finite or negative.
+    """
     if not (math.isfinite(t) and t >= 0.0):
         raise ValueError(f"a ROS time must be finite and >= 0 seconds, got {t!r}")
     return int(round(t * 1e9))
+
+
+def latched_qos() -> dict[str, Any]:
+    """Keyword arguments of rosbags' `add_connection` that record a latched (transient local, reliable,
+    keep last 1) publisher, as `/tf_static` and maps are published: `ros2 bag play` then offers the
+    same QoS, and RViz's transient-local subscriptions accept it. Empty with a rosbags too old to
+    record QoS that way (the topic then plays with the default QoS)."""
+    try:
+        from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
+    except ImportError:
+        return {}
+    if "offered_qos_profiles" not in inspect.signature(Writer2.add_connection).parameters:
+        return {}
+    zero = QosTime(sec=0, nsec=0)
+    qos = Qos(
+        history=QosHistory.KEEP_LAST,
+        depth=1,
+        reliability=QosReliability.RELIABLE,
+        durability=QosDurability.TRANSIENT_LOCAL,
+        deadline=zero,
+        lifespan=zero,
+        liveliness=QosLiveliness.AUTOMATIC,
+        liveliness_lease_duration=zero,
+        avoid_ros_namespace_conventions=False,
+    )
+    return {"offered_qos_profiles": [qos]}

@@ -20,6 +20,9 @@ and planicp installed for Debian's `/usr/bin/python3`).
 on ROS 2. Both need `pip install 'planicp[ros2]'` (PyPI's ROS 2 wheels; `ros2_interfaces` builds
 tf2_msgs, which is not a wheel, on first use).
 
+`planicp.ros.estimate_bag` writes a replay's estimates as a ROS 2 bag (`planicp replay --out-bag`),
+without ROS: `pip install 'planicp[ros]'` (rosbags).
+
 Frames and units follow REP-103/105: metres, radians, seconds; poses are (x, y, yaw).
 """
 
