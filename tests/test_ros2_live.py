@@ -23,7 +23,6 @@ import importlib.util
 import math
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import threading
@@ -36,6 +35,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from live_ros import pose2d, position_errors, stop_process_group
 from planicp.ros import covariance_from_6x6, quaternion_to_yaw, ros2_launch_path, yaw_to_quaternion
 from planicp.se2 import between, compose
 
@@ -72,27 +72,6 @@ def _missing() -> str | None:
         if _script(script) is None:
             return f"the console script {script} is not installed"
     return None
-
-
-def _stop(process: subprocess.Popen[bytes], timeout: float = 10.0) -> None:
-    """SIGINT to the process group, then SIGKILL."""
-    if process.poll() is not None:
-        return
-    for sig, wait in ((signal.SIGINT, timeout), (signal.SIGKILL, 5.0)):
-        try:
-            os.killpg(process.pid, sig)
-        except ProcessLookupError:
-            return
-        try:
-            process.wait(wait)
-            return
-        except subprocess.TimeoutExpired:
-            continue
-
-
-def _pose2d(pose: Any) -> tuple[float, float, float]:
-    o = pose.orientation
-    return (pose.position.x, pose.position.y, quaternion_to_yaw(o.x, o.y, o.z, o.w))
 
 
 def _key(stamp: Any) -> Stamp:
@@ -177,7 +156,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
         run = _drive(start, tf_message_class())
     finally:
         for p in reversed(processes):
-            _stop(p)
+            stop_process_group(p, 10.0)
         if rclpy is not None:
             rclpy.try_shutdown()
         for f in logs.values():
@@ -229,16 +208,16 @@ def _drive(start: Callable[[str, list[str]], subprocess.Popen[bytes]], tf_messag
 
     def on_pose(m: Any) -> None:
         with run.lock:
-            run.poses[_key(m.header.stamp)] = (_pose2d(m.pose.pose), list(m.pose.covariance))
+            run.poses[_key(m.header.stamp)] = (pose2d(m.pose.pose), list(m.pose.covariance))
             run.arrivals.append((time.monotonic(), "amcl_pose"))
 
     def on_truth(m: Any) -> None:
         with run.lock:
-            run.truth[_key(m.header.stamp)] = _pose2d(m.pose)
+            run.truth[_key(m.header.stamp)] = pose2d(m.pose)
 
     def on_odom(m: Any) -> None:
         with run.lock:
-            run.odometry[_key(m.header.stamp)] = _pose2d(m.pose.pose)
+            run.odometry[_key(m.header.stamp)] = pose2d(m.pose.pose)
 
     def on_tf(m: Any) -> None:
         with run.lock:
@@ -410,9 +389,7 @@ def _drive(start: Callable[[str, list[str]], subprocess.Popen[bytes]], tf_messag
 
 
 def _errors(run: LiveRun, keys: list[Stamp]) -> np.ndarray:
-    return np.array(
-        [math.hypot(run.poses[k][0][0] - run.truth[k][0], run.poses[k][0][1] - run.truth[k][1]) for k in keys]
-    )
+    return position_errors(run.poses, run.truth, keys)
 
 
 def _drive_time(run: LiveRun, key: Stamp) -> float:

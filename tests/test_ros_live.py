@@ -17,7 +17,6 @@ import importlib.util
 import math
 import os
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -31,6 +30,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from live_ros import pose2d, position_errors, stop_process_group
 from planicp.ros import covariance_from_6x6, quaternion_to_yaw, ros_package_path, yaw_to_quaternion
 from planicp.se2 import between, compose
 
@@ -60,27 +60,6 @@ def _free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
-
-
-def _stop(process: subprocess.Popen[bytes], timeout: float = 15.0) -> None:
-    """SIGINT to the process group (roslaunch and roscore shut their children down), then SIGKILL."""
-    if process.poll() is not None:
-        return
-    for sig, wait in ((signal.SIGINT, timeout), (signal.SIGKILL, 5.0)):
-        try:
-            os.killpg(process.pid, sig)
-        except ProcessLookupError:
-            return
-        try:
-            process.wait(wait)
-            return
-        except subprocess.TimeoutExpired:
-            continue
-
-
-def _pose2d(pose: Any) -> tuple[float, float, float]:
-    o = pose.orientation
-    return (pose.position.x, pose.position.y, quaternion_to_yaw(o.x, o.y, o.z, o.w))
 
 
 def _key(stamp: Any) -> Stamp:
@@ -166,7 +145,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveRun]:
         except ImportError:
             pass
         for p in reversed(processes):
-            _stop(p)
+            stop_process_group(p, 15.0)
         for f in logs.values():
             f.close()
         run.node_log = (work / "node.log").read_text(errors="replace")
@@ -206,15 +185,15 @@ def _drive(env: dict[str, str], master: Any, node: subprocess.Popen[bytes], star
 
     def on_pose(m: Any) -> None:
         with run.lock:
-            run.poses[_key(m.header.stamp)] = (_pose2d(m.pose.pose), list(m.pose.covariance))
+            run.poses[_key(m.header.stamp)] = (pose2d(m.pose.pose), list(m.pose.covariance))
 
     def on_truth(m: Any) -> None:
         with run.lock:
-            run.truth[_key(m.header.stamp)] = _pose2d(m.pose)
+            run.truth[_key(m.header.stamp)] = pose2d(m.pose)
 
     def on_odom(m: Any) -> None:
         with run.lock:
-            run.odometry[_key(m.header.stamp)] = _pose2d(m.pose.pose)
+            run.odometry[_key(m.header.stamp)] = pose2d(m.pose.pose)
 
     def on_tf(m: Any) -> None:
         with run.lock:
@@ -326,9 +305,7 @@ def _initial_pose(
 
 
 def _errors(run: LiveRun, keys: list[Stamp]) -> np.ndarray:
-    return np.array(
-        [math.hypot(run.poses[k][0][0] - run.truth[k][0], run.poses[k][0][1] - run.truth[k][1]) for k in keys]
-    )
+    return position_errors(run.poses, run.truth, keys)
 
 
 def test_poses_match_the_ground_truth(live: LiveRun) -> None:
