@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..se2 import quaternion_to_yaw
+from ..se2 import between, quaternion_to_yaw, yaw_to_quaternion
 
 PLANAR_INDICES = (0, 1, 5)
 """Rows/columns of x, y and yaw in the 6x6 covariance of geometry_msgs."""
@@ -86,3 +86,38 @@ def planar_mount(translation: Any, quaternion: Any) -> tuple[tuple[float, float,
     x_axis = (1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy + qz * qw))
     zz = 1.0 - 2.0 * (qx * qx + qy * qy)
     return (float(t[0]), float(t[1]), math.atan2(x_axis[1], x_axis[0])), zz < 0.0
+
+
+def set_planar_pose(msg: Any, pose: Any) -> None:
+    """Fills a `geometry_msgs/Pose` (ROS 1 or 2) with the planar `pose` (x, y metres; yaw radians)."""
+    msg.position.x, msg.position.y = float(pose[0]), float(pose[1])
+    o = msg.orientation
+    o.x, o.y, o.z, o.w = yaw_to_quaternion(float(pose[2]))
+
+
+def set_planar_transform(msg: Any, pose: Any) -> None:
+    """Fills a `geometry_msgs/Transform` (ROS 1 or 2) with the planar `pose` (x, y metres; yaw radians)."""
+    msg.translation.x, msg.translation.y = float(pose[0]), float(pose[1])
+    r = msg.rotation
+    r.x, r.y, r.z, r.w = yaw_to_quaternion(float(pose[2]))
+
+
+def fill_odometry(odom: Any, stamp: Any, frames: tuple[str, str], pose: Any, previous: Any, dt: float) -> None:
+    """Fills a `nav_msgs/Odometry` (ROS 1 or 2): `stamp`, the (odom, base) `frames`, the planar
+    `pose` (T_odom_base) and, over a step of `dt` seconds from `previous`, the body-frame velocity
+    (m/s, rad/s; left at zero when `dt` is not positive)."""
+    odom.header.stamp = stamp
+    odom.header.frame_id, odom.child_frame_id = frames
+    set_planar_pose(odom.pose.pose, pose)
+    if dt > 0.0:
+        step = between(previous, pose)
+        odom.twist.twist.linear.x, odom.twist.twist.linear.y = step[0] / dt, step[1] / dt
+        odom.twist.twist.angular.z = step[2] / dt
+
+
+def fill_transform(tf: Any, stamp: Any, frames: tuple[str, str], pose: Any) -> None:
+    """Fills a `geometry_msgs/TransformStamped` (ROS 1 or 2): `stamp`, the (parent, child)
+    `frames` and the planar `pose` (T_parent_child)."""
+    tf.header.stamp = stamp
+    tf.header.frame_id, tf.child_frame_id = frames
+    set_planar_transform(tf.transform, pose)

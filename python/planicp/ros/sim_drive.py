@@ -30,9 +30,14 @@ from typing import Any
 
 import numpy as np
 
-from ..se2 import between, yaw_to_quaternion
 from ..sim.experiment import ExperimentConfig, Recording, run_experiment
-from .message_layout import covariance_to_6x6
+from .message_layout import (
+    covariance_to_6x6,
+    fill_odometry,
+    fill_transform,
+    set_planar_pose,
+    set_planar_transform,
+)
 from .node_settings import NodeSettings
 from .ros_imports import import_ros, start_node
 
@@ -92,7 +97,7 @@ def play(recording: Recording, params: Mapping[str, Any]) -> None:
     mount = g.TransformStamped()
     mount.header.stamp = rospy.Time.now()
     mount.header.frame_id, mount.child_frame_id = p["base_frame"], p["laser_frame"]
-    _set_transform(mount.transform, lidar.mount)
+    set_planar_transform(mount.transform, lidar.mount)
     static_pub.sendTransform(mount)
     initial_pub = None
     if p["initial_pose_topic"]:
@@ -104,7 +109,7 @@ def play(recording: Recording, params: Mapping[str, Any]) -> None:
         initial = g.PoseWithCovarianceStamped()
         initial.header.stamp = start
         initial.header.frame_id = p["map_frame"]
-        _set_pose(initial.pose.pose, tuple(float(v) for v in recording.truth[0]))
+        set_planar_pose(initial.pose.pose, tuple(float(v) for v in recording.truth[0]))
         initial.pose.covariance = covariance_to_6x6(np.diag([0.05**2, 0.05**2, 0.02**2]))
         initial_pub.publish(initial)
     wall_start = time.monotonic()
@@ -120,19 +125,11 @@ def play(recording: Recording, params: Mapping[str, Any]) -> None:
         pose = (float(row[0]), float(row[1]), float(row[2]))
         dt = float(t - times[i - 1]) if i > 0 else 0.0
         odom = nav.Odometry()
-        odom.header.stamp = stamp
-        odom.header.frame_id, odom.child_frame_id = p["odom_frame"], p["base_frame"]
-        _set_pose(odom.pose.pose, pose)
-        if dt > 0.0:  # body-frame velocity over the last step
-            step = between(previous, pose)
-            odom.twist.twist.linear.x, odom.twist.twist.linear.y = step[0] / dt, step[1] / dt
-            odom.twist.twist.angular.z = step[2] / dt
+        fill_odometry(odom, stamp, (p["odom_frame"], p["base_frame"]), pose, previous, dt)
         previous = pose
         odom_pub.publish(odom)
         tf = g.TransformStamped()
-        tf.header.stamp = stamp
-        tf.header.frame_id, tf.child_frame_id = p["odom_frame"], p["base_frame"]
-        _set_transform(tf.transform, pose)
+        fill_transform(tf, stamp, (p["odom_frame"], p["base_frame"]), pose)
         tf_pub.sendTransform(tf)
         k = scan_at.get(i)
         if k is None:
@@ -151,20 +148,8 @@ def play(recording: Recording, params: Mapping[str, Any]) -> None:
         truth = g.PoseStamped()
         truth.header.stamp = stamp
         truth.header.frame_id = p["map_frame"]
-        _set_pose(truth.pose, tuple(float(v) for v in recording.truth[k]))
+        set_planar_pose(truth.pose, tuple(float(v) for v in recording.truth[k]))
         truth_pub.publish(truth)
-
-
-def _set_pose(msg: Any, pose: Sequence[float]) -> None:
-    msg.position.x, msg.position.y = pose[0], pose[1]
-    o = msg.orientation
-    o.x, o.y, o.z, o.w = yaw_to_quaternion(pose[2])
-
-
-def _set_transform(msg: Any, pose: Sequence[float]) -> None:
-    msg.translation.x, msg.translation.y = pose[0], pose[1]
-    r = msg.rotation
-    r.x, r.y, r.z, r.w = yaw_to_quaternion(pose[2])
 
 
 def main(argv: Sequence[str] | None = None) -> int:
