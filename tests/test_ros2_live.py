@@ -49,6 +49,8 @@ where; from 19 s on it drives along a corridor whose stretches look alike), a wr
 malformed scans."""
 RESET_OFFSET = (2.5, 0.0, 0.0)
 """The wrong initial pose: 2.5 m ahead of the robot (T_base_wrong)."""
+RESET_SETTLE_S = 1.0
+"""Seconds after the wrong initial pose's stamp within which a published pose must follow it."""
 TRANSFORM_TOLERANCE = 1.0
 """The node's transform_tolerance (nav2_amcl's default, the shipped parameter file's), seconds."""
 NODE = "planicp"
@@ -486,12 +488,26 @@ def test_initial_pose_resets_the_pose(live: LiveRun) -> None:
     assert live.reset is not None
     reset_stamp, wrong = live.reset
     after = sorted(k for k in live.poses if _seconds(k) > reset_stamp)
-    first = after[0]
+    # Within a second of the reset, the poses follow the wrong pose moved by the odometry (and the
+    # localizer may then find the truth again). Not necessarily the very first: the node's
+    # callbacks for `initialpose` and for the scans run on their own threads, and on a loaded
+    # machine a scan stamped just after the reset can be tracked before the reset is applied.
     ref = min(live.odometry, key=lambda k: abs(_seconds(k) - reset_stamp))
-    expected = compose(wrong, between(live.odometry[ref], live.odometry[first]))
-    pose = live.poses[first][0]
-    assert math.hypot(pose[0] - expected[0], pose[1] - expected[1]) < 0.6, (pose, expected)
-    assert math.hypot(pose[0] - live.truth[first][0], pose[1] - live.truth[first][1]) > 1.5
+
+    def off(k: Stamp) -> tuple[float, float]:
+        expected = compose(wrong, between(live.odometry[ref], live.odometry[k]))
+        pose = live.poses[k][0]
+        return (
+            math.hypot(pose[0] - expected[0], pose[1] - expected[1]),
+            math.hypot(pose[0] - live.truth[k][0], pose[1] - live.truth[k][1]),
+        )
+
+    window = [
+        k for k in after if _seconds(k) <= reset_stamp + RESET_SETTLE_S and k in live.odometry and k in live.truth
+    ]
+    assert window, "no pose within a second of the reset"
+    followed = [off(k) for k in window]
+    assert any(from_wrong < 0.6 and from_truth > 1.5 for from_wrong, from_truth in followed), followed
 
 
 def test_malformed_scans_do_not_move_the_pose_or_stop_the_node(live: LiveRun) -> None:

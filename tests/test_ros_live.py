@@ -40,6 +40,8 @@ MALFORMED_AT_S, RESET_AT_S, RESTORE_AT_S = 15.0, 30.0, 34.0
 """Drive times at which the test sends malformed scans, a wrong initial pose and the true one."""
 RESET_OFFSET = (2.5, 0.0, 0.0)
 """The wrong initial pose: 2.5 m ahead of the robot (T_base_wrong)."""
+RESET_SETTLE_S = 1.0
+"""Seconds after the wrong initial pose's stamp within which a published pose must follow it."""
 TRANSFORM_TOLERANCE = 0.1
 """The node's `transform_tolerance` (the shipped parameter file's)."""
 
@@ -352,12 +354,25 @@ def test_initial_pose_resets_the_pose(live: LiveRun) -> None:
     assert live.reset is not None
     reset_stamp, wrong = live.reset
     after = sorted(k for k in live.poses if live.stamp_seconds(k) > reset_stamp)
-    first = after[0]
+    # Within a second of the reset, the poses follow the wrong pose moved by the odometry (and the
+    # localizer may then find the truth again). Not necessarily the very first: the node's
+    # callbacks for `initialpose` and for the scans run on their own threads, and on a loaded
+    # machine a scan stamped just after the reset can be tracked before the reset is applied.
     ref = min(live.odometry, key=lambda k: abs(live.stamp_seconds(k) - reset_stamp))
-    expected = compose(wrong, between(live.odometry[ref], live.odometry[first]))
-    pose = live.poses[first][0]
-    assert math.hypot(pose[0] - expected[0], pose[1] - expected[1]) < 0.6, (pose, expected)
-    assert math.hypot(pose[0] - live.truth[first][0], pose[1] - live.truth[first][1]) > 1.5
+
+    def off(k: Stamp) -> tuple[float, float]:
+        expected = compose(wrong, between(live.odometry[ref], live.odometry[k]))
+        pose = live.poses[k][0]
+        return (
+            math.hypot(pose[0] - expected[0], pose[1] - expected[1]),
+            math.hypot(pose[0] - live.truth[k][0], pose[1] - live.truth[k][1]),
+        )
+
+    soon = [k for k in after if live.stamp_seconds(k) <= reset_stamp + RESET_SETTLE_S]
+    window = [k for k in soon if k in live.odometry and k in live.truth]
+    assert window, "no pose within a second of the reset"
+    followed = [off(k) for k in window]
+    assert any(from_wrong < 0.6 and from_truth > 1.5 for from_wrong, from_truth in followed), followed
     # The true pose, with RViz's covariance: tracking resumes within a second.
     settled = [k for k in after if live.stamp_seconds(k) > live.restore + 1.0 and k in live.truth]
     assert len(settled) > 50
