@@ -2,7 +2,7 @@
 """Walls out of the real raster drawings: what the default extraction keeps and drops, and its
 precision and recall against the true walls where a drawing has them.
 
-    python benches/drawing_walls.py [--drawings ../shared/data/drawings] [--out out/drawing_walls]
+    python benches/drawing_walls.py [--drawings ../shared/data/drawings] [--notes] [--track SECONDS]
 
 For each raster drawing, the wall surface points `PlanMap.from_image` extracts by default
 (walls="drawing") and with every dark pixel a wall (walls="all-dark", the reading before) are
@@ -37,8 +37,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planicp import PlanMap
-from planicp.plans.plan_raster import load_gray, wall_mask
-from planicp.plans.wall_extraction import extract_walls
+from planicp.plans.plan_raster import load_gray
+from planicp.plans.wall_extraction import explain_image
 
 SVG = "{http://www.w3.org/2000/svg}"
 
@@ -128,11 +128,50 @@ def plan_pixels(plan: PlanMap, resolution: float, height: int) -> NDArray[np.flo
     return np.column_stack([xy[:, 0] / resolution, height - xy[:, 1] / resolution])
 
 
+def track_in_true_walls(
+    drawings: Path, duration: float, seeds: list[int]
+) -> list[tuple[int, float, float, float, int, int]]:
+    """The drift experiment (`planicp.sim.run_experiment`) in the CubiCasa building: the robot
+    drives, and its LIDAR scans, in the TRUE walls (the SVG's wall polygons less the doors, the
+    windows solid, registered to the drawing's pixels), furnished with furniture and people;
+    planicp tracks it on the plan EXTRACTED from the drawing by default. Both in the drawing's
+    map frame (origin (0, 0, 0), 0.0056 m per pixel). Per seed: (seed, position RMS m, position
+    max m, heading RMS deg, scans, lost scans)."""
+    from planicp.plans.plan_raster import PlanRaster
+    from planicp.sim.experiment import ExperimentConfig, run_experiment
+
+    name, resolution = "cubicasa_F1_original.png", DRAWINGS["cubicasa_F1_original.png"]
+    gray = load_gray(drawings / name)
+    polygons = svg_polygons(drawings / "cubicasa_F1_model.svg")
+    scale, shift, _ = register(polygons["Wall"], gray)
+    walls = fill(polygons["Wall"], gray.shape, scale, shift) & ~fill(polygons["Door"], gray.shape, scale, shift)
+    building = PlanRaster(walls.astype(bool), resolution, (0.0, 0.0, 0.0))
+    plan = PlanMap.from_image(drawings / name, resolution, cache=False)
+    rows = []
+    for seed in seeds:
+        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=duration, seed=seed), building=building)
+        d, dyaw = recording.errors("estimate")
+        lost = 0 if recording.lost is None else int(recording.lost.sum())
+        rows.append(
+            (
+                seed,
+                float(np.sqrt(np.mean(d**2))),
+                float(d.max()),
+                float(np.degrees(np.sqrt(np.mean(dyaw**2)))),
+                len(recording.times),
+                lost,
+            )
+        )
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--drawings", type=Path, default=Path("../shared/data/drawings"))
     parser.add_argument("--tolerance", type=float, default=0.05, help="metres")
-    parser.add_argument("--out", type=Path, default=None, help="folder for the overlays (planicp plan's)")
+    parser.add_argument("--notes", action="store_true", help="print what the extraction decided on each drawing")
+    parser.add_argument("--track", type=float, default=0.0, metavar="SECONDS", help="simulated tracking run length")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     args = parser.parse_args()
     print("| drawing | truth | walls | points | precision | recall | time |")
     print("|---|---|---|---|---|---|---|")
@@ -165,10 +204,15 @@ def main() -> None:
                 else:
                     cells = "- | -"
                 print(f"| {name} | {label} | {mode} | {len(plan)} | {cells} | {seconds:.1f} s |")
-        if args.out is not None:
-            extracted = extract_walls(wall_mask(gray), resolution)
-            for note in extracted.notes:
+        if args.notes:
+            for note in explain_image(path, resolution).notes:
                 print(f"<!-- {name}: {note} -->")
+    if args.track > 0:
+        print()
+        print("| seed | position RMS | position max | heading RMS | scans | lost |")
+        print("|---|---|---|---|---|---|")
+        for seed, rms, worst, heading, scans, lost in track_in_true_walls(args.drawings, args.track, args.seeds):
+            print(f"| {seed} | {rms * 100:.1f} cm | {worst * 100:.1f} cm | {heading:.2f} deg | {scans} | {lost} |")
 
 
 if __name__ == "__main__":

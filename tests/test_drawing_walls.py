@@ -87,12 +87,12 @@ def _clutter(image: NDArray[np.uint8], pen: int = 1) -> None:
         cv2.rectangle(image, (c - 8, 205), (c + 8, 215), black, pen)
     cv2.circle(image, (480, 300), 18, black, pen, cv2.LINE_AA)
     # A dimension string below the floor, with arrows and its text.
-    cv2.arrowedLine(image, (300, 385), (40, 385), black, pen, tipLength=0.03)
-    cv2.arrowedLine(image, (300, 385), (560, 385), black, pen, tipLength=0.03)
-    cv2.putText(image, "10.40", (280, 380), cv2.FONT_HERSHEY_SIMPLEX, 0.4, black, pen, cv2.LINE_AA)
-    # Hatching: a tiled floor of short parallel strokes.
+    cv2.arrowedLine(image, (300, 392), (40, 392), black, pen, tipLength=0.03)
+    cv2.arrowedLine(image, (300, 392), (560, 392), black, pen, tipLength=0.03)
+    cv2.putText(image, "10.40", (280, 388), cv2.FONT_HERSHEY_SIMPLEX, 0.4, black, pen, cv2.LINE_AA)
+    # Hatching: a tiled floor of short parallel strokes (0.3 m across).
     for k in range(0, 100, 8):
-        cv2.line(image, (320 + k, 270), (320 + k + 20, 290), black, pen)
+        cv2.line(image, (320 + k, 270), (320 + k + 15, 285), black, pen)
 
 
 def thick_drawing(grey: int) -> tuple[NDArray[np.uint8], NDArray[np.bool_]]:

@@ -61,12 +61,13 @@ DROPPED_CLASSES: dict[int, str] = {
     4: "fills (thicker than walls)",
     5: "short or curved strokes (text, door swings, hatching)",
     6: "detached shapes (furniture)",
+    9: "unpaired lines (furniture outlines, dimension lines)",
     7: "coloured ink (not black or grey)",
     8: "ink of another tone than the walls",
 }
 """Labels of the dropped ink pixels and what each class is."""
 
-THIN, SMALL, FILL, SHORT, DETACHED, COLOURED, TONE = 2, 3, 4, 5, 6, 7, 8
+THIN, SMALL, FILL, SHORT, DETACHED, COLOURED, TONE, UNPAIRED = 2, 3, 4, 5, 6, 7, 8, 9
 
 
 @settings_dataclass(frozen=True, config=SETTINGS)
@@ -95,6 +96,10 @@ class WallExtraction(Settings):
             the bands; ink further than this (grey levels) from it is another kind of line work
             (CubiCasa's black symbols beside its grey walls) and is dropped before the bands are
             taken again.
+        max_wall_thickness: metres, line style: the widest gap between a wall's two face lines.
+        min_paired: line style: when at least this share of the straight runs are paired (a
+            parallel run at the drawing's wall thickness beside them), the walls are the paired
+            runs; otherwise (walls drawn as single lines) the networks of runs.
     """
 
     thick_factor: Annotated[float, Real(ge=1.0)] = 2.5
@@ -106,6 +111,8 @@ class WallExtraction(Settings):
     min_rectangularity: Annotated[float, Real(gt=0.0, le=1.0)] = 0.85
     max_opening: Annotated[float, Real(gt=0.0, unit="metres")] = 2.0
     tone_tolerance: Annotated[float, Real(gt=0.0, le=255.0)] = 40.0
+    max_wall_thickness: Annotated[float, Real(gt=0.0, unit="metres")] = 0.6
+    min_paired: Annotated[float, Real(ge=0.0, le=1.0)] = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,20 +147,34 @@ def stroke_thickness(ink: NDArray[np.bool_]) -> NDArray[np.int32]:
     """(H, W) int32: for each ink pixel, the diameter in pixels of the largest disc (ellipse
     kernel) whose opening of `ink` still holds it (0 off the ink). Diameters 1..16, then every
     15 % up to the thickest stroke."""
+    return stroke_thickness_upto(ink, max(2, min(ink.shape)))
+
+
+def stroke_thickness_upto(ink: NDArray[np.bool_], limit: int) -> NDArray[np.int32]:
+    """`stroke_thickness` with discs up to `limit` pixels (thicker strokes get about `limit`)."""
     cv2 = _cv2()
     mask = ink.astype(np.uint8)
     thickness = np.where(ink, 1, 0).astype(np.int32)
     k = 2
-    limit = max(2, min(ink.shape))
     while k <= limit:
         kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+        opened = _open(mask, kernel)
         if not opened.any():
             break
         thickness[opened > 0] = k
         mask = opened  # an opening by a larger disc lies within the opening by a smaller one
         k = k + 1 if k < 16 else int(k * 1.15) + 1
     return thickness
+
+
+def _open(mask: NDArray[np.uint8], kernel: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """Morphological opening, outside the image counted as no ink (a stroke at the edge is not
+    lengthened beyond it)."""
+    cv2 = _cv2()
+    opened: NDArray[np.uint8] = cv2.morphologyEx(
+        mask, cv2.MORPH_OPEN, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0
+    )
+    return opened
 
 
 def _otsu_split(values: NDArray[np.float64]) -> float:
@@ -217,7 +238,7 @@ def extract_walls(
             *notes,
         )
     else:
-        walls, labels, notes = _line_walls(ink, pen, run_px, s, labels)
+        walls, labels, notes = _line_walls(ink, pen, run_px, s, labels, resolution)
         wall_px = pen
         style = "line"
         notes = (
@@ -255,7 +276,7 @@ def _thick_walls(
 
     def bands_of(ink_: NDArray[np.bool_]) -> Any:
         mask = ink_.astype(np.uint8)
-        return cv2.morphologyEx(mask, cv2.MORPH_OPEN, disc) | cv2.morphologyEx(mask, cv2.MORPH_OPEN, square)
+        return _open(mask, disc) | _open(mask, square)
 
     opened = bands_of(ink)
     tone_note = ""
@@ -341,8 +362,44 @@ def _dominant_angles(ink: NDArray[np.bool_], run_px: int) -> list[float]:
     return found
 
 
+def _paired_runs(
+    ink: NDArray[np.bool_], runs: NDArray[np.bool_], pen: float, run_px: int, s: WallExtraction, resolution: float
+) -> tuple[NDArray[np.bool_], int]:
+    """The straight runs that are a wall's face lines, and the walls' median thickness in pixels
+    (0: no wall strip found).
+
+    A wall drawn as two lines (its ends closed) encloses a strip of free space: a hole of the ink,
+    at most `max_wall_thickness` wide and at least twice `min_run` long (its area over its width;
+    a pillow or a chair drawn as a small rectangle is shorter). The
+    runs along such strips are paired; a single line (a furniture outline, a dimension line) has
+    no enclosed strip beside it, and the space a room's or a bed's outline encloses is wide."""
+    cv2 = _cv2()
+    widest = max(3.0, s.max_wall_thickness / resolution)
+    free = (~ink).astype(np.uint8)
+    count, comp, stats, _ = cv2.connectedComponentsWithStats(free, connectivity=4)
+    depth = cv2.distanceTransform(free, cv2.DIST_L2, 3)
+    rows, cols = ink.shape
+    strip = np.zeros(count, bool)
+    widths = []
+    for i in range(1, count):
+        x, y, w, h, area = stats[i]
+        if x == 0 or y == 0 or x + w == cols or y + h == rows or area < run_px:
+            continue  # open to the drawing's edge: outside, not a wall's inside
+        sub = comp[y : y + h, x : x + w] == i
+        width = 2.0 * float(depth[y : y + h, x : x + w][sub].max())
+        if width <= widest and area / max(width, 1.0) >= 2 * run_px:  # long: not a pillow or a chair
+            strip[i] = True
+            widths.append(width)
+    if not strip.any():
+        return np.zeros_like(runs), 0
+    inside = strip[comp].astype(np.uint8)
+    reach = 2 * max(2, int(math.ceil(2 * pen))) + 1  # the face lines beside the strip, two pens thick
+    beside = cv2.dilate(inside, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))) > 0
+    return runs & beside, int(round(float(np.median(widths))))
+
+
 def _line_walls(
-    ink: NDArray[np.bool_], pen: float, run_px: int, s: WallExtraction, labels: NDArray[np.uint8]
+    ink: NDArray[np.bool_], pen: float, run_px: int, s: WallExtraction, labels: NDArray[np.uint8], resolution: float
 ) -> tuple[NDArray[np.bool_], NDArray[np.uint8], tuple[str, ...]]:
     cv2 = _cv2()
     mask = ink.astype(np.uint8)
@@ -353,10 +410,20 @@ def _line_walls(
     # A pen line of 2-3 px: a 1-px kernel fits in it along its length; widened by the pen to the line's width.
     runs = np.zeros(ink.shape, np.uint8)
     for a in angles:
-        runs |= cv2.morphologyEx(mask, cv2.MORPH_OPEN, _line_kernel(run_px, a))
+        runs |= _open(mask, _line_kernel(run_px, a))
     labels[ink & (runs == 0)] = SHORT
-    gap = max(3, int(round(2 * pen)) + 1)
-    joined = cv2.morphologyEx(runs, cv2.MORPH_CLOSE, np.ones((gap, gap), np.uint8))
+    paired, gap = _paired_runs(ink, runs > 0, pen, run_px, s, resolution)
+    if gap > 0 and paired.sum() >= s.min_paired * max(1, int((runs > 0).sum())):
+        walls = paired
+        labels[(runs > 0) & ~walls] = UNPAIRED
+        unpaired = int(((runs > 0) & ~walls).sum())
+        notes: tuple[str, ...] = (
+            f"straight runs of at least {run_px} px in {len(angles)} directions; walls drawn as pairs of lines "
+            f"about {gap} px apart: {int(walls.sum())} px of runs paired, {unpaired} px unpaired",
+        )
+        return walls, labels, notes
+    gap_px = max(3, int(round(2 * pen)) + 1)
+    joined = cv2.morphologyEx(runs, cv2.MORPH_CLOSE, np.ones((gap_px, gap_px), np.uint8))
     count, comp, stats, _ = cv2.connectedComponentsWithStats(joined, connectivity=8)
     sizes = np.bincount(comp[runs > 0], minlength=count).astype(np.float64)
     sizes[0] = 0
@@ -365,8 +432,8 @@ def _line_walls(
     walls = (runs > 0) & keep[comp]
     labels[(runs > 0) & ~walls] = DETACHED
     notes = (
-        f"straight runs of at least {run_px} px in {len(angles)} directions; {int(keep.sum())} wall networks kept, "
-        f"{int((~keep[1:]).sum())} detached shapes dropped",
+        f"straight runs of at least {run_px} px in {len(angles)} directions, single wall lines; {int(keep.sum())} "
+        f"wall networks kept, {int((~keep[1:]).sum())} detached shapes dropped",
     )
     return walls, labels, notes
 
