@@ -51,8 +51,9 @@ DRAWINGS = {
 
 
 def svg_polygons(path: Path) -> dict[str, list[NDArray[np.float64]]]:
-    """The polygons of the groups of class Wall, Door and Window (first word of the class), SVG units."""
-    found: dict[str, list[NDArray[np.float64]]] = {"Wall": [], "Door": [], "Window": []}
+    """The polygons of the groups of class Wall, Door, Window and Space (rooms; first word of the
+    class), SVG units."""
+    found: dict[str, list[NDArray[np.float64]]] = {"Wall": [], "Door": [], "Window": [], "Space": []}
     for group in ET.parse(path).iter(SVG + "g"):
         kind = (group.get("class") or "").split()[:1]
         if not kind or kind[0] not in found:
@@ -133,7 +134,8 @@ def track_in_true_walls(
 ) -> list[tuple[int, float, float, float, int, int]]:
     """The drift experiment (`planicp.sim.run_experiment`) in the CubiCasa building: the robot
     drives, and its LIDAR scans, in the TRUE walls (the SVG's wall polygons less the doors, the
-    windows solid, registered to the drawing's pixels), furnished with furniture and people;
+    windows solid, registered to the drawing's pixels; outside the footprint of its rooms and walls
+    solid), furnished with furniture and people;
     planicp tracks it on the plan EXTRACTED from the drawing by default. Both in the drawing's
     map frame (origin (0, 0, 0), 0.0056 m per pixel). Per seed: (seed, position RMS m, position
     max m, heading RMS deg, scans, lost scans)."""
@@ -145,7 +147,12 @@ def track_in_true_walls(
     polygons = svg_polygons(drawings / "cubicasa_F1_model.svg")
     scale, shift, _ = register(polygons["Wall"], gray)
     walls = fill(polygons["Wall"], gray.shape, scale, shift) & ~fill(polygons["Door"], gray.shape, scale, shift)
-    building = PlanRaster(walls.astype(bool), resolution, (0.0, 0.0, 0.0))
+    # The building's footprint: its rooms (the balcony too), walls, doors and windows. Outside it is
+    # solid, so that the robot stays in the building: the exterior door leads nowhere, and the
+    # balcony's open side (a railing in the drawing) is a barrier the LIDAR sees.
+    footprint = fill([p for k in ("Space", "Wall", "Door", "Window") for p in polygons[k]], gray.shape, scale, shift)
+    footprint = cv2.morphologyEx(footprint, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # seams between polygons
+    building = PlanRaster((walls | (1 - footprint)).astype(bool), resolution, (0.0, 0.0, 0.0))
     plan = PlanMap.from_image(drawings / name, resolution, cache=False)
     rows = []
     for seed in seeds:

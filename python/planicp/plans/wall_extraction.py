@@ -96,7 +96,9 @@ class WallExtraction(Settings):
             the bands; ink further than this (grey levels) from it is another kind of line work
             (CubiCasa's black symbols beside its grey walls) and is dropped before the bands are
             taken again.
-        max_wall_thickness: metres, line style: the widest gap between a wall's two face lines.
+        max_wall_thickness: metres: the thickest wall. Line style: the widest strip between a
+            wall's two face lines. Stroke thickness is measured up to twice it (thicker ink is a
+            fill however thick).
         min_paired: line style: when at least this share of the straight runs are paired (a
             parallel run at the drawing's wall thickness beside them), the walls are the paired
             runs; otherwise (walls drawn as single lines) the networks of runs.
@@ -143,28 +145,46 @@ def _cv2() -> Any:
     return cv2
 
 
-def stroke_thickness(ink: NDArray[np.bool_]) -> NDArray[np.int32]:
-    """(H, W) int32: for each ink pixel, the diameter in pixels of the largest disc (ellipse
-    kernel) whose opening of `ink` still holds it (0 off the ink). Diameters 1..16, then every
-    15 % up to the thickest stroke."""
-    return stroke_thickness_upto(ink, max(2, min(ink.shape)))
-
-
-def stroke_thickness_upto(ink: NDArray[np.bool_], limit: int) -> NDArray[np.int32]:
-    """`stroke_thickness` with discs up to `limit` pixels (thicker strokes get about `limit`)."""
+def stroke_thickness(ink: NDArray[np.bool_], limit: int | None = None) -> NDArray[np.int32]:
+    """(H, W) int32: for each ink pixel, the diameter in pixels of the largest disc whose opening
+    of `ink` still holds it (0 off the ink). Diameters 1..16 (OpenCV's ellipse kernels), then
+    every 15 % (discs by distance transforms, whose cost does not grow with the disc) up to the
+    thickest stroke or `limit` (strokes thicker than the last disc tried get its diameter)."""
     cv2 = _cv2()
+    top = max(2, min(ink.shape)) if limit is None else max(2, int(limit))
     mask = ink.astype(np.uint8)
     thickness = np.where(ink, 1, 0).astype(np.int32)
     k = 2
-    while k <= limit:
-        kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-        opened = _open(mask, kernel)
+    while k <= top:
+        if k <= 16:
+            opened = _open(mask, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k)))
+        else:
+            opened = _open_disc(mask, (k - 1) / 2.0)
         if not opened.any():
             break
         thickness[opened > 0] = k
         mask = opened  # an opening by a larger disc lies within the opening by a smaller one
         k = k + 1 if k < 16 else int(k * 1.15) + 1
     return thickness
+
+
+def stroke_thickness_upto(ink: NDArray[np.bool_], limit: int) -> NDArray[np.int32]:
+    """`stroke_thickness` with discs up to `limit` pixels."""
+    return stroke_thickness(ink, limit)
+
+
+def _open_disc(mask: NDArray[np.uint8], radius: float) -> NDArray[np.uint8]:
+    """Opening of `mask` by a Euclidean disc of `radius` pixels (outside the image no ink), with
+    two distance transforms: the centres whose disc fits in the mask, grown by the disc."""
+    cv2 = _cv2()
+    padded = np.pad(mask, 1)
+    inside = cv2.distanceTransform(padded, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    centres = (inside > radius).astype(np.uint8)
+    if not centres.any():
+        return np.zeros_like(mask)
+    reach = cv2.distanceTransform(1 - centres, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    opened: NDArray[np.uint8] = (reach[1:-1, 1:-1] <= radius).astype(np.uint8) & mask
+    return opened
 
 
 def _open(mask: NDArray[np.uint8], kernel: NDArray[np.uint8]) -> NDArray[np.uint8]:
@@ -217,7 +237,8 @@ def extract_walls(
             f"every dark pixel of the drawing is coloured (chroma above max_chroma={s.max_chroma:g}): raise "
             'max_chroma, or read it with every dark pixel a wall: walls="all-dark"'
         )
-    thickness = stroke_thickness(ink)
+    # Discs up to twice the thickest wall: thicker ink is a fill whatever its thickness.
+    thickness = stroke_thickness(ink, int(2 * s.max_wall_thickness / resolution) + 2)
     values = thickness[ink]
     split = math.exp(_otsu_split(np.log(values.astype(np.float64))))
     thin_values = values[values <= split]
