@@ -146,6 +146,25 @@ def test_line_drawing_keeps_the_wall_lines_and_drops_the_clutter() -> None:
     assert not extracted.walls[60:110, 420:520].any()  # the bed, apart from the walls
 
 
+def test_long_hatching_in_a_line_drawing_is_no_wall() -> None:
+    """Hatching of long parallel lines inside a frame: the narrow strips between them lie side by
+    side, each line between two strips, unlike a wall's face line (a room on its other side)."""
+    image, walls = line_drawing()
+    hatch = np.zeros_like(image)
+    for k in range(-100, 220, 7):
+        cv2.line(hatch, (60 + k, 100), (160 + k, 200), 1, 1)
+    hatch[:, :70] = 0
+    hatch[:, 270:] = 0
+    hatch[:100] = 0
+    hatch[201:] = 0
+    cv2.rectangle(hatch, (70, 100), (270, 200), 1, 1)
+    image[hatch > 0] = 0
+    extracted = explain_image(image, RES)
+    assert (extracted.walls & (hatch > 0)).sum() < 0.1 * (hatch > 0).sum()
+    _, recall = _score(PlanMap.from_image(image, RES, cache=False), walls)
+    assert recall >= 0.95
+
+
 @pytest.mark.parametrize("style", ["thick", "line"])
 def test_doors_are_openings(style: str) -> None:
     image, _ = thick_drawing(0) if style == "thick" else line_drawing()

@@ -10,7 +10,8 @@ are turned into pixels with its resolution (metres per pixel). The steps, all Op
 2. **Stroke thickness** of every ink pixel by granulometry: the largest disc (an ellipse kernel
    of k pixels) whose morphological opening still holds the pixel. A 1-2 px pen line (text,
    symbol, door swing, dimension line, hatching, tile) has thickness 1-3; a wall drawn as a band
-   has its own width.
+   has its own width. Ink thicker than `max_wall_thickness` is no wall: it is dropped as
+   "fills" (a filled room, a logo, a dark legend box).
 3. **Drawing style.** The ink's thicknesses (area-weighted, in log scale) are split in two by
    Otsu's method; the pen width is the thin class's median, and ink is thick above the split
    and above `thick_factor` pen widths. When at least `min_thick_share` of the ink is thick, the
@@ -25,15 +26,19 @@ are turned into pixels with its resolution (metres per pixel). The steps, all Op
    of their rotated bounding box) are wall runs; a shorter one is kept as a wall piece (a pier
    between windows, a stub beside a door) when it lies within `max_opening` (the widest door or
    window) of a run and fills at least `min_rectangularity` of its rotated bounding box (a
-   straight band), else dropped as "small shapes" (a bold arrow, a stove). Components thicker
-   than `fill_factor` times the walls' median thickness over most of their area are "fills".
+   straight band), else dropped as "small shapes" (a bold arrow, a stove).
 5. **Line style.** The ink is opened with 1-px line kernels of `min_run` metres in 4 directions
    plus the dominant directions of its straight segments (OpenCV's line segment detector): what
    remains are the straight runs at least that long. Text, door swings (arcs), short symbol
-   strokes and hatching hold none and are dropped as "short or curved strokes". Runs are grouped
-   into networks (8-connected after closing gaps of 2 pen widths); a network with less than
-   `min_network` of the largest one's run pixels (a bed or a table apart from the walls) is dropped
-   as "detached shapes".
+   strokes and short hatching hold none and are dropped as "short or curved strokes". A wall
+   drawn as two lines (its ends closed) encloses a strip: a hole in the ink at most
+   `max_wall_thickness` wide and at least twice `min_run` long. The runs beside such strips are
+   the walls; single lines (furniture outlines, dimension lines), small closed shapes (a pillow,
+   a chair) and strips side by side, most of their lines between two strips (long hatching), are
+   dropped as "unpaired lines". When less than `min_paired` of the runs are paired (walls drawn
+   as single lines), the runs are grouped into networks instead (8-connected after closing gaps
+   of 2 pen widths); a network with less than `min_network` of the largest one's run pixels (a
+   bed or a table apart from the walls) is dropped as "detached shapes".
 
 Doors are openings: a door's leaf and swing are pen strokes (thin in thick-wall drawings, curved
 or short in line drawings) and are dropped, leaving the gap in the wall.
@@ -80,8 +85,6 @@ class WallExtraction(Settings):
         min_thick_share: ... and the thick ink is at least this share of all ink.
         min_run: metres: a wall run is at least this long (line style: straight runs; thick
             style: a short component apart from every long one is dropped).
-        fill_factor: thick components thicker than this many times the walls' median thickness
-            over most of their area are fills, not walls.
         min_network: line style: a network of straight runs shorter than this share of the
             longest network is a detached shape (furniture), not walls.
         max_chroma: ink of a colour image whose chroma (largest minus smallest of its red, green
@@ -96,9 +99,8 @@ class WallExtraction(Settings):
             the bands; ink further than this (grey levels) from it is another kind of line work
             (CubiCasa's black symbols beside its grey walls) and is dropped before the bands are
             taken again.
-        max_wall_thickness: metres: the thickest wall. Line style: the widest strip between a
-            wall's two face lines. Stroke thickness is measured up to twice it (thicker ink is a
-            fill however thick).
+        max_wall_thickness: metres: the thickest wall. Ink thicker is a fill; in line style, the
+            widest strip between a wall's two face lines.
         min_paired: line style: when at least this share of the straight runs are paired (a
             parallel run at the drawing's wall thickness beside them), the walls are the paired
             runs; otherwise (walls drawn as single lines) the networks of runs.
@@ -107,7 +109,6 @@ class WallExtraction(Settings):
     thick_factor: Annotated[float, Real(ge=1.0)] = 2.5
     min_thick_share: Annotated[float, Real(gt=0.0, lt=1.0)] = 0.1
     min_run: Annotated[float, Real(gt=0.0, unit="metres")] = 0.6
-    fill_factor: Annotated[float, Real(gt=1.0)] = 2.5
     min_network: Annotated[float, Real(gt=0.0, le=1.0)] = 0.1
     max_chroma: Annotated[float, Real(ge=0.0, le=255.0)] = 60.0
     min_rectangularity: Annotated[float, Real(gt=0.0, le=1.0)] = 0.85
@@ -149,7 +150,7 @@ def stroke_thickness(ink: NDArray[np.bool_], limit: int | None = None) -> NDArra
     """(H, W) int32: for each ink pixel, the diameter in pixels of the largest disc whose opening
     of `ink` still holds it (0 off the ink). Diameters 1..16 (OpenCV's ellipse kernels), then
     every 15 % (discs by distance transforms, whose cost does not grow with the disc) up to the
-    thickest stroke or `limit` (strokes thicker than the last disc tried get its diameter)."""
+    thickest stroke or `limit`, the last disc tried (thicker strokes get `limit`)."""
     cv2 = _cv2()
     top = max(2, min(ink.shape)) if limit is None else max(2, int(limit))
     mask = ink.astype(np.uint8)
@@ -164,7 +165,9 @@ def stroke_thickness(ink: NDArray[np.bool_], limit: int | None = None) -> NDArra
             break
         thickness[opened > 0] = k
         mask = opened  # an opening by a larger disc lies within the opening by a smaller one
-        k = k + 1 if k < 16 else int(k * 1.15) + 1
+        if k == top:
+            break
+        k = min(top, k + 1 if k < 16 else int(k * 1.15) + 1)  # the last disc: `limit` itself
     return thickness
 
 
@@ -237,8 +240,16 @@ def extract_walls(
             f"every dark pixel of the drawing is coloured (chroma above max_chroma={s.max_chroma:g}): raise "
             'max_chroma, or read it with every dark pixel a wall: walls="all-dark"'
         )
-    # Discs up to twice the thickest wall: thicker ink is a fill whatever its thickness.
-    thickness = stroke_thickness(ink, int(2 * s.max_wall_thickness / resolution) + 2)
+    # Discs up to just beyond the thickest wall: thicker ink is a fill, however thick.
+    widest = int(math.ceil(s.max_wall_thickness / resolution)) + 1  # a disc wider than any wall
+    thickness = stroke_thickness(ink, widest)
+    fills = thickness >= widest
+    ink = ink & ~fills
+    if not ink.any():
+        raise ValueError(
+            f"every dark pixel of the drawing is in areas thicker than max_wall_thickness={s.max_wall_thickness:g} m "
+            '(fills): check the resolution, or read it with every dark pixel a wall: walls="all-dark"'
+        )
     values = thickness[ink]
     split = math.exp(_otsu_split(np.log(values.astype(np.float64))))
     thin_values = values[values <= split]
@@ -248,6 +259,7 @@ def extract_walls(
     run_px = max(3, int(round(s.min_run / resolution)))
     labels = np.zeros(ink.shape, np.uint8)
     labels[coloured] = COLOURED
+    labels[fills] = FILL
     if thick_share >= s.min_thick_share:
         walls, labels, wall_px, notes = _thick_walls(
             ink, thickness, int(math.floor(cut)) + 1, run_px, s, labels, gray, resolution
@@ -316,7 +328,6 @@ def _thick_walls(
     count, comp, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
     wall_px = float(np.median(thickness[bands])) if bands.any() else float(k)
     long = np.zeros(count, bool)
-    fill = np.zeros(count, bool)
     rectangular = np.zeros(count, bool)
     for i in range(1, count):
         x, y, w, h, area = stats[i]
@@ -325,25 +336,22 @@ def _thick_walls(
         (_, (a, b), _) = cv2.minAreaRect(points)
         long[i] = max(a, b) >= run_px
         rectangular[i] = area >= s.min_rectangularity * max(1.0, (a + 1) * (b + 1))
-        fill[i] = float((thickness[y : y + h, x : x + w][sub] > s.fill_factor * wall_px).mean()) > 0.5
-    anchors = np.isin(comp, np.nonzero(long & ~fill)[0]).astype(np.uint8)
+    anchors = long[comp].astype(np.uint8)
     reach_px = max(1, int(round(s.max_opening / resolution)))
     near = cv2.distanceTransform(1 - anchors, cv2.DIST_L2, 3) <= reach_px
     small = np.zeros(count, bool)
     for i in range(1, count):
-        if not long[i] and not fill[i]:
+        if not long[i]:
             x, y, w, h, _ = stats[i]
             beside = bool(near[y : y + h, x : x + w][comp[y : y + h, x : x + w] == i].any())
             small[i] = not (beside and rectangular[i])
-    fill_px = fill[comp] & bands
     small_px = small[comp] & bands
-    labels[fill_px] = FILL
     labels[small_px] = SMALL
-    walls = bands & ~fill_px & ~small_px
+    walls = bands & ~small_px
     notes = (
         *((tone_note,) if tone_note else ()),
-        f"{int(long[1:].sum())} wall runs of at least {run_px} px, {int((~long[1:] & ~small[1:] & ~fill[1:]).sum())} "
-        f"short pieces beside them; dropped {int(small.sum())} small shapes, {int(fill.sum())} fills",
+        f"{int(long[1:].sum())} wall runs of at least {run_px} px, {int((~long[1:] & ~small[1:]).sum())} "
+        f"short pieces beside them; dropped {int(small.sum())} small shapes",
     )
     return walls, labels, wall_px, notes
 
@@ -393,7 +401,8 @@ def _paired_runs(
     at most `max_wall_thickness` wide and at least twice `min_run` long (its area over its width;
     a pillow or a chair drawn as a small rectangle is shorter). The
     runs along such strips are paired; a single line (a furniture outline, a dimension line) has
-    no enclosed strip beside it, and the space a room's or a bed's outline encloses is wide."""
+    no enclosed strip beside it, and the space a room's or a bed's outline encloses is wide. Strips
+    side by side (most of their lines with another strip beyond) are hatching."""
     cv2 = _cv2()
     widest = max(3.0, s.max_wall_thickness / resolution)
     free = (~ink).astype(np.uint8)
@@ -401,7 +410,7 @@ def _paired_runs(
     depth = cv2.distanceTransform(free, cv2.DIST_L2, 3)
     rows, cols = ink.shape
     strip = np.zeros(count, bool)
-    widths = []
+    widths = np.zeros(count)
     for i in range(1, count):
         x, y, w, h, area = stats[i]
         if x == 0 or y == 0 or x + w == cols or y + h == rows or area < run_px:
@@ -410,13 +419,31 @@ def _paired_runs(
         width = 2.0 * float(depth[y : y + h, x : x + w][sub].max())
         if width <= widest and area / max(width, 1.0) >= 2 * run_px:  # long: not a pillow or a chair
             strip[i] = True
-            widths.append(width)
+            widths[i] = width
     if not strip.any():
         return np.zeros_like(runs), 0
-    inside = strip[comp].astype(np.uint8)
     reach = 2 * max(2, int(math.ceil(2 * pen))) + 1  # the face lines beside the strip, two pens thick
-    beside = cv2.dilate(inside, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))) > 0
-    return runs & beside, int(round(float(np.median(widths))))
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))
+    # Hatching: parallel lines whose strips lie side by side, each line between two strips. A
+    # wall's face line has its strip on one side and a room on the other. A strip most of whose
+    # lines have another strip beyond them is hatching, not a wall.
+    ids = np.where(strip[comp], comp, 0).astype(np.float32)
+    highest = cv2.dilate(ids, disc)
+    lowest = -cv2.dilate(np.where(ids > 0, -ids, -np.float32(count)), disc)
+    lines = runs & (highest > 0)
+    shared = lines & (lowest < highest)
+    near = np.bincount(highest[lines].astype(np.int64), minlength=count) + np.bincount(
+        lowest[lines & (lowest < count)].astype(np.int64), minlength=count
+    )
+    both = np.bincount(highest[shared].astype(np.int64), minlength=count) + np.bincount(
+        lowest[shared].astype(np.int64), minlength=count
+    )
+    hatching = both > 0.5 * np.maximum(near, 1)
+    strip &= ~hatching
+    if not strip.any():
+        return np.zeros_like(runs), 0
+    beside = cv2.dilate(strip[comp].astype(np.uint8), disc) > 0
+    return runs & beside, int(round(float(np.median(widths[strip]))))
 
 
 def _line_walls(
