@@ -195,6 +195,23 @@ def test_a_clean_wall_image_keeps_every_wall() -> None:
     np.testing.assert_array_equal(np.sort(drawing.points, axis=0), np.sort(every.points, axis=0))
 
 
+def test_tracking_in_the_true_walls_on_the_extracted_plan() -> None:
+    """The robot drives in the walls drawn (outside the floor solid), furnished; planicp tracks it
+    on the plan extracted from the cluttered drawing."""
+    from planicp.plans.plan_raster import PlanRaster
+    from planicp.sim.experiment import ExperimentConfig, run_experiment
+
+    image, walls = thick_drawing(100)
+    outside = np.ones((H, W), bool)
+    outside[40:361, 40:561] = False
+    building = PlanRaster(walls | outside, RES, (0.0, 0.0, 0.0))
+    plan = PlanMap.from_image(image, RES, cache=False)
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=20.0, seed=4), building=building)
+    distance, _ = recording.errors("estimate")
+    assert float(np.sqrt(np.mean(distance**2))) < 0.05
+    assert recording.lost is not None and not recording.lost.any()
+
+
 def test_settings_and_refusals() -> None:
     image, _ = thick_drawing(0)
     with pytest.raises(ValueError, match='walls must be "drawing".*or "all-dark"'):
