@@ -130,13 +130,14 @@ def plan_pixels(plan: PlanMap, resolution: float, height: int) -> NDArray[np.flo
 
 
 def track_in_true_walls(
-    drawings: Path, duration: float, seeds: list[int]
+    drawings: Path, duration: float, seeds: list[int], walls_mode: str = "drawing"
 ) -> list[tuple[int, float, float, float, int, int]]:
     """The drift experiment (`planicp.sim.run_experiment`) in the CubiCasa building: the robot
     drives, and its LIDAR scans, in the TRUE walls (the SVG's wall polygons less the doors, the
     windows solid, registered to the drawing's pixels; outside the footprint of its rooms and walls
     solid), furnished with furniture and people;
-    planicp tracks it on the plan EXTRACTED from the drawing by default. Both in the drawing's
+    planicp tracks it on the plan EXTRACTED from the drawing (by default; `walls_mode` "all-dark":
+    every dark pixel a wall, as before). Both in the drawing's
     map frame (origin (0, 0, 0), 0.0056 m per pixel). Per seed: (seed, position RMS m, position
     max m, heading RMS deg, scans, lost scans)."""
     from planicp.plans.plan_raster import PlanRaster
@@ -153,7 +154,7 @@ def track_in_true_walls(
     footprint = fill([p for k in ("Space", "Wall", "Door", "Window") for p in polygons[k]], gray.shape, scale, shift)
     footprint = cv2.morphologyEx(footprint, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # seams between polygons
     building = PlanRaster((walls | (1 - footprint)).astype(bool), resolution, (0.0, 0.0, 0.0))
-    plan = PlanMap.from_image(drawings / name, resolution, cache=False)
+    plan = PlanMap.from_image(drawings / name, resolution, walls=walls_mode, cache=False)
     rows = []
     for seed in seeds:
         recording, _ = run_experiment(plan, ExperimentConfig(duration_s=duration, seed=seed), building=building)
@@ -179,6 +180,7 @@ def main() -> None:
     parser.add_argument("--notes", action="store_true", help="print what the extraction decided on each drawing")
     parser.add_argument("--track", type=float, default=0.0, metavar="SECONDS", help="simulated tracking run length")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--track-walls", default="drawing", choices=("drawing", "all-dark"), help="plan reading")
     args = parser.parse_args()
     print("| drawing | truth | walls | points | precision | recall | time |")
     print("|---|---|---|---|---|---|---|")
@@ -218,7 +220,9 @@ def main() -> None:
         print()
         print("| seed | position RMS | position max | heading RMS | scans | lost |")
         print("|---|---|---|---|---|---|")
-        for seed, rms, worst, heading, scans, lost in track_in_true_walls(args.drawings, args.track, args.seeds):
+        for seed, rms, worst, heading, scans, lost in track_in_true_walls(
+            args.drawings, args.track, args.seeds, args.track_walls
+        ):
             print(f"| {seed} | {rms * 100:.1f} cm | {worst * 100:.1f} cm | {heading:.2f} deg | {scans} | {lost} |")
 
 
