@@ -16,9 +16,9 @@ from numpy.typing import NDArray
 
 from planicp import PlanMap
 from planicp.cli import main as cli_main
-from planicp.plans.plan_figure import plot_drawing_overlay
+from planicp.plans.plan_figure import CLASS_COLOURS, plot_drawing_overlay
 from planicp.plans.plan_raster import load_rgb
-from planicp.plans.wall_extraction import WALL, WallExtraction, explain_image, extract_walls
+from planicp.plans.wall_extraction import DROPPED_CLASSES, WALL, WallExtraction, explain_image, extract_walls
 
 RES = 0.02  # metres per pixel of the drawings
 H, W = 400, 600  # pixels: a 12 x 8 m floor
@@ -247,3 +247,4 @@ def test_cli_plan_draws_the_decisions_on_the_drawing(tmp_path: Path, capsys: pyt
     assert "every dark pixel is a wall" in capsys.readouterr().out
     figure = plot_drawing_overlay(load_rgb(path), explain_image(path, RES), title="x")
     assert math.isclose(figure.get_figwidth(), 10.0)
+    assert set(CLASS_COLOURS) == {WALL, *DROPPED_CLASSES}  # every class has its colour in the overlay

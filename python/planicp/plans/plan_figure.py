@@ -61,6 +61,7 @@ CLASS_COLOURS: dict[int, tuple[float, float, float]] = {
     6: (0.55, 0.0, 0.75),  # detached shapes: purple
     7: (0.0, 0.7, 0.2),  # coloured ink: green
     8: (0.0, 0.75, 0.75),  # another tone: cyan
+    9: (0.6, 0.6, 0.0),  # unpaired lines: olive
 }
 """Colour of each class of `wall_extraction` labels in the drawing overlay."""
 
