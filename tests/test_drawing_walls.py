@@ -187,6 +187,16 @@ def test_coloured_ink_and_another_tone_are_dropped() -> None:
     assert precision >= 0.95 and recall >= 0.95, (precision, recall)
 
 
+def test_walls_in_two_tones_are_all_kept() -> None:
+    """New walls black, existing walls grey (as CAD drawings tell them apart): both are walls."""
+    image, walls = thick_drawing(0)
+    image[walls & (np.arange(W)[None, :] > 300)] = 110  # the right half's walls grey
+    plan = PlanMap.from_image(image, RES, cache=False)
+    precision, recall = _score(plan, walls)
+    assert precision >= 0.95 and recall >= 0.95, (precision, recall)
+    assert any("two tones" in note for note in explain_image(image, RES).notes)
+
+
 def test_a_clean_wall_image_keeps_every_wall() -> None:
     walls = _wall_mask(10)
     image = np.where(walls, 0, 255).astype(np.uint8)

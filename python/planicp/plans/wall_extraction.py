@@ -20,7 +20,9 @@ are turned into pixels with its resolution (metres per pixel). The steps, all Op
 4. **Thick-wall style.** The bands are the union of the openings of the ink by a disc and by a
    square of the thick size (the square keeps the corners of axis-aligned walls square). The
    walls' tone is the bands' median grey; ink further than `tone_tolerance` from it is dropped
-   as "another tone" (CubiCasa's black symbols beside its grey walls), and the bands taken again.
+   as "another tone" (CubiCasa's black symbols beside its grey walls), and the bands taken again,
+   unless that ink makes bands of its own (more than `max_other_tone_share` of the bands): walls
+   drawn in two tones.
    Every pen stroke is dropped as "thin strokes", also where it touches a wall (a door swing
    hinged on it, a window's frame lines). Band components longer than `min_run` (the longer side
    of their rotated bounding box) are wall runs; a shorter one is kept as a wall piece (a pier
@@ -98,7 +100,9 @@ class WallExtraction(Settings):
         tone_tolerance: thick style, with the grey image: the walls' tone is the median grey of
             the bands; ink further than this (grey levels) from it is another kind of line work
             (CubiCasa's black symbols beside its grey walls) and is dropped before the bands are
-            taken again.
+            taken again; unless it makes bands of its own, more than `max_other_tone_share` of
+            the bands' area: then the drawing draws walls in two tones (new and existing walls)
+            and both are kept.
         max_wall_thickness: metres: the thickest wall. Ink thicker is a fill; in line style, the
             widest strip between a wall's two face lines.
         min_paired: line style: when at least this share of the straight runs are paired (a
@@ -114,6 +118,7 @@ class WallExtraction(Settings):
     min_rectangularity: Annotated[float, Real(gt=0.0, le=1.0)] = 0.85
     max_opening: Annotated[float, Real(gt=0.0, unit="metres")] = 2.0
     tone_tolerance: Annotated[float, Real(gt=0.0, le=255.0)] = 40.0
+    max_other_tone_share: Annotated[float, Real(ge=0.0, le=1.0)] = 0.25
     max_wall_thickness: Annotated[float, Real(gt=0.0, unit="metres")] = 0.6
     min_paired: Annotated[float, Real(ge=0.0, le=1.0)] = 0.5
 
@@ -316,6 +321,11 @@ def _thick_walls(
     if gray is not None and opened.any():
         tone = float(np.median(gray[opened > 0]))
         other = ink & (np.abs(gray.astype(np.float64) - tone) > s.tone_tolerance)
+        # Another tone with bands of its own is a second wall tone (new and existing walls), kept.
+        own = int((bands_of(other) > 0).sum()) if other.any() else 0
+        if own > s.max_other_tone_share * int((opened > 0).sum()):
+            tone_note = f"walls in two tones: {own} px of bands in another tone than grey {tone:.0f}, kept"
+            other = np.zeros_like(other)
         if other.any():
             labels[other] = TONE
             ink = ink & ~other
