@@ -108,6 +108,7 @@ def plot_drawing_overlay(
     ax.imshow(image, extent=extent, interpolation="nearest", origin="upper")
     ax.set_aspect("equal")
     ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2, fontsize=8, frameon=False)
-    ax.set_title(f"{title + ': ' if title else ''}{extracted.style} drawing, walls in blue")
+    style = {"thick": "thick-wall drawing", "line": "line drawing", "all-dark": "every dark pixel a wall"}
+    ax.set_title(f"{title + ': ' if title else ''}{style.get(extracted.style, extracted.style)}, walls in blue")
     fig.tight_layout()
     return fig
