@@ -149,7 +149,7 @@ def main() -> None:
         "nav2 depot (0.05 m)": floor_from_ros_map(DATA / "depot.yaml"),
     }
     if not args.no_willow:
-        willow = PlanMap.from_image(DATA / "willow-full.pgm", 0.1, cache=False)
+        willow = PlanMap.from_image(DATA / "willow-full.pgm", 0.1, walls="all-dark", cache=False)  # a SLAM map
         plans["Willow Garage 54 x 59 m (0.1 m)"] = (floor_from_plan(willow), willow)
     for extra in args.map:
         plans[Path(extra).name] = floor_from_ros_map(Path(extra))

@@ -34,7 +34,7 @@ def floor_from_map(yaml_path: Path) -> tuple[sim.Floor, PlanMap]:
 
 
 def floor_from_image(path: Path, resolution: float) -> tuple[sim.Floor, PlanMap]:
-    plan = PlanMap.from_image(path, resolution, cache=False)
+    plan = PlanMap.from_image(path, resolution, walls="all-dark", cache=False)  # maps, not drawings
     assert plan.raster is not None
     up = np.pad(plan.raster.walls[::-1], 3, constant_values=False)
     frame = np.pad(np.zeros_like(plan.raster.walls), 3, constant_values=True)  # closes the image's edges

@@ -241,7 +241,7 @@ def test_pdf_scale_given_colours_widths_and_layers(tmp_path: Path) -> None:
 @needs_pdf
 def test_pdf_raster_fallback_renders_the_page_in_the_same_frame(tmp_path: Path) -> None:
     path = write_pdf(tmp_path / "room.pdf", room_content())
-    loaded = read_plan_file(path, raster=0.1, cache=False)
+    loaded = read_plan_file(path, raster=0.1, cache=False, walls="all-dark")  # the rendering's frame: every line
     assert any("rendered at 0.1 m per pixel" in note for note in loaded.notes)
     xmin, ymin, xmax, ymax = loaded.plan.extent
     x0 = OFFSET / M
@@ -278,7 +278,7 @@ def test_pdf_page_rotation_is_applied_alike_to_vectors_and_raster(tmp_path: Path
     ends = pdf_walls(path, scale=100).segments.reshape(-1, 2) / (PT * RATIO)  # back to points
     # Turned clockwise for display: (x, y) -> (y, 400 - x).
     np.testing.assert_allclose(np.sort(ends, axis=0)[[0, -1]], [[100, 100], [250, 300]], atol=1e-6)
-    raster = read_plan_file(path, scale=100, raster=0.05, cache=False).plan
+    raster = read_plan_file(path, scale=100, raster=0.05, cache=False, walls="all-dark").plan
     lo, hi = np.array(raster.extent[:2]), np.array(raster.extent[2:])
     np.testing.assert_allclose(lo / (PT * RATIO), [100, 100], atol=3.5)  # within a pixel and the line's half width
     np.testing.assert_allclose(hi / (PT * RATIO), [250, 300], atol=3.5)

@@ -104,7 +104,12 @@ def test_ros_map_and_image_of_it_agree(name: str) -> None:
     for ros_reading, image_reading in (("centres", "centres"), ("auto", "auto"), ("boundary", "boundary")):
         plan = PlanMap.from_ros_map(DATA / f"{name}.yaml", edge_detector=ros_reading)
         image_plan = PlanMap.from_image(
-            DATA / f"{name}.pgm", ros.resolution, ros.origin, threshold=threshold, edge_detector=image_reading
+            DATA / f"{name}.pgm",
+            ros.resolution,
+            ros.origin,
+            threshold=threshold,
+            edge_detector=image_reading,
+            walls="all-dark",  # a map, not a drawing: every occupied pixel is wall
         )
         np.testing.assert_array_equal(plan.points, image_plan.points)
     by_default = PlanMap.from_ros_map(DATA / f"{name}.yaml")
@@ -118,7 +123,7 @@ def test_ros_map_and_image_of_it_agree(name: str) -> None:
 
 
 def test_willow_at_ten_centimetres() -> None:
-    plan = PlanMap.from_image(DATA / "willow-full.pgm", 0.1)
+    plan = PlanMap.from_image(DATA / "willow-full.pgm", 0.1, walls="all-dark")  # a SLAM map, not a drawing
     xmin, ymin, xmax, ymax = plan.extent
     # 540 x 587 px at 0.1 m: the building fills most of the 54.0 x 58.7 m image.
     assert 50.0 < xmax - xmin <= 54.0 and 55.0 < ymax - ymin <= 58.7
@@ -213,8 +218,8 @@ def test_colour_alpha_and_morphology() -> None:
     rgba[20, 20, :3] = 0  # a speck of dirt
     rgba[0:5, 0:5, 3] = 0  # transparent black corner counts as background
     rgba[0:5, 0:5, :3] = 0
-    plan = PlanMap.from_image(rgba, 0.05, threshold=128)
-    cleaned = PlanMap.from_image(rgba, 0.05, threshold=128, open_px=2)
+    plan = PlanMap.from_image(rgba, 0.05, threshold=128, walls="all-dark")  # the mask itself, speck included
+    cleaned = PlanMap.from_image(rgba, 0.05, threshold=128, open_px=2, walls="all-dark")
     assert len(plan) == 2 * 24 + 2 * 3 + 4  # the wall's perimeter faces plus the speck's 4
     assert len(cleaned) == 2 * 24 + 2 * 3
 
@@ -250,29 +255,30 @@ def test_an_image_finer_than_useful_is_thinned_and_cached_as_thinned(cache_dir: 
 
 def test_cache_hits_misses_and_corruption(floor: synthetic.Floor, tmp_path: Path, cache_dir: Path) -> None:
     path = tmp_path / "plan.png"
+    WALLS = "all-dark"  # a clean wall image: one dark pixel more is 4 faces more
     import cv2
 
     cv2.imwrite(str(path), floor.to_image())
-    first = PlanMap.from_image(path, 0.05)
+    first = PlanMap.from_image(path, 0.05, walls=WALLS)
     assert not first.from_cache
-    second = PlanMap.from_image(path, 0.05)
+    second = PlanMap.from_image(path, 0.05, walls=WALLS)
     assert second.from_cache
     np.testing.assert_array_equal(first.points, second.points)
-    assert not PlanMap.from_image(path, 0.05, (1.0, 0.0, 0.0)).from_cache  # another parameter
-    assert not PlanMap.from_image(path, 0.05, close_px=1).from_cache
+    assert not PlanMap.from_image(path, 0.05, (1.0, 0.0, 0.0), walls=WALLS).from_cache  # another parameter
+    assert not PlanMap.from_image(path, 0.05, close_px=1, walls=WALLS).from_cache
     image = floor.to_image().copy()
     image[image.shape[0] // 2, image.shape[1] // 2] = 0  # the file changes
     cv2.imwrite(str(path), image)
-    changed = PlanMap.from_image(path, 0.05)
+    changed = PlanMap.from_image(path, 0.05, walls=WALLS)
     assert not changed.from_cache and len(changed) == len(first) + 4
     entries = sorted(cache_dir.glob("*.npz"))
     assert len(entries) == 4
     for entry in entries:
         entry.write_bytes(b"corrupt")
     np.testing.assert_array_equal(second.normals, first.normals)  # stored with the entry
-    rebuilt = PlanMap.from_image(path, 0.05)
+    rebuilt = PlanMap.from_image(path, 0.05, walls=WALLS)
     assert not rebuilt.from_cache and len(rebuilt) == len(changed)
-    assert PlanMap.from_image(path, 0.05).from_cache
+    assert PlanMap.from_image(path, 0.05, walls=WALLS).from_cache
     assert list(cache_dir.glob("*.tmp")) == []
     assert not PlanMap.from_image(path, 0.05, cache=False).from_cache
     assert PlanMap.from_image(path, 0.05, cache=tmp_path / "other").from_cache is False
@@ -323,7 +329,8 @@ def test_localize_on_a_real_map_with_visibility() -> None:
 
 def test_cli_plan(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "out"
-    assert cli_main(["plan", str(DATA / "willow-full.pgm"), "--resolution", "0.1", "--out", str(out)]) == 0
+    willow = ["plan", str(DATA / "willow-full.pgm"), "--resolution", "0.1", "--walls", "all-dark"]  # a SLAM map
+    assert cli_main([*willow, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "wall points, extent x" in text and "(53.20 x 57.10 m)" in text
     assert sorted(p.name for p in out.iterdir()) == ["overlay.png", "plan.pgm", "plan.yaml", "wall_points.csv"]

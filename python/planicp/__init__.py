@@ -31,6 +31,7 @@ from .plans import vector_plan
 from .plans.plan_map import PlanMap
 from .plans.plan_raster import PlanRaster, resolution_from_pixels
 from .plans.ros_map import RosMap, read_ros_map
+from .plans.wall_extraction import WallExtraction
 
 # tracking: alignment, the Localizer and its rules, global localization
 from .tracking.acceptance_gate import AcceptanceGate
@@ -95,6 +96,7 @@ __all__ = [
     "RelocalizationConfig",
     "SearchInSteps",
     "SearchRegion",
+    "WallExtraction",
     "WallView",
     "__version__",
     "compare_grids",

@@ -30,8 +30,9 @@ def _demo(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .plans.plan_figure import plot_plan_overlay
+    from .plans.plan_figure import plot_drawing_overlay, plot_plan_overlay
     from .plans.plan_loading import plan_layers, read_plan_file
+    from .plans.plan_raster import load_rgb
 
     source = Path(args.image)
     if args.list_layers:
@@ -52,9 +53,11 @@ def _plan(args: argparse.Namespace) -> int:
         storey=_storey(args.storey),
         cut_height=args.cut_height,
         raster=args.raster,
+        explain=True,
         threshold=args.threshold,
         open_px=args.open_px,
         close_px=args.close_px,
+        walls=args.walls,
     )
     plan = loaded.plan
     for note in loaded.notes:
@@ -65,7 +68,11 @@ def _plan(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     points_csv, overlay_png = io.BytesIO(), io.BytesIO()
     np.savetxt(points_csv, plan.points, delimiter=",", header="x_m,y_m", comments="", fmt="%.6f")
-    plot_plan_overlay(plan, title=source.name).savefig(overlay_png, format="png")
+    if loaded.drawing is not None:  # an image: the decisions drawn on the drawing itself
+        figure = plot_drawing_overlay(load_rgb(source), loaded.drawing, plan.raster, title=source.name)
+    else:
+        figure = plot_plan_overlay(plan, title=source.name)
+    figure.savefig(overlay_png, format="png")
     write_atomically(points_path, points_csv.getvalue())
     write_atomically(overlay_path, overlay_png.getvalue())
     yaml_path = plan.to_ros_map(out / "plan.yaml")
@@ -314,6 +321,13 @@ def build_parser() -> argparse.ArgumentParser:
         default=(0.0, 0.0, 0.0),
         metavar=("X", "Y", "YAW"),
         help="pose of the image's lower-left corner in the map frame (m, m, rad)",
+    )
+    plan.add_argument(
+        "--walls",
+        choices=("drawing", "all-dark"),
+        default="drawing",
+        help="images: 'drawing' keeps the walls of a drawing and drops text, symbols, door swings, hatching, "
+        "fills; 'all-dark' makes every dark pixel a wall (clean wall images, maps drawn as images)",
     )
     plan.add_argument("--threshold", type=int, default=None, help="wall grey level 1..255 (default: Otsu)")
     plan.add_argument("--open-px", type=int, default=0, help="remove dark specks up to this many pixels")

@@ -3,7 +3,9 @@
 A plan arrives as an image, a ROS map_server map, a HouseExpo outline or a drawing (DXF, PDF, SVG,
 IFC), and becomes a `PlanMap`: wall-surface points in metres in the map frame, with their
 nearest-wall index. `plan_map` holds `PlanMap` (and `CacheSetting`); `plan_raster` the wall pixels
-of an image (`PlanRaster`, `resolution_from_pixels`) and the points on their surfaces; `ros_map`
+of an image (`PlanRaster`, `resolution_from_pixels`) and the points on their surfaces;
+`wall_extraction` the walls of a raster drawing told from its text, symbols, door swings,
+hatching and fills (`WallExtraction`, `extract_walls`); `ros_map`
 map_server YAML + image (`RosMap`, `read_ros_map`, `write_ros_map`); `vector_plan` wall segments
 from HouseExpo JSON and DXF and their sampling into points; `image_files` the header checks that
 bound an image before it is decoded; `plan_cache` the on-disk cache of prepared plans;
@@ -13,6 +15,6 @@ plan from whatever file the command line is given (`load_plan`, `read_plan_file`
 `dxf_plan`, `pdf_plan`, `svg_plan` and `ifc_plan` (with `step_file`, the STEP text IFC is written
 in, and `region_outline`, the outline of wall areas less openings); `print_scale` print scales as
 drawings write them; `default_plan` the office plan shipped in `planicp/data`; `plan_figure` the
-figure of the extracted points over the plan. The public names are exported by `planicp` itself;
-import them from there.
+figure of the extracted points over the plan, and of a drawing's wall extraction over the
+drawing. The public names are exported by `planicp` itself; import them from there.
 """

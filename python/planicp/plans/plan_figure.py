@@ -1,4 +1,5 @@
-"""Figures of a plan: the extracted wall points over the plan's raster, in metres."""
+"""Figures of a plan: the extracted wall points over the plan's raster, in metres; a drawing's
+wall extraction over the drawing itself."""
 
 from __future__ import annotations
 
@@ -6,11 +7,14 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .plan_map import PlanMap
+    from .plan_raster import PlanRaster
+    from .wall_extraction import ExtractedWalls
 
 
 def plot_plan_overlay(plan: PlanMap, *, title: str | None = None, point_size: float = 1.0) -> Figure:
@@ -44,5 +48,67 @@ def plot_plan_overlay(plan: PlanMap, *, title: str | None = None, point_size: fl
     ax.legend(loc="upper right", markerscale=4)
     if title:
         ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+CLASS_COLOURS: dict[int, tuple[float, float, float]] = {
+    1: (0.0, 0.35, 1.0),  # walls kept: blue
+    2: (1.0, 0.55, 0.0),  # thin strokes: orange
+    3: (0.85, 0.0, 0.85),  # small shapes: magenta
+    4: (0.55, 0.3, 0.1),  # fills: brown
+    5: (0.9, 0.0, 0.0),  # short or curved strokes: red
+    6: (0.55, 0.0, 0.75),  # detached shapes: purple
+    7: (0.0, 0.7, 0.2),  # coloured ink: green
+    8: (0.0, 0.75, 0.75),  # another tone: cyan
+    9: (0.6, 0.6, 0.0),  # unpaired lines: olive
+}
+"""Colour of each class of `wall_extraction` labels in the drawing overlay."""
+
+
+def plot_drawing_overlay(
+    drawing: NDArray[np.uint8],
+    extracted: ExtractedWalls,
+    raster: PlanRaster | None = None,
+    *,
+    title: str | None = None,
+) -> Figure:
+    """The drawing itself (faded), each of its ink pixels coloured by what the wall extraction
+    decided: kept walls blue, each dropped class in its own colour, with a legend and pixel counts.
+
+    `drawing` is the (H, W, 3) RGB image (`plan_raster.load_rgb`); `raster`, the plan's, gives
+    the axes in metres of the map frame (when its origin is not rotated; pixels otherwise).
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    from .wall_extraction import DROPPED_CLASSES, WALL
+
+    rows, cols = extracted.labels.shape
+    fig = Figure(figsize=(10, 10 * rows / max(cols, 1) + 1.5), dpi=150)
+    ax = fig.add_subplot()
+    image = 0.45 * drawing.astype(np.float64) / 255.0 + 0.55
+    labels = extracted.labels
+    counts = np.bincount(labels.ravel(), minlength=256)
+    handles = []
+    for label, colour in CLASS_COLOURS.items():
+        if counts[label]:
+            image[labels == label] = colour
+            name = "walls kept" if label == WALL else f"dropped: {DROPPED_CLASSES[label]}"
+            handles.append(Patch(color=colour, label=f"{name} ({int(counts[label])} px)"))
+    extent = None
+    if raster is not None and abs(raster.origin[2]) < 1e-12:
+        ox, oy, _ = raster.origin
+        extent = (ox, ox + cols * raster.resolution, oy, oy + rows * raster.resolution)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+    else:
+        ax.set_xlabel("column (px)")
+        ax.set_ylabel("row (px)")
+    ax.imshow(image, extent=extent, interpolation="nearest", origin="upper")
+    ax.set_aspect("equal")
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2, fontsize=8, frameon=False)
+    style = {"thick": "thick-wall drawing", "line": "line drawing", "all-dark": "every dark pixel a wall"}
+    ax.set_title(f"{title + ': ' if title else ''}{style.get(extracted.style, extracted.style)}, walls in blue")
     fig.tight_layout()
     return fig

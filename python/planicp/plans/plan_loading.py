@@ -9,6 +9,7 @@ from typing import Any
 
 from .plan_formats import missing_extra, plan_format, unsupported_format
 from .plan_map import CacheSetting, PlanMap
+from .wall_extraction import ExtractedWalls, explain_image
 
 
 def house_expo_files(folder: str | Path) -> list[Path]:
@@ -39,11 +40,14 @@ class LoadedPlan:
         kind: the file's format ("image", "ros_map", "house_expo", "dxf", "pdf", "svg", "ifc").
         notes: one line per decision: the scale and where it came from, what was kept as walls
             and what was dropped.
+        drawing: of an image read with `explain=True`: what its wall extraction kept and dropped,
+            pixel by pixel (for the overlay on the drawing); None otherwise.
     """
 
     plan: PlanMap
     kind: str
     notes: tuple[str, ...] = ()
+    drawing: ExtractedWalls | None = None
 
 
 def load_plan(
@@ -91,6 +95,7 @@ def read_plan_file(
     storey: str | int | None = None,
     cut_height: float = 1.0,
     raster: bool | float = False,
+    explain: bool = False,
     **image_options: Any,
 ) -> LoadedPlan:
     """The plan in `source`, with what its reader decided. The format is recognised by the file's
@@ -115,7 +120,9 @@ def read_plan_file(
       windows open;
     * anything else: a plan image, which needs `resolution` (metres per pixel) and takes `origin`
       (x, y, yaw of the image's lower-left corner in the map frame) and `image_options`
-      (`threshold`, `open_px`, `close_px`, `edge_detector`: see `PlanMap.from_image`).
+      (`threshold`, `open_px`, `close_px`, `edge_detector`, `walls`, `wall_extraction`: see
+      `PlanMap.from_image`); with `explain`, the wall extraction's decisions are returned too
+      (`LoadedPlan.drawing`, and its notes), as `planicp plan` prints and draws them.
 
     Vector plans are sampled every `spacing` metres, in metres in the map frame.
 
@@ -149,7 +156,12 @@ def read_plan_file(
         return _ifc_plan(path, storey, cut_height, spacing)
     if resolution is None:
         raise ValueError(f"plan image {path} needs a resolution (metres per pixel, --resolution)")
-    return LoadedPlan(PlanMap.from_image(path, resolution, tuple(origin), cache=cache, **image_options), kind)
+    plan = PlanMap.from_image(path, resolution, tuple(origin), cache=cache, **image_options)
+    if not explain:
+        return LoadedPlan(plan, kind)
+    extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
+    drawing = explain_image(path, resolution, **extraction_options)
+    return LoadedPlan(plan, kind, drawing.notes, drawing)
 
 
 def _segments_plan(segments: Any, spacing: float, name: str) -> PlanMap:

@@ -12,9 +12,10 @@ from .. import _core
 from .._validation import as_points, as_pose, positive, whole_number
 from .image_files import check_image_file, require_regular_file
 from .plan_cache import cache_key, cached, default_cache_dir
-from .plan_raster import PlanRaster, load_gray, wall_mask
+from .plan_raster import PlanRaster, load_gray_and_chroma, wall_mask
 from .ros_map import read_ros_map, write_ros_map
 from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments
+from .wall_extraction import WallExtraction, check_walls_option, extract_walls
 from .wall_index_stats import WallIndexStats
 
 VISIBILITY_RASTER_CELLS = _core.MAX_RASTER_CELLS
@@ -137,6 +138,8 @@ class PlanMap:
         open_px: int = 0,
         close_px: int = 0,
         edge_detector: str = "boundary",
+        walls: str = "drawing",
+        wall_extraction: WallExtraction | None = None,
         cache: CacheSetting = True,
     ) -> PlanMap:
         """A plan from an image of it (PNG, JPG, PGM, BMP, ... or an array).
@@ -153,13 +156,19 @@ class PlanMap:
             close_px: morphological closing of the wall mask (bridges gaps up to that size), in
                 pixels; 0 = none.
             edge_detector: "auto", "boundary", "canny" or "centres" (see `PlanRaster.surface_points`).
+            walls: "drawing" (default): the walls of a drawing, its text, symbols, door swings,
+                hatching and fills dropped (`planicp.plans.wall_extraction`); "all-dark": every dark
+                pixel is wall (clean wall images, maps drawn as images).
+            wall_extraction: how walls are told from the rest (`WallExtraction`), with "drawing".
             cache: True (default folder, see `planicp.plans.plan_cache`), False, or a folder.
 
         Raises:
             FileNotFoundError: the file does not exist.
-            ValueError: unreadable image, no walls (all white or all black), bad resolution/origin.
+            ValueError: unreadable image, no walls (all white or all black, or nothing wall-like in
+                a drawing), bad resolution/origin, an unknown `walls`.
         """
         res = positive(resolution, "resolution", "metres per pixel")
+        extraction = check_walls_option(walls, wall_extraction)
         pose = as_pose(origin, "origin")
         if isinstance(source, (str, Path)):
             path = Path(source)
@@ -176,19 +185,21 @@ class PlanMap:
             "open_px": open_px,
             "close_px": close_px,
             "edge_detector": edge_detector,
+            "walls": walls,
+            "wall_extraction": None if extraction is None else extraction.to_dict(),
             "orientation": "exif",  # photos turned upright by their EXIF orientation (entries before were not)
         }
 
         def build() -> dict[str, NDArray[Any]]:
-            gray = load_gray(source)
-            walls = wall_mask(
-                gray,
-                threshold,
-                open_px=open_px,
-                close_px=close_px,
-                what=f"plan image {source}" if isinstance(source, (str, Path)) else "plan image",
-            )
-            return cls._prepared(PlanRaster(walls, res, pose), edge_detector)
+            gray, chroma = load_gray_and_chroma(source)
+            what = f"plan image {source}" if isinstance(source, (str, Path)) else "plan image"
+            mask = wall_mask(gray, threshold, open_px=open_px, close_px=close_px, what=what)
+            if extraction is not None:
+                try:
+                    mask = extract_walls(mask, res, extraction, chroma, gray).walls
+                except ValueError as exc:
+                    raise ValueError(f"{what}: {exc}") from None
+            return cls._prepared(PlanRaster(mask, res, pose), edge_detector)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("image", params, contents), build)
         return cls._from_cached(arrays, res, pose, hit, edge_detector)

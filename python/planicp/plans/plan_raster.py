@@ -235,12 +235,29 @@ def _colour_to_gray(image: NDArray[Any]) -> NDArray[Any]:
     return out
 
 
+def _chroma(image: NDArray[Any]) -> NDArray[np.uint8]:
+    """Max minus min of the colour channels of a (H, W, 3 or 4) image, scaled to 0..255."""
+    rgb = image[:, :, :3]
+    top = float(np.iinfo(image.dtype).max) if image.dtype.kind in "ui" else 1.0
+    spread = rgb.max(axis=2).astype(np.float64) - rgb.min(axis=2)
+    with np.errstate(invalid="ignore"):
+        scaled = np.nan_to_num(spread * (255.0 / top), nan=0.0)
+    chroma: NDArray[np.uint8] = np.clip(np.round(scaled), 0, 255).astype(np.uint8)
+    return chroma
+
+
 def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:
     """An 8-bit grey image from a path (PNG, JPG, PGM, BMP, ...) or an array.
 
     Colour is converted to grey, transparent pixels become white (no wall), 16-bit and float images
     are rescaled to 0..255.
     """
+    return load_gray_and_chroma(source, what)[0]
+
+
+def _read_image(source: str | Path | NDArray[Any], what: str) -> tuple[NDArray[Any], str]:
+    """The pixels of an image file (upright by its EXIF orientation; OpenCV's channel order, BGR)
+    or of an array, and the name to call it in messages."""
     cv2 = _cv2()
     if isinstance(source, (str, Path)):
         path = Path(source)
@@ -262,26 +279,52 @@ def load_gray(source: str | Path | NDArray[Any], what: str = "plan image") -> ND
         name = f"{what} array"
         if image.dtype.kind not in "uifb":
             raise TypeError(f"{name} must hold numbers, got dtype {image.dtype}")
+    return image, name
+
+
+def load_rgb(source: str | Path | NDArray[Any], what: str = "plan image") -> NDArray[np.uint8]:
+    """The image as it is seen, (H, W, 3) 8-bit RGB (grey repeated; transparent pixels white), for
+    figures drawn on the drawing itself."""
+    image, name = _read_image(source, what)
     if image.ndim == 3 and image.shape[2] in (3, 4):
+        rgb = np.stack(
+            [load_gray(image[:, :, [c, c, c] + ([3] if image.shape[2] == 4 else [])]) for c in (2, 1, 0)], axis=2
+        )
+        if isinstance(source, (str, Path)):
+            return rgb  # OpenCV decoded the file as BGR
+        return np.ascontiguousarray(rgb[:, :, ::-1])  # an array is taken as RGB
+    gray = load_gray(image, what)
+    return np.repeat(gray[:, :, None], 3, axis=2)
+
+
+def load_gray_and_chroma(
+    source: str | Path | NDArray[Any], what: str = "plan image"
+) -> tuple[NDArray[np.uint8], NDArray[np.uint8] | None]:
+    """`load_gray`'s grey image, and for a colour image its chroma: the largest minus the smallest
+    of the red, green and blue values, 0..255 (0: neutral grey; None for a grey image)."""
+    image, name = _read_image(source, what)
+    chroma = None
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        chroma = _chroma(image)
         image = _colour_to_gray(image)
     if image.ndim != 2:
         raise ValueError(f"{name} must be a 2-D grey image (or colour), got shape {image.shape}")
     if image.size == 0:
         raise ValueError(f"{name} has no pixels")
     if image.dtype == np.uint8:
-        return np.ascontiguousarray(image)
+        return np.ascontiguousarray(image), chroma
     if image.dtype == np.bool_:
-        return np.where(image, 255, 0).astype(np.uint8)
+        return np.where(image, 255, 0).astype(np.uint8), chroma
     if image.dtype.kind in "ui":
         top = float(np.iinfo(image.dtype).max)
         scaled: NDArray[np.uint8] = np.clip(np.round(image.astype(np.float64) * 255.0 / top), 0, 255).astype(np.uint8)
-        return scaled
+        return scaled, chroma
     values = image.astype(np.float64)
     if not np.isfinite(values).all():
         raise ValueError(f"{name} has NaN or inf pixels")
     top = 1.0 if values.max() <= 1.0 else 255.0
     out: NDArray[np.uint8] = np.clip(np.round(values * 255.0 / top), 0, 255).astype(np.uint8)
-    return out
+    return out, chroma
 
 
 EXIF_ORIENTATION_TAG = 0x0112

@@ -27,6 +27,7 @@ from ..io.scan_log import ScanFrame
 from ..laser_scan import scan_to_points
 from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
 from ..plans.plan_map import PlanMap
+from ..plans.plan_raster import PlanRaster
 from ..se2 import compose, wrap_angle
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.icp_config import IcpConfig
@@ -276,17 +277,23 @@ def run_experiment(
     plan: PlanMap,
     config: ExperimentConfig | None = None,
     progress: Callable[[float], None] | None = None,
+    *,
+    building: PlanRaster | None = None,
 ) -> tuple[Recording, World]:
     """Runs the drift experiment on `plan` (which must come from a raster: image or ROS map).
 
     `progress`, when given, is called with the simulated time (seconds) after every scan.
+    `building`: the walls the robot drives and scans in, in the plan's map frame, when they are
+    not the plan's own raster (a plan extracted from a drawing, tracked in the building's true
+    walls); default: the plan's raster.
     Returns the recording and the furnished world it ran in.
     """
     config = config or ExperimentConfig()
-    if plan.raster is None:
+    walls = building if building is not None else plan.raster
+    if walls is None:
         raise ValueError("the experiment needs a plan made from a raster (PlanMap.from_image or from_ros_map)")
     rng = np.random.default_rng(config.seed)
-    world = World.from_raster(plan.raster, rng, config.furnishing)
+    world = World.from_raster(walls, rng, config.furnishing)
     clearance = config.limits.radius + 0.15
     trajectory = simulate_drive(
         world.floor, rng, config.duration_s, config.limits, control_rate_hz=config.odometry_rate_hz, clearance=clearance
