@@ -45,6 +45,8 @@ from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.occlusion_rule import OcclusionRule
 from .tracking.recovery import RecoveryConfig
+from .tracking.scale_check import PlanScaleWarning, ScaleEstimate, ScaleRule
+from .tracking.scale_estimation import ScaleCandidate, ScaleSearch, estimate_scale
 from .tracking.relocalize import (
     Candidate,
     Relocalization,
@@ -86,6 +88,7 @@ __all__ = [
     "LostRule",
     "MotionNoise",
     "PlanMap",
+    "PlanScaleWarning",
     "PlanRaster",
     "RosMap",
     "PlanicpError",
@@ -93,11 +96,16 @@ __all__ = [
     "RecoveryConfig",
     "Relocalization",
     "RelocalizationConfig",
+    "ScaleCandidate",
+    "ScaleEstimate",
+    "ScaleRule",
+    "ScaleSearch",
     "SearchInSteps",
     "SearchRegion",
     "WallView",
     "__version__",
     "compare_grids",
+    "estimate_scale",
     "localize",
     "read_ros_map",
     "relocalize",
