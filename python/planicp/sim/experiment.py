@@ -277,16 +277,16 @@ def run_experiment(
     config: ExperimentConfig | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> tuple[Recording, World]:
-    """Runs the drift experiment on `plan` (which must come from a raster: image or ROS map).
+    """Runs the drift experiment on `plan`: an image or ROS map, or a drawing whose wall points are
+    rasterised for the simulated building (`World.from_plan`); an open outline is closed first
+    (`World.from_raster`, with an `OpenOutlineWarning`).
 
     `progress`, when given, is called with the simulated time (seconds) after every scan.
     Returns the recording and the furnished world it ran in.
     """
     config = config or ExperimentConfig()
-    if plan.raster is None:
-        raise ValueError("the experiment needs a plan made from a raster (PlanMap.from_image or from_ros_map)")
     rng = np.random.default_rng(config.seed)
-    world = World.from_raster(plan.raster, rng, config.furnishing)
+    world = World.from_plan(plan, rng, config.furnishing)
     clearance = config.limits.radius + 0.15
     trajectory = simulate_drive(
         world.floor, rng, config.duration_s, config.limits, control_rate_hz=config.odometry_rate_hz, clearance=clearance
