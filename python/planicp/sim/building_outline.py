@@ -122,9 +122,9 @@ def building_outline(walls: NDArray[np.bool_], resolution: float, max_gap: float
         if base >= cells_min:
             raise ValueError(
                 "the plan's building outline is open: the largest region its walls enclose is "
-                f"{base * resolution**2:.1f} m^2, {100.0 * base / box_free:.0f} % of the free space within their extent, and gaps wider than "
-                f"{max_gap:g} m lead out of the rest. Draw its outer walls closed (a door or window as a wall), crop "
-                "the plan to the building, or close wider gaps (max_gap)"
+                f"{base * resolution**2:.1f} m^2, {100.0 * base / box_free:.0f} % of the free space within their "
+                f"extent, and gaps wider than {max_gap:g} m lead out of the rest. Draw its outer walls closed "
+                "(a door or window as a wall), crop the plan to the building, or close wider gaps (max_gap)"
             )
         raise ValueError(
             f"the plan has no enclosed free space of {MIN_AREA:g} m^2 or more to furnish, even with gaps up to "
