@@ -149,6 +149,26 @@ MIN_SPREAD = 0.01
 """Least robust sigma of the residuals, metres (a LIDAR's range noise)."""
 
 
+def explained_share(lookup: WallLookup, points: NDArray[np.float64], pose: Pose) -> float:
+    """Share of `points` (base frame, metres) within `EXPLAINED_DISTANCE` of the wall their ray
+    from `pose` (T_map_base) meets, along its normal: how much of a scan the plan explains there."""
+    if not len(points):
+        return 0.0
+    bearing = np.arctan2(points[:, 1], points[:, 0])
+    lo, hi = float(bearing.min()), float(bearing.max())
+    x, y, yaw = pose
+    ranges = lookup.grid.cast((x, y, yaw + lo), 0.0, CAST_STEP, int((hi - lo) / CAST_STEP) + 2, 0.0, lookup.reach)
+    wall_range = ranges[np.rint((bearing - lo) / CAST_STEP).astype(np.int64)]
+    direction = np.column_stack((np.cos(bearing + yaw), np.sin(bearing + yaw)))
+    index = lookup.nearest_points(wall_range[:, None] * direction + (x, y))
+    paired = np.isfinite(wall_range) & (wall_range < lookup.reach) & (index >= 0)
+    normal = lookup.normals[index[paired]]
+    length = np.hypot(points[paired, 0], points[paired, 1])
+    # The return and the wall lie on the same ray: their distance along the wall's normal.
+    gap = np.abs(np.einsum("ij,ij->i", normal, direction[paired])) * np.abs(length - wall_range[paired])
+    return float(np.count_nonzero(gap <= EXPLAINED_DISTANCE)) / len(points)
+
+
 def scale_fit(
     lookup: WallLookup,
     points: NDArray[np.float64],
@@ -201,7 +221,6 @@ def scale_fit(
     gate = max_distance + MAX_SCALE_ERROR * np.hypot(base[:, 0], base[:, 1])
     state = np.zeros(4)  # dx, dy, dyaw, e: the similarity applied to the scan about the robot
     variance = math.nan
-    explained_rigid = 0.0
     pairs = 0
     mean_range = 0.0
     for k_step in range(max(1, iterations)):
@@ -209,8 +228,6 @@ def scale_fit(
         k = 1.0 + state[3]
         rel = k * np.column_stack((c * rel0[:, 0] - s * rel0[:, 1], s * rel0[:, 0] + c * rel0[:, 1]))
         residual = np.einsum("ij,ij->i", normal, rel) + normal @ state[:2] - offset
-        if k_step == 0:
-            explained_rigid = float(np.count_nonzero(np.abs(residual) <= EXPLAINED_DISTANCE)) / len(points)
         near = np.abs(residual) <= gate
         if int(near.sum()) < min_pairs:
             return None
@@ -254,9 +271,10 @@ def scale_fit(
             break
     if not (math.isfinite(variance) and variance > 0.0):
         return None
-    c, s = math.cos(state[2]), math.sin(state[2])
-    rel = (1.0 + state[3]) * np.column_stack((c * rel0[:, 0] - s * rel0[:, 1], s * rel0[:, 0] + c * rel0[:, 1]))
-    residual = np.einsum("ij,ij->i", normal, rel) + normal @ state[:2] - offset
-    explained = float(np.count_nonzero(np.abs(residual) <= EXPLAINED_DISTANCE)) / len(points)
+    # How much of the scan each model explains, every return paired with the wall its ray meets
+    # from that model's pose (the rigid fit's pairs are the wrong walls for far returns once the
+    # scale moves the robot by decimetres).
+    explained_rigid = explained_share(lookup, points, pose)
+    explained = explained_share(lookup, (1.0 + state[3]) * points, (x + state[0], y + state[1], yaw + state[2]))
     # `state[3]` is the scale of the scan that fits the plan, minus one: the plan's scale error.
     return ScaleFit(float(state[3]), variance, pairs, mean_range, explained, explained_rigid)
