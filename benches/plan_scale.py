@@ -7,7 +7,8 @@ which `Estimate.scale_suspect` first holds (of the first `--scans`), the running
 there, `planicp.estimate_scale` from the first 30 scans, and the update's time with the check and
 without it.
 
-    python benches/plan_scale.py [--seeds 0 1 2] [--scans 50] [--floors]
+    python benches/plan_scale.py [--seeds 0 1 2] [--scans 50] [--floors] [--estimate]
+    python benches/plan_scale.py --timing --seeds 0 1 2
 """
 
 from __future__ import annotations
@@ -42,7 +43,11 @@ def main() -> None:
     parser.add_argument("--scans", type=int, default=50)
     parser.add_argument("--floors", action="store_true", help="generated floors too")
     parser.add_argument("--estimate", action="store_true", help="run planicp.estimate_scale as well")
+    parser.add_argument("--timing", action="store_true", help="only the update's time, check on and off, interleaved")
     args = parser.parse_args()
+    if args.timing:
+        _timing(args.seeds)
+        return
     print(
         "| plan | seed | plan scale | first flagged scan | running factor (truth) | estimate_scale "
         "| ms/update p50 / p99 (check off: p50 / p99) |"
@@ -85,6 +90,38 @@ def main() -> None:
                     f"({np.percentile(off, 50):.2f} / {np.percentile(off, 99):.2f}) |",
                     flush=True,
                 )
+
+
+def _timing(seeds: list[int]) -> None:
+    """`Localizer.update` with the scale check on and off, the two localizers fed the same scans
+    alternately (so that they share the machine's load): 300 scans of the office per seed, on the
+    correct plan and on the plan 3 % small."""
+    plan = load_default_plan()
+    print("| plan scale | updates | check on: p50 / p99 / max ms | check off: p50 / p99 / max ms |")
+    print("|---|---|---|---|")
+    for s in (1.0, 0.97):
+        scaled = plan.scaled(s) if s != 1.0 else plan
+        on_t: list[float] = []
+        off_t: list[float] = []
+        for seed in seeds:
+            recording, _ = run_experiment(plan, ExperimentConfig(duration_s=30.5, seed=seed))
+            start = (recording.truth[0, 0] * s, recording.truth[0, 1] * s, recording.truth[0, 2])
+            on = planicp.Localizer(scaled, start)
+            off = planicp.Localizer(scaled, start, scale=planicp.ScaleRule(enabled=False))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", planicp.PlanScaleWarning)
+                for k, (scan, odom) in enumerate(zip(recording.scans[:300], recording.odometry_in_odom)):
+                    for localizer, times in ((on, on_t), (off, off_t)) if k % 2 else ((off, off_t), (on, on_t)):
+                        t0 = time.perf_counter()
+                        localizer.update(scan, tuple(odom))
+                        if k:
+                            times.append(time.perf_counter() - t0)
+        a, b = np.array(on_t) * 1e3, np.array(off_t) * 1e3
+        print(
+            f"| {s:.2f} | {len(a)} | {np.percentile(a, 50):.2f} / {np.percentile(a, 99):.2f} / {a.max():.2f} "
+            f"| {np.percentile(b, 50):.2f} / {np.percentile(b, 99):.2f} / {b.max():.2f} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -274,7 +274,10 @@ def scale_fit(
     # How much of the scan each model explains, every return paired with the wall its ray meets
     # from that model's pose (the rigid fit's pairs are the wrong walls for far returns once the
     # scale moves the robot by decimetres).
-    explained_rigid = explained_share(lookup, points, pose)
+    length = np.hypot(points[paired, 0], points[paired, 1])
+    facing = np.abs(np.einsum("ij,ij->i", normal, direction[paired]))
+    rigid_gap = facing * np.abs(length - wall_range[paired])  # the rigid fit's pairs, cast above
+    explained_rigid = float(np.count_nonzero(rigid_gap <= EXPLAINED_DISTANCE)) / len(points)
     explained = explained_share(lookup, (1.0 + state[3]) * points, (x + state[0], y + state[1], yaw + state[2]))
     # `state[3]` is the scale of the scan that fits the plan, minus one: the plan's scale error.
     return ScaleFit(float(state[3]), variance, pairs, mean_range, explained, explained_rigid)
