@@ -139,6 +139,13 @@ MAX_SCALE_ERROR = 0.15
 """Largest scale error looked for: a return pairs with its wall up to `max_distance` plus this
 share of its range (a far wall of a plan 10 % off is a tenth of its range from its return)."""
 
+MAX_SHIFT = 2.0
+"""Metres the similarity may move the robot from the rigid fit: a plan 15 % off centres the robot
+at most 15 % of half a 25 m room away; a larger shift is an unconstrained direction."""
+
+MAX_TURN = math.radians(10.0)
+"""Radians the similarity may turn the robot from the rigid fit (a scale turns nothing)."""
+
 TUKEY_C = 4.685
 """Tukey's biweight constant (95 % efficiency for Gaussian residuals), in robust sigmas."""
 
@@ -261,8 +268,13 @@ def scale_fit(
             return None
         step = -cov @ (wjac.T @ residual)
         state += step
-        if not (np.isfinite(state).all() and abs(state[3]) <= 2 * MAX_SCALE_ERROR):
-            return None
+        if not (
+            np.isfinite(state).all()
+            and abs(state[3]) <= 2 * MAX_SCALE_ERROR
+            and math.hypot(state[0], state[1]) <= MAX_SHIFT
+            and abs(state[2]) <= MAX_TURN
+        ):
+            return None  # walls along one direction only (a corridor): no scale to tell from a shift
         after = residual + jac @ step
         sigma2 = float(weight @ (after * after)) / max(float(weight.sum()) - 4.0, 1.0)
         variance = sigma2 * float(cov[3, 3])
