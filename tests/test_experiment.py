@@ -75,7 +75,7 @@ def test_bad_experiment_settings() -> None:
         LidarModel(rate_hz=-10.0)
     with pytest.raises(ValueError, match="dropout must be in"):
         LidarModel(dropout=1.5)
-    with pytest.raises(ValueError, match="needs a plan made from a raster"):
+    with pytest.raises(ValueError, match="no enclosed free space of 1 m.2 or more to furnish"):
         run_experiment(PlanMap.from_points(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])))
     full = np.ones((40, 40), dtype=bool)
     with pytest.raises(ValueError, match="no enclosed free space"):

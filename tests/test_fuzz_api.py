@@ -674,6 +674,24 @@ def test_robustness_api(data: Any) -> None:
         assert np.isfinite(loc.covariance).all()
 
 
+@FUZZ
+@given(st.data())
+def test_scale_api(data: Any) -> None:
+    """ScaleRule with random settings; estimate_scale with random scans, odometry, start pose and
+    ratios: a result with a finite positive factor, or TypeError/ValueError with a message."""
+    number = st.one_of(values, anything, st.integers(-3, 100))
+    call(planicp.ScaleRule, every=data.draw(number), tolerance=data.draw(number), agreement=data.draw(number))
+    plan = box_plan()
+    n = data.draw(st.integers(0, 4))
+    odometry = data.draw(st.one_of(st.just(np.zeros((n, 3))), anything))
+    ratios = data.draw(st.one_of(st.just((1.0,)), st.lists(values, max_size=2), anything))
+    ok, found = call(
+        planicp.estimate_scale, plan, [data.draw(scans()) for _ in range(n)], odometry, data.draw(poses), ratios=ratios
+    )
+    if ok:
+        assert math.isfinite(found.factor) and found.factor > 0
+
+
 def test_every_public_name_is_fuzzed() -> None:
     """A new public name must be added to this file (or here, with a reason)."""
     covered = {
@@ -707,6 +725,8 @@ def test_every_public_name_is_fuzzed() -> None:
         "OcclusionRule",
         "FusionRule",
         "WallView",
+        "ScaleRule",
+        "estimate_scale",
     }
     # Outputs and containers (EogState, GridAgreement, OccupancyGridMessage), and the modules with tests
     # of their own (synthetic: test_synthetic.py, vector_plan: test_vector_plan.py, WallExtraction:
@@ -722,6 +742,11 @@ def test_every_public_name_is_fuzzed() -> None:
         "Candidate",
         "Relocalization",
         "RelocalizationConfig",
+        # The scale check's records and warning: tests/test_plan_scale.py.
+        "PlanScaleWarning",
+        "ScaleEstimate",
+        "ScaleCandidate",
+        "ScaleSearch",
     }
     assert set(planicp.__all__) <= covered | elsewhere, set(planicp.__all__) - covered - elsewhere
 

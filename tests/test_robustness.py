@@ -508,22 +508,30 @@ def test_the_recovery_refuses_places_the_scan_sees_through() -> None:
 
 def test_clutter_is_not_mistaken_for_a_kidnap() -> None:
     """On a generated floor with diagonal walls the robot crosses places where the plan explains
-    only a fifth of the scans. Before the continuity check the localizer declared itself lost there
-    and adopted a wrong place 2-6 m away that explained more of the clutter."""
+    less than half of the scans. Before the continuity check the localizer declared itself lost
+    there and adopted a wrong place 2-6 m away that explained more of the clutter.
+
+    (This floor's paper around the building is larger than the building, so until the simulation
+    kept the robot inside the building (`planicp.sim.building_outline`, issue 22) the robot drove
+    outside it, where the plan explained a fifth of some scans. Inside, twelve times the demo's
+    furniture makes the clutter.)"""
     from planicp import sim as synthetic
+    from planicp.sim.world import Furnishing
 
     floor = synthetic.generate_floor(11, "diagonal")
     plan = PlanMap.from_raster(PlanRaster(floor.walls[::-1], floor.resolution, (floor.origin[0], floor.origin[1], 0.0)))
+    crowded = Furnishing(cabinets=36.0, blocks=9.6, tables=24.0, people=12.0)
     for seed in (0, 3):
-        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=seed))
+        recording, _ = run_experiment(plan, ExperimentConfig(duration_s=60.0, seed=seed, furnishing=crowded))
         error = np.hypot(*(recording.estimate[:, :2] - recording.truth[:, :2]).T)
         assert error.max() < 0.05, (seed, error.max())
-        # The clutter is there: at the true pose the plan explains less than a quarter of some scans.
+        assert recording.lost is not None and not recording.lost.any()
+        # The clutter is there: at the true pose the plan explains less than half of some scans.
         explained = [
             localize(s, plan, tuple(t), IcpConfig.for_tracking()).inlier_ratio
             for s, t in zip(recording.scans[::10], recording.truth[::10])
         ]
-        assert min(explained) < 0.25, min(explained)
+        assert min(explained) < 0.45, min(explained)
 
 
 def test_continuity_rule() -> None:

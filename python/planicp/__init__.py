@@ -46,6 +46,8 @@ from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.occlusion_rule import OcclusionRule
 from .tracking.recovery import RecoveryConfig
+from .tracking.scale_check import PlanScaleWarning, ScaleEstimate, ScaleRule
+from .tracking.scale_estimation import ScaleCandidate, ScaleSearch, estimate_scale
 from .tracking.relocalize import (
     Candidate,
     Relocalization,
@@ -87,6 +89,7 @@ __all__ = [
     "LostRule",
     "MotionNoise",
     "PlanMap",
+    "PlanScaleWarning",
     "PlanRaster",
     "RosMap",
     "PlanicpError",
@@ -94,12 +97,17 @@ __all__ = [
     "RecoveryConfig",
     "Relocalization",
     "RelocalizationConfig",
+    "ScaleCandidate",
+    "ScaleEstimate",
+    "ScaleRule",
+    "ScaleSearch",
     "SearchInSteps",
     "SearchRegion",
     "WallExtraction",
     "WallView",
     "__version__",
     "compare_grids",
+    "estimate_scale",
     "localize",
     "read_ros_map",
     "relocalize",

@@ -330,6 +330,13 @@ class PlanMap:
         except ValueError as exc:  # too many points, too large a raster: the drawing's size, so the file's
             raise _naming(exc, f"DXF file {str(path)!r}") from None
 
+    def scaled(self, factor: float) -> PlanMap:
+        """This plan with every map coordinate multiplied by `factor` about the map origin (a
+        raster plan: its image read at `resolution * factor`); see `plan_scaling.scaled_plan`."""
+        from .plan_scaling import scaled_plan
+
+        return scaled_plan(self, factor)
+
     def to_ros_map(self, yaml_path: str | Path, resolution: float | None = None) -> Path:
         """Writes the plan as a map_server map (YAML + PGM beside it): walls occupied (0), the
         rest free (254). A plan read from an image or ROS map writes its own wall raster, which

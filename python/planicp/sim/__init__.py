@@ -10,7 +10,10 @@ odometry drifts while plan-based localization does not. Which file holds what:
 * `simulated_lidar` -- `simulate_ranges` / `simulate_scan`: LaserScan ranges in a floor
   (the native ray caster, ``planicp._core.OccupancyGrid``) and `ranges_to_points`;
 * `pose_perturbation` -- `perturb_pose`, a guess a given distance and angle off;
-* `world` -- `World`: a plan raster furnished with seeded furniture and walking people;
+* `world` -- `World`: a plan raster (or a drawing's wall points rasterised) furnished with seeded
+  furniture and walking people;
+* `building_outline` -- where the building is on a plan raster: an open outline closed with a
+  warning, or refused;
 * `crowd` -- people standing around the robot, placed anew for every scan;
 * `diff_drive` -- `DiffDriveLimits`, `DiffDriveState`, exact arc integration `step`;
 * `route_planner` -- clearance-inflated A* routes (`plan_route`) and random tours (`tour`);

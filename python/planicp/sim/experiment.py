@@ -280,20 +280,22 @@ def run_experiment(
     *,
     building: PlanRaster | None = None,
 ) -> tuple[Recording, World]:
-    """Runs the drift experiment on `plan` (which must come from a raster: image or ROS map).
+    """Runs the drift experiment on `plan`: an image or ROS map, or a drawing whose wall points are
+    rasterised for the simulated building (`World.from_plan`); an open outline is closed first
+    (`World.from_raster`, with an `OpenOutlineWarning`).
 
     `progress`, when given, is called with the simulated time (seconds) after every scan.
     `building`: the walls the robot drives and scans in, in the plan's map frame, when they are
-    not the plan's own raster (a plan extracted from a drawing, tracked in the building's true
-    walls); default: the plan's raster.
+    not the plan's own (a plan extracted from a drawing, tracked in the building's true walls);
+    default: the plan's raster, or its wall points rasterised.
     Returns the recording and the furnished world it ran in.
     """
     config = config or ExperimentConfig()
-    walls = building if building is not None else plan.raster
-    if walls is None:
-        raise ValueError("the experiment needs a plan made from a raster (PlanMap.from_image or from_ros_map)")
     rng = np.random.default_rng(config.seed)
-    world = World.from_raster(walls, rng, config.furnishing)
+    if building is not None:
+        world = World.from_raster(building, rng, config.furnishing)
+    else:
+        world = World.from_plan(plan, rng, config.furnishing)
     clearance = config.limits.radius + 0.15
     trajectory = simulate_drive(
         world.floor, rng, config.duration_s, config.limits, control_rate_hz=config.odometry_rate_hz, clearance=clearance

@@ -11,13 +11,23 @@ Frames: map frame, metres. The world's grid is a `planicp.sim.floor.Floor` (rows
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
+from .building_outline import MAX_GAP, OpenOutlineWarning, building_outline, largest_enclosed_region
 from .floor import Floor
+
+DRAWING_RESOLUTION = 0.01
+"""Metres per cell at which a plan made of points (a drawing) is rasterised for the simulation."""
+
+MAX_DRAWING_CELLS = 8_000_000
+"""Most cells of a drawing's simulated building (a larger one is rasterised coarser): furnishing
+checks the building's connectivity for every piece of furniture."""
 
 
 @dataclass(frozen=True)
@@ -65,29 +75,52 @@ class World:
     Attributes:
         floor: walls and clutter, rows growing with +y.
         people: the walking people, moved by `advance`.
+        notes: what the simulation did to the plan's building (an open outline closed).
     """
 
     floor: Floor
     people: list[Person] = field(default_factory=list)
+    notes: tuple[str, ...] = ()
 
     @classmethod
-    def from_raster(cls, raster: PlanRaster, rng: np.random.Generator, furnishing: Furnishing | None = None) -> World:
-        """Furnishes the plan raster (image order, origin yaw 0) with seeded furniture and people."""
+    def from_raster(
+        cls,
+        raster: PlanRaster,
+        rng: np.random.Generator,
+        furnishing: Furnishing | None = None,
+        *,
+        max_gap: float = MAX_GAP,
+    ) -> World:
+        """Furnishes the plan raster (image order, origin yaw 0) with seeded furniture and people.
+
+        The building is found by `building_outline`: an outline the drawing left open (gaps up to
+        `max_gap` metres) is closed with cells the plan does not show (shut doors), with an
+        `OpenOutlineWarning` and a line in `notes`; the robot, furniture and people are placed
+        only inside it. A plan that encloses no building even so is refused (ValueError naming
+        the fix)."""
         if abs(raster.origin[2]) > 1e-12:
             raise ValueError("World.from_raster needs a plan raster with origin yaw 0")
         furnishing = furnishing or Furnishing()
-        walls = np.ascontiguousarray(raster.walls[::-1])  # rows grow with +y
-        margin = 3
-        walls = np.pad(walls, margin, constant_values=False)
-        frame = np.pad(np.zeros(raster.walls.shape, dtype=bool), margin, constant_values=True)
+        image_walls = np.ascontiguousarray(raster.walls[::-1])  # rows grow with +y
         res = raster.resolution
+        outline = building_outline(image_walls, res, max_gap)
+        notes: tuple[str, ...] = ()
+        if outline.note:
+            warnings.warn(OpenOutlineWarning(outline.note), stacklevel=2)
+            notes = (outline.note,)
+        margin = 3
+        walls = np.pad(image_walls, margin, constant_values=False)
+        frame = np.pad(np.zeros(raster.walls.shape, dtype=bool), margin, constant_values=True)
         corner = (raster.origin[0] - margin * res, raster.origin[1] - margin * res)
-        # Inside = the largest free region of the plan image not touching the image's edge.
-        inside = np.pad(_inside(~np.ascontiguousarray(raster.walls[::-1])), margin, constant_values=False)
-        if inside.sum() == 0:
-            raise ValueError("the plan has no enclosed free space to furnish (is the building outline closed?)")
+        inside = np.pad(outline.inside, margin, constant_values=False)
         area_100m2 = inside.sum() * res * res / 100.0
-        clutter = frame.copy()
+        clutter = frame | np.pad(outline.sealed, margin, constant_values=False)
+        # The robot and the people start in the floor's largest enclosed free region: when the
+        # paper around the building is larger than the building, that is outside it, so it is
+        # made solid (it is never seen from inside a closed building).
+        enclosed = largest_enclosed_region(~(walls | clutter))
+        if not (enclosed & inside).any():
+            clutter |= np.pad(~image_walls & ~outline.inside, margin, constant_values=False)
         placer = _Placer(walls, clutter, inside, res, rng)
         for _ in range(int(round(furnishing.cabinets * area_100m2))):
             placer.cabinet()
@@ -95,11 +128,29 @@ class World:
             placer.block()
         for _ in range(int(round(furnishing.tables * area_100m2))):
             placer.table_leg()
-        world = cls(Floor(walls, clutter, res, corner))
+        world = cls(Floor(walls, clutter, res, corner), notes=notes)
         for _ in range(int(round(furnishing.people * area_100m2))):
             x, y, heading = world.floor.sample_pose(rng, clearance=0.5)
             world.people.append(Person(x, y, heading, float(rng.uniform(0.3, 1.2)), float(rng.uniform(0.18, 0.25))))
         return world
+
+    @classmethod
+    def from_plan(
+        cls,
+        plan: PlanMap,
+        rng: np.random.Generator,
+        furnishing: Furnishing | None = None,
+        *,
+        resolution: float = DRAWING_RESOLUTION,
+        max_gap: float = MAX_GAP,
+    ) -> World:
+        """The plan's building furnished: its own raster (an image, a ROS map) or, for a plan made
+        of points (a DXF, PDF, SVG or IFC drawing, a HouseExpo outline, segments), its wall points
+        rasterised (`drawing_raster`). See `from_raster`."""
+        raster = plan.raster
+        if raster is None or abs(raster.origin[2]) > 1e-12:
+            raster = drawing_raster(plan, resolution)
+        return cls.from_raster(raster, rng, furnishing, max_gap=max_gap)
 
     def discs(self) -> NDArray[np.float64]:
         """(K, 3) people as (x, y, radius), metres."""
@@ -123,16 +174,19 @@ class World:
                 p.heading = float(rng.uniform(-math.pi, math.pi))
 
 
-def _inside(free_mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def drawing_raster(plan: PlanMap, resolution: float = DRAWING_RESOLUTION) -> PlanRaster:
+    """The simulated building's walls for a plan made of points: each wall point's cell and its 8
+    neighbours at `resolution` metres per cell (coarser when the plan would need more than
+    `MAX_DRAWING_CELLS`), so that points drawn a cell or two apart make a wall no ray passes and
+    a LIDAR's returns lie 1 to 2 cells in front of the drawn surface."""
     import cv2
 
-    free = free_mask.astype(np.uint8)
-    count, labels = cv2.connectedComponents(free, connectivity=4)
-    border = set(np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]])).tolist())
-    sizes = [(int((labels == k).sum()), k) for k in range(1, count) if k not in border]
-    if not sizes:
-        return np.zeros(free.shape, dtype=bool)
-    return np.asarray(labels == max(sizes)[1], dtype=bool)
+    x0, y0, x1, y1 = plan.extent
+    area = max(x1 - x0, resolution) * max(y1 - y0, resolution)
+    resolution = max(resolution, math.sqrt(area / MAX_DRAWING_CELLS))
+    raster = PlanRaster.from_points(plan.points, resolution, margin=4)
+    grown = cv2.dilate(raster.walls.astype(np.uint8), np.ones((3, 3), dtype=np.uint8)).astype(bool)
+    return PlanRaster(grown, raster.resolution, raster.origin)
 
 
 def _disc_free(

@@ -5,6 +5,8 @@
 each: `AcceptanceGate` (`acceptance_gate`), `MotionNoise` (`motion_noise`), `OcclusionRule`
 (`occlusion_rule`), `FusionRule` (`fusion_rule`), `DegeneracyRule` (`degeneracy_rule`),
 `ContinuityRule` (`continuity_rule`) and `LostRule` (`lost_rule`); when it is lost, `Recovery`
-(`recovery`) finds it again with the global search of `relocalize`. The public names are exported by
-`planicp` itself; import them from there.
+(`recovery`) finds it again with the global search of `relocalize`. A plan whose scale is off is
+noticed while tracking (`scale_check`: `ScaleRule`, `ScaleEstimate`, on the per-scan evidence of
+`scale_evidence`) and measured from the first scans (`scale_estimation`: `estimate_scale`). The
+public names are exported by `planicp` itself; import them from there.
 """

@@ -27,6 +27,7 @@ from .motion_noise import MotionNoise
 from .occlusion_rule import OcclusionFilter, OcclusionRule
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .relocalize import Relocalization, prepare_search, relocalize
+from .scale_check import ScaleEstimate, ScaleMonitor, ScaleRule
 from .stages import (
     Rules,
     confirm_pending,
@@ -81,6 +82,11 @@ class Estimate:
             `FitDecision`, `PendingDecision`, `SearchDecision`, `ScoreDecision`, `Correction`,
             `LostDecision`, `RecoveryDecision`, `Bookkeeping`; each has a `why` sentence. Empty for an
             `Estimate` made by hand. (Not part of the estimate's repr or equality.)
+        scale: what the accepted fits so far say about the plan's scale (`ScaleEstimate`: the
+            factor that would make the plan true to the building, and whether the plan is
+            `suspect` of being off by more than `ScaleRule.tolerance`); None before the
+            `ScaleRule`'s `min_fits` fits (or with the check off). It only observes: the pose
+            is the same with it or without it. (Not part of the estimate's equality.)
     """
 
     pose: Pose
@@ -98,6 +104,13 @@ class Estimate:
     kept: NDArray[np.bool_] | None = None
     provisional: bool = False
     decisions: tuple[Decision, ...] = field(default=(), repr=False, compare=False)
+    scale: ScaleEstimate | None = field(default=None, compare=False)
+
+    @property
+    def scale_suspect(self) -> bool:
+        """The plan's scale looks off by more than `ScaleRule.tolerance` (see `scale`): the
+        `Localizer` has also warned once (`PlanScaleWarning`)."""
+        return self.scale is not None and self.scale.suspect
 
     @property
     def T_map_base(self) -> NDArray[np.float64]:  # noqa: N802
@@ -162,6 +175,7 @@ class Localizer:
         continuity: ContinuityRule | None = None,
         occlusion: OcclusionRule | Literal[False] | None = None,
         fusion: FusionRule | None = None,
+        scale: ScaleRule | None = None,
     ) -> None:
         """
         Args:
@@ -181,6 +195,8 @@ class Localizer:
                 alignment (None: `OcclusionRule()`; False: align every return).
             fusion: when an accepted fit is fused with the odometry prediction (a Kalman update;
                 None: `FusionRule()`).
+            scale: when the plan's scale is reported as off (`Estimate.scale`; None:
+                `ScaleRule()`; `ScaleRule(enabled=False)` turns the check off).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -201,6 +217,10 @@ class Localizer:
             raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
         self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
+        if scale is not None and not isinstance(scale, ScaleRule):
+            raise TypeError(f"scale must be a planicp.ScaleRule or None, got {type(scale).__name__}")
+        # Observes the accepted fits for a plan whose scale is off; never changes a pose.
+        self._scale = ScaleMonitor(plan, scale if scale is not None else ScaleRule())
         # The nearest-wall index refuses pairs with hidden wall faces where the KD-tree finds the
         # nearest visible one, so its basin is narrower from a poor start (a 15-degree odometry
         # step): fits it cannot make are tried again with the KD-tree.
@@ -342,6 +362,17 @@ class Localizer:
             self._last_odom = odom
             if records.anchored:
                 self._anchor = (points, odom)
+            # The scale check observes the fit from the prediction when it stays where the
+            # odometry says the robot is (a plan off in scale explains too little of the scans
+            # for the gate long before its fits jump: it is rejected, but in the right place).
+            scale = self._scale.last
+            fitted = fit.result
+            if (
+                fitted is not None
+                and fitted.num_inliers >= rules.gate.min_inliers
+                and not rules.gate.jump_rejection(fitted, prediction.pose)
+            ):
+                scale = self._scale.observe(points, fitted.pose)
             kept = fit.kept
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan
@@ -361,6 +392,7 @@ class Localizer:
                 kept,
                 recovery.on_trial,
                 decisions=(prediction, fit, confirmation, search, score, correction, lost, recovery, records),
+                scale=scale,
             )
 
     def _rules(self) -> Rules:
