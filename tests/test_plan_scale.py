@@ -37,10 +37,27 @@ def track(
     plan: planicp.PlanMap, recording: Recording, s: float, scans: int, **options: object
 ) -> list[planicp.Estimate]:
     start = (recording.truth[0, 0] * s, recording.truth[0, 1] * s, recording.truth[0, 2])
+    # The check itself is under test: on, whatever the plan (the shipped office is a map_server
+    # map, metric by construction, which the `Localizer` does not check by default).
+    options.setdefault("scale", planicp.ScaleRule())
     localizer = planicp.Localizer(plan, start, **options)  # type: ignore[arg-type]
     return [
         localizer.update(scan, tuple(odom)) for scan, odom in zip(recording.scans[:scans], recording.odometry_in_odom)
     ]
+
+
+def test_the_scale_of_a_map_server_map_is_not_checked_by_default() -> None:
+    """A map_server map is made by SLAM in metres (`PlanMap.metric`): its scale is right, and
+    the `Localizer` does not spend time checking it unless asked; a plan whose scale may be off
+    (here the same plan rescaled, as a drawing read at a guessed resolution) is checked."""
+    recording = drive(0)
+    assert office().metric and not office().scaled(1.0).metric
+    metric = planicp.Localizer(office(), tuple(recording.truth[0]))
+    for scan, odom in zip(recording.scans[:30], recording.odometry_in_odom):
+        assert metric.update(scan, tuple(odom)).scale is None
+    drawn = planicp.Localizer(office().scaled(1.0), tuple(recording.truth[0]))
+    last = [drawn.update(scan, tuple(odom)) for scan, odom in zip(recording.scans[:30], recording.odometry_in_odom)][-1]
+    assert last.scale is not None and last.scale.fits >= 8 and not last.scale_suspect
 
 
 def test_scaled_plan_is_the_image_read_at_the_scaled_resolution() -> None:

@@ -56,7 +56,7 @@ class PlanMap:
     number of alignments, from any number of threads.
     """
 
-    __slots__ = ("_native", "_points", "raster", "from_cache", "edge_detector")
+    __slots__ = ("_native", "_points", "raster", "from_cache", "edge_detector", "metric")
 
     def __init__(
         self,
@@ -79,6 +79,10 @@ class PlanMap:
         self.edge_detector = edge_detector
         """How the points were read from `raster` (see `PlanRaster.surface_points`; None for
         plans built from points)."""
+        self.metric = False
+        """Whether the plan's scale is metric by construction: a map_server map, made by SLAM from
+        a range sensor's metres (`from_ros_map`). A drawing's scale (an image's metres per pixel,
+        a print scale) may be off, and the `Localizer` watches it (`ScaleRule`)."""
 
     @classmethod
     def from_points(cls, xy: Any, *, resolution: float | None = None) -> PlanMap:
@@ -262,7 +266,9 @@ class PlanMap:
             return cls._prepared(ros_map.wall_raster(), reading)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
-        return cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit, reading)
+        plan = cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit, reading)
+        plan.metric = True
+        return plan
 
     @classmethod
     def from_segments(cls, segments: Any, spacing: float = 0.02) -> PlanMap:
