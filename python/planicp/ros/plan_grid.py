@@ -70,4 +70,7 @@ def plan_from_occupancy_grid(
     raster = PlanRaster(
         np.ascontiguousarray(walls), positive(resolution, "resolution", "metres"), as_pose(origin, "origin")
     )
-    return PlanMap.from_raster(raster, edge_detector="auto")
+    plan = PlanMap.from_raster(raster, edge_detector="auto")
+    # An occupancy grid on a map topic is in metres, as map_server serves a map_server map.
+    plan.metric = True
+    return plan
