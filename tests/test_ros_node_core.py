@@ -163,6 +163,38 @@ def test_tracks_the_drive_and_map_to_odom_composes_with_odometry(plan: PlanMap, 
     assert set(d.values()) >= {"inlier_ratio", "accepted", "rejected", "malformed_scans", "lost"}
 
 
+def test_a_laser_scan_message_from_an_upside_down_laser_is_the_same_scan(plan: PlanMap, drive: Recording) -> None:
+    """`add_scan_message` reads a LaserScan's fields (ROS 1 and 2 alike); a laser mounted upside
+    down reports each beam at the negated angle, and its message gives the same poses as the
+    upright scan."""
+    from types import SimpleNamespace
+
+    upright, mirrored = make_core(plan, drive), make_core(plan, drive)
+    assert drive.odometry_stream is not None and drive.odometry_stream_times is not None
+    poses: list[tuple[tuple[float, float, float], tuple[float, float, float]]] = []
+    for kind, i in messages(drive, 0, 12):
+        if kind == "odom":
+            t, odom = float(drive.odometry_stream_times[i]), drive.odometry_stream[i]
+            upright.add_odometry(t, odom)
+            mirrored.add_odometry(t, odom)
+            continue
+        f = scan_fields(drive, i)
+        msg = SimpleNamespace(
+            ranges=f["ranges"],
+            angle_min=-f["angle_min"],  # type: ignore[operator]
+            angle_increment=-f["angle_increment"],  # type: ignore[operator]
+            angle_max=-f["angle_max"],  # type: ignore[operator]
+            range_min=f["range_min"],
+            range_max=f["range_max"],
+        )
+        a = upright.add_scan(**f)  # type: ignore[arg-type]
+        b = mirrored.add_scan_message(f["stamp"], msg, (f["laser_pose"], True))  # type: ignore[arg-type]
+        poses.extend((x.pose, y.pose) for x, y in zip(a, b, strict=True))
+    assert len(poses) >= 10
+    for x, y in poses:
+        np.testing.assert_allclose(x, y, atol=1e-9)
+
+
 def test_a_scan_ahead_of_the_odometry_waits_for_it(plan: PlanMap, drive: Recording) -> None:
     """Scans often arrive before the odometry message of their stamp: they wait, one at a time."""
     assert drive.odometry_stream is not None and drive.odometry_stream_times is not None

@@ -137,6 +137,23 @@ class PlanicpNodeCore:
                 return [self._process(pending)]
             return []
 
+    def add_scan_message(self, stamp: float, msg: Any, mount: tuple[Any, bool]) -> list[PoseOutput]:
+        """`add_scan` for a `sensor_msgs/LaserScan` (ROS 1 or 2: the fields are named alike) stamped
+        `stamp` (seconds), from a laser mounted at `mount`: (T_base_laser, whether the laser is
+        upside down, which mirrors its angles)."""
+        laser_pose, flipped = mount
+        sign = -1.0 if flipped else 1.0
+        return self.add_scan(
+            stamp,
+            msg.ranges,
+            sign * msg.angle_min,
+            sign * msg.angle_increment,
+            msg.range_min,
+            msg.range_max,
+            angle_max=sign * msg.angle_max,
+            laser_pose=laser_pose,
+        )
+
     def add_scan(
         self,
         stamp: float,

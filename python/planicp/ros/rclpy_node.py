@@ -325,20 +325,9 @@ class PlanicpLifecycleNode(_lifecycle.Node):  # type: ignore[misc]
             mount = self._laser_mount(core, frame)
             if mount is None:
                 return
-            laser_pose, flipped = mount
-            sign = -1.0 if flipped else 1.0
             stamp = stamp_seconds(msg.header.stamp)
             self._remember(stamp, msg.header.stamp)
-            outputs = core.add_scan(
-                stamp,
-                msg.ranges,
-                sign * msg.angle_min,
-                sign * msg.angle_increment,
-                msg.range_min,
-                msg.range_max,
-                angle_max=sign * msg.angle_max,
-                laser_pose=laser_pose,
-            )
+            outputs = core.add_scan_message(stamp, msg, mount)
         except (TypeError, ValueError) as exc:
             self._warn(str(exc))
             return

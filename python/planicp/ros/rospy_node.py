@@ -113,20 +113,9 @@ class PlanicpRosNode:
             mount = self._laser_mount(frame)
             if mount is None:
                 return
-            (laser_pose, flipped) = mount
-            sign = -1.0 if flipped else 1.0
             stamp = msg.header.stamp.to_sec()
             self._remember(stamp, msg.header.stamp)
-            outputs = self.core.add_scan(
-                stamp,
-                msg.ranges,
-                sign * msg.angle_min,
-                sign * msg.angle_increment,
-                msg.range_min,
-                msg.range_max,
-                angle_max=sign * msg.angle_max,
-                laser_pose=laser_pose,
-            )
+            outputs = self.core.add_scan_message(stamp, msg, mount)
         except (TypeError, ValueError) as exc:
             self.rospy.logwarn_throttle_identical(5.0, f"{NODE_NAME}: {exc}")
             return
