@@ -371,7 +371,8 @@ class Localizer:
             scale = self._scale.last
             fitted = fit.result
             if (
-                fitted is not None
+                self._scale.rule.enabled
+                and fitted is not None
                 and fitted.num_inliers >= rules.gate.min_inliers
                 and not rules.gate.jump_rejection(fitted, prediction.pose)
             ):
