@@ -689,6 +689,10 @@ def test_a_view_gives_the_alignment_its_visible_points() -> None:
         plan.view_from(pose, 8.0, 720, ranges=False, pair_distance=0.5)
     with pytest.raises(ValueError, match="pair_distance must be a positive"):
         plan.view_from(pose, 8.0, 720, scan=near, ranges=False, pair_distance=0.0)
+    with pytest.raises(planicp.PlanicpError, match="pass the scan too"):
+        plan._native.view_from(pose, 8.0, 720, None, False, 0.5)
+    with pytest.raises(planicp.PlanicpError, match="pair_distance"):
+        plan._native.view_from(pose, 8.0, 720, near, True, 0.5)  # ranges stop at the walls, however far
     with pytest.raises(ValueError, match="was cast from"):
         localize(scan, plan, (5.5, 1.0, 0.0), config, view=view)
     with pytest.raises(TypeError, match="view must be a planicp.WallView"):
