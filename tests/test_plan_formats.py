@@ -558,7 +558,7 @@ def test_dxf_hidden_layers_blocks_and_door_swings(tmp_path: Path, capsys: pytest
     assert cli_main(["plan", str(path), "--list-layers"]) == 0
     listing = capsys.readouterr().out.splitlines()
     assert "HIDDEN: frozen; 1 LINE (not read unless named with --layer)" in listing
-    assert "WALLS: on; 1 ARC, 3 LINE, 1 LWPOLYLINE" in listing
+    assert "WALLS: on, named as walls; 1 ARC, 3 LINE, 1 LWPOLYLINE" in listing
 
 
 # --------------------------------------------------------------------------------------------------

@@ -5,6 +5,10 @@ What a CAD drawing shows is what its walls are read from (`dxf_walls`):
 * layers that are frozen, switched off, not plotted, or named "Defpoints" (CAD's non-plotting
   layer) are skipped unless asked for by name; so are layers named as doors ("door", "Tür",
   "porte", ...): doors are openings, not walls;
+* of the layers shown, those NAMED AS WALLS by CAD conventions (A-WALL, Walls, Wand, mur, muro,
+  ISO 13567 codes, ...) are read, with the layer that is the building's shell around them, when
+  one is (`dxf_wall_layers`); the others shown (furniture, beams, ...) are left out and named in
+  the notes. When no layer is named as walls, every layer shown is read, and the notes say so;
 * block references (INSERT, and MINSERT arrays) are expanded with their transforms, nested ones
   too (ezdxf's virtual entities), so walls drawn as blocks count; an entity of a block on layer
   "0" takes the layer of the reference, as CAD programs draw it;
@@ -49,16 +53,15 @@ DOOR_LAYER = re.compile(r"door|t(?:ü|ue)r(?:en)?\b|porte|puerta|porta|deur|d[ø
 @dataclass(frozen=True)
 class DxfLayer:
     """One layer of a drawing: its name, its state ("on", or "frozen", "off", "not plotted",
-    "door layer" joined by ", "), and how many entities of each type are on it (blocks expanded)."""
+    "door layer" joined by ", "; a layer shown then says what the default reading makes of it:
+    "on, named as walls", "on, the shell around the walls", "on, not named as walls"), how many
+    entities of each type are on it (blocks expanded), and whether `dxf_walls` reads it when no
+    layers are named."""
 
     name: str
     state: str
     entities: dict[str, int]
-
-    @property
-    def read_by_default(self) -> bool:
-        """Whether `dxf_walls` reads the layer when no layers are named."""
-        return self.state == "on"
+    read_by_default: bool
 
 
 @dataclass(frozen=True)
@@ -68,7 +71,7 @@ class DxfWalls:
     Attributes:
         segments: (M, 2, 2) segments [[x0, y0], [x1, y1]], metres, map frame.
         layers: the layers the walls were read from.
-        skipped_layers: the layers left out, with why ("Doors: frozen").
+        skipped_layers: the layers left out, with why ("Doors: frozen", "Shelves: not named as walls").
         door_swings: how many door swings (arc and leaf) were left out (door symbols drawn as one
             polyline are counted in `notes`).
         block_entities: how many wall entities came from block references.
@@ -167,17 +170,128 @@ def _entities(doc: Any, name: str) -> list[tuple[Any, str, str, bool]]:
 
 
 def dxf_layers(path: str | PathLike[str]) -> list[DxfLayer]:
-    """The layers of a DXF drawing, sorted by name, with their state and entity counts (blocks
-    expanded, an entity of a block on layer "0" counted on the reference's layer).
+    """The layers of a DXF drawing, sorted by name, with their state, entity counts (blocks
+    expanded, an entity of a block on layer "0" counted on the reference's layer) and whether the
+    default reading takes them as walls.
 
     Raises:
         ImportError: ezdxf is not installed. FileNotFoundError, ValueError: as `dxf_walls`.
     """
     doc, name = _read(path)
+    scale = _units(doc, name)[1]
     counts: dict[str, Counter[str]] = {str(layer.dxf.name): Counter() for layer in doc.layers}
-    for _, layer, kind, _ in _entities(doc, name):
+    entities = _entities(doc, name)
+    for _, layer, kind, _ in entities:
         counts.setdefault(layer, Counter())[kind] += 1
-    return [DxfLayer(layer, _layer_state(doc, layer), dict(sorted(c.items()))) for layer, c in sorted(counts.items())]
+    states = {layer: _layer_state(doc, layer) for layer in counts}
+    shown = {layer for layer, state in states.items() if state == "on"}
+    choice = _default_choice(doc, _polylines(entities, shown, 0.05 / scale, name), scale)
+    out = []
+    for layer, c in sorted(counts.items()):
+        state, read = states[layer], False
+        if state == "on":
+            read = layer in choice.read
+            state = "on, " + choice.role(layer) if choice.named else state
+        out.append(DxfLayer(layer, state, dict(sorted(c.items())), read))
+    return out
+
+
+@dataclass(frozen=True)
+class _Choice:
+    """The default reading's layers: `named` as walls, `shells` around them, `read` (both; every
+    layer shown when none is named), `left_out` (shown, with wall entities, not read)."""
+
+    named: tuple[str, ...]
+    shells: tuple[str, ...]
+    read: frozenset[str]
+    left_out: tuple[str, ...]
+
+    def role(self, layer: str) -> str:
+        if layer in self.named:
+            return "named as walls"
+        if layer in self.shells:
+            return "the shell around the walls"
+        return "not named as walls"
+
+    def note(self) -> str:
+        if not self.named:
+            return (
+                "layers: none is named as walls (wall, A-WALL, Wand, mur, muro, ISO 13567 21/22, ...): every layer "
+                "shown read; name the wall layers with --layer (layers=[...]) if some are not walls"
+            )
+        shells = f"; the shell around them: {', '.join(self.shells)}" if self.shells else ""
+        left = (
+            f"; left out, not named as walls: {', '.join(self.left_out)} (read them by naming every wall layer "
+            "with --layer, layers=[...])"
+            if self.left_out
+            else ""
+        )
+        return f"layers: named as walls: {', '.join(self.named)}{shells}{left}"
+
+
+def _default_choice(doc: Any, items: list[tuple[Any, NDArray[np.float64], str, str, bool]], scale: float) -> _Choice:
+    """Which of the layers holding `items` (entity, chain, type, layer, from a block) the default
+    reading takes (see `dxf_wall_layers`)."""
+    from .dxf_wall_layers import continuous, not_shell, shell_layers, wall_layer
+
+    by_layer: dict[str, list[NDArray[np.float64]]] = {}
+    for _, chain, _, layer, _ in items:
+        by_layer.setdefault(layer, []).append(chain)
+    named = tuple(sorted(layer for layer in by_layer if wall_layer(layer)))
+    if not named:
+        return _Choice((), (), frozenset(by_layer), ())
+
+    def linetype(layer: str) -> str:
+        entry = doc.layers.get(layer) if layer in doc.layers else None
+        return str(entry.dxf.get("linetype", "")) if entry is not None else ""
+
+    candidates = {
+        layer: chains
+        for layer, chains in by_layer.items()
+        if layer not in named and not not_shell(layer) and continuous(linetype(layer))
+    }
+    walls = [chain for layer in named for chain in by_layer[layer]]
+    shells = tuple(shell_layers(candidates, walls, scale))
+    read = frozenset(named + shells)
+    return _Choice(named, shells, read, tuple(sorted(set(by_layer) - read)))
+
+
+def _units(doc: Any, name: str) -> tuple[int, float]:
+    """The drawing's `$INSUNITS` code and metres per drawing unit."""
+    from .vector_plan import _DAMAGED, _METRES_PER_UNIT
+
+    try:
+        code = doc.header.get("$INSUNITS", 0)
+    except _DAMAGED as exc:
+        raise ValueError(
+            f"{name} could not be read as DXF: its header is damaged ({type(exc).__name__}: {one_line(str(exc))})"
+        ) from None
+    if isinstance(code, bool) or not isinstance(code, int) or code not in _METRES_PER_UNIT:
+        raise ValueError(f"{name} has unknown drawing units $INSUNITS = {brief(code)}")
+    return code, _METRES_PER_UNIT[code]
+
+
+def _polylines(
+    entities: list[tuple[Any, str, str, bool]], read: set[str] | frozenset[str], tol_units: float, name: str
+) -> list[tuple[Any, NDArray[np.float64], str, str, bool]]:
+    """(entity, chain in drawing units, type, layer, from a block) of the wall entities on `read`."""
+    from .vector_plan import _DAMAGED, _entity_polyline
+
+    items = []
+    for entity, layer, kind, in_block in entities:
+        if layer not in read:
+            continue
+        try:
+            polyline = _entity_polyline(entity, tol_units)
+        except _DAMAGED as exc:  # besides the ValueErrors here: a value ezdxf's recovery left unset (a None point)
+            reason = str(exc) if type(exc) is ValueError else f"damaged ({type(exc).__name__}: {exc})"
+            raise ValueError(
+                f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
+                f"{one_line(layer, 60)}: {one_line(reason)}"
+            ) from None
+        if polyline is not None:
+            items.append((entity, polyline, kind, layer, in_block))
+    return items
 
 
 def _door_swings(items: list[tuple[Any, NDArray[np.float64], str]], scale: float) -> set[int]:
@@ -248,7 +362,9 @@ def dxf_walls(
     Args:
         path: the DXF file.
         layers: the wall layers, compared case-insensitively (a str is one layer), read whatever
-            their state; None: every layer that is on, thawed, plotted and not a door layer.
+            their state; None: of the layers that are on, thawed, plotted and not door layers,
+            those named as walls and the shell around them (`dxf_wall_layers`), or all of them
+            when none is named as walls.
         arc_tolerance: largest sagitta of a chord replacing an arc, metres.
         keep_door_swings: keep door swings (arc and leaf, or a door symbol's polyline) as walls.
 
@@ -260,22 +376,18 @@ def dxf_walls(
             entity was found (the message lists the layers and their states), the file is not a
             readable DXF, its `$INSUNITS` is unknown, or `arc_tolerance` <= 0.
     """
-    from .vector_plan import _DAMAGED, _METRES_PER_UNIT, _WALL_TYPES, _entity_polyline, _layer_names
+    from .vector_plan import _DAMAGED, _WALL_TYPES, _layer_names
 
     tolerance = positive(arc_tolerance, "arc_tolerance", "metres")
     wanted = _layer_names(layers)
     doc, name = _read(path)
+    code, scale = _units(doc, name)
     try:
-        code = doc.header.get("$INSUNITS", 0)
         existing = {str(layer.dxf.name) for layer in doc.layers}
     except _DAMAGED as exc:
         raise ValueError(
-            f"{name} could not be read as DXF: its header or layers are damaged "
-            f"({type(exc).__name__}: {one_line(str(exc))})"
+            f"{name} could not be read as DXF: its layers are damaged ({type(exc).__name__}: {one_line(str(exc))})"
         ) from None
-    if isinstance(code, bool) or not isinstance(code, int) or code not in _METRES_PER_UNIT:
-        raise ValueError(f"{name} has unknown drawing units $INSUNITS = {brief(code)}")
-    scale = _METRES_PER_UNIT[code]
     entities = _entities(doc, name)
     existing.update(layer for _, layer, _, _ in entities)
     states = {layer: _layer_state(doc, layer) for layer in existing}
@@ -290,27 +402,18 @@ def dxf_walls(
         read = {layer for layer in existing if layer.casefold() in wanted}
     else:
         read = {layer for layer, state in states.items() if state == "on"}
+    found = _polylines(entities, read, tolerance / scale, name)
+    choice = None
+    if wanted is None:
+        choice = _default_choice(doc, found, scale)
+        found = [item for item in found if item[3] in choice.read]
+        read = set(choice.read)
     skipped = tuple(f"{layer}: {states[layer]}" for layer in sorted(existing - read) if states[layer] != "on")
-
-    tol_units = tolerance / scale
-    items: list[tuple[Any, NDArray[np.float64], str]] = []
-    used: set[str] = set()
-    from_blocks = 0
-    for entity, layer, kind, in_block in entities:
-        if layer not in read:
-            continue
-        try:
-            polyline = _entity_polyline(entity, tol_units)
-        except _DAMAGED as exc:  # besides the ValueErrors here: a value ezdxf's recovery left unset (a None point)
-            reason = str(exc) if type(exc) is ValueError else f"damaged ({type(exc).__name__}: {exc})"
-            raise ValueError(
-                f"{name}: {kind} {one_line(str(entity.dxf.get('handle')), 20)} on layer "
-                f"{one_line(layer, 60)}: {one_line(reason)}"
-            ) from None
-        if polyline is not None:
-            items.append((entity, polyline, kind))
-            used.add(layer)
-            from_blocks += in_block
+    if choice is not None:
+        skipped += tuple(f"{layer}: not named as walls" for layer in choice.left_out)
+    items = [(entity, chain, kind) for entity, chain, kind, _, _ in found]
+    used = {layer for _, _, _, layer, _ in found}
+    from_blocks = sum(in_block for _, _, _, _, in_block in found)
     doors = set() if keep_door_swings else _door_swings(items, scale)
     pieces = [np.stack([chain[:-1], chain[1:]], axis=1) for i, (_, chain, _) in enumerate(items) if i not in doors]
     if not pieces:
@@ -334,5 +437,5 @@ def dxf_walls(
         + (f" ({from_blocks} entities from block references)" if from_blocks else ""),
         f"dropped: layers {'; '.join(skipped) if skipped else 'none'}; {swings} door swings (arc and leaf), "
         f"{symbols} door symbols (polyline wedges)",
-    )
+    ) + ((choice.note(),) if choice is not None else ())
     return DxfWalls(np.ascontiguousarray(segments), tuple(sorted(used)), skipped, swings, from_blocks, notes)
