@@ -105,8 +105,8 @@ def read_plan_file(
     * `.json`: a HouseExpo plan: its outline sampled every `spacing` metres or, with `resolution`,
       rasterised at that many metres per pixel with 15 cm walls (a plan with a raster, as the
       simulation needs: `PlanMap.from_house_expo`);
-    * `.dxf`: a CAD drawing (`layers`: the wall layers, default every layer that is on and not
-      frozen; needs `planicp[cad]`);
+    * `.dxf`: a CAD drawing (`layers`: the wall layers, default of the layers shown those named as
+      walls and the building's shell around them, all when none is; needs `planicp[cad]`);
     * `.pdf`: a vector PDF (`pdf_plan.pdf_walls`): `layers` its optional content groups, `scale`
       the print scale (default: the one the drawing states), `resolution` metres per point
       instead, `page` from 1; `raster=True` (or a page with no dark line work) renders the page

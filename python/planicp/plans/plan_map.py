@@ -328,7 +328,9 @@ class PlanMap:
         arc_tolerance: float = 0.01,
     ) -> PlanMap:
         """A plan from a DXF drawing: LINE, LWPOLYLINE (with bulges), POLYLINE, ARC and CIRCLE on
-        `layers` (all when None), in metres from `$INSUNITS`, sampled every `spacing` metres.
+        `layers` (None: of the layers shown, those named as walls and the building's shell around
+        them, or all of them when none is named as walls: `dxf_plan.dxf_walls`), in metres from
+        `$INSUNITS`, sampled every `spacing` metres.
         Needs the optional extra: `pip install 'planicp[cad]'`."""
         segments = dxf_segments(path, layers, arc_tolerance=arc_tolerance)
         try:

@@ -200,8 +200,10 @@ def dxf_segments(
     Walls are the LINE, LWPOLYLINE (closed flag and bulge arcs), 2D POLYLINE, ARC and CIRCLE
     entities of the modelspace on the chosen layers, block references expanded; everything else
     (text, hatches, dimensions, 3D polylines, meshes) is skipped, and so are door swings (an arc
-    and its leaf). Without `layers`, frozen, off, non-plotting and door layers are skipped
-    (`dxf_plan.dxf_walls`, which also says what it read and left out). Arcs, circles and
+    and its leaf). Without `layers`, frozen, off, non-plotting and door layers are skipped, and of
+    the others the layers named as walls are read with the building's shell around them (all of
+    them when none is named as walls: `dxf_plan.dxf_walls`, which also says what it read and left
+    out). Arcs, circles and
     bulges become chords whose sagitta (largest gap between chord and true arc) is at most
     `arc_tolerance`; the chord ends lie on the true arc, and segment endpoints are kept exactly.
 
@@ -214,8 +216,8 @@ def dxf_segments(
     Args:
         path: the DXF file.
         layers: names of the wall layers, compared case-insensitively (a single str is one
-            layer), read whatever their state; None takes every layer that is shown (on, thawed,
-            plotted) and not a door layer.
+            layer), read whatever their state; None: of the layers shown (on, thawed, plotted)
+            and not door layers, those named as walls and their shell, or all when none is.
         arc_tolerance: largest sagitta of a chord replacing an arc, metres.
 
     Returns:
