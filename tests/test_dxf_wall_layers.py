@@ -132,3 +132,16 @@ def test_no_layer_named_as_walls_reads_every_layer_shown_and_says_so(tmp_path: P
     assert walls.layers == ("Base", "Layer1", "Layer2", "Stahltraeger", "Tisch")
     assert walls.notes[3].startswith("layers: none is named as walls (wall, A-WALL, Wand, mur, muro,")
     assert not any("not named as walls" in s for s in walls.skipped_layers)
+
+
+def test_layers_are_listed_even_when_the_walls_cannot_be_read(tmp_path: Path) -> None:
+    from planicp.plans.dxf_plan import dxf_layers, dxf_walls
+
+    path = _house(tmp_path, "Wand", "Base")
+    doc = ezdxf.readfile(path)
+    doc.header["$INSUNITS"] = 99  # no unit DXF defines
+    doc.saveas(path)
+    with pytest.raises(ValueError, match=r"unknown drawing units \$INSUNITS = 99"):
+        dxf_walls(path)
+    listed = {layer.name: (layer.state, layer.read_by_default) for layer in dxf_layers(path)}
+    assert listed["Base"] == ("on", True) and listed["Stahltraeger"] == ("on", True)

@@ -178,14 +178,17 @@ def dxf_layers(path: str | PathLike[str]) -> list[DxfLayer]:
         ImportError: ezdxf is not installed. FileNotFoundError, ValueError: as `dxf_walls`.
     """
     doc, name = _read(path)
-    scale = _units(doc, name)[1]
     counts: dict[str, Counter[str]] = {str(layer.dxf.name): Counter() for layer in doc.layers}
     entities = _entities(doc, name)
     for _, layer, kind, _ in entities:
         counts.setdefault(layer, Counter())[kind] += 1
     states = {layer: _layer_state(doc, layer) for layer in counts}
     shown = {layer for layer, state in states.items() if state == "on"}
-    choice = _default_choice(doc, _polylines(entities, shown, 0.05 / scale, name), scale)
+    try:
+        scale = _units(doc, name)[1]
+        choice = _default_choice(doc, _polylines(entities, shown, 0.05 / scale, name), scale)
+    except ValueError:  # unknown units or a damaged entity: `dxf_walls` says which; the layers are listed
+        choice = _Choice((), (), frozenset(shown), ())
     out = []
     for layer, c in sorted(counts.items()):
         state, read = states[layer], False
