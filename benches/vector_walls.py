@@ -10,7 +10,8 @@ For each drawing, the wall points planicp's default reading gives (`load_plan`, 
 * `cmu_newell_simon_floor3.pdf`: the black 0.06 pt strokes, selected here by colour and width
   from pdfminer's layout objects (their own path walk, Bezier curves flattened here), in page
   points scaled by the drawing's true print scale 1"=24' (0.1016 m per point, known from the
-  legend's areas). planicp reads it with `scale='1"=24\\''` (it states no scale in its text).
+  legend's areas). planicp reads it with `scale='1"=24\\''`, and without (it states no scale in
+  its text: the scale its legend gives, `legend_scale`).
 * `raumzeitlabor_floorplan.dxf`: the entities of the wall layers `Base` and `Wand (neu)` (the
   drawings' README: the room's shell and the new walls), read with ezdxf directly (block references
   expanded with ezdxf's `virtual_entities`), in centimetres ($INSUNITS 5).
@@ -347,6 +348,7 @@ def main() -> None:
             {"scale": "1\"=24'"},
         )
     )
+    truths.append((pdf.name, "black 0.06 pt strokes", truths[-1][2], {}))  # its scale from its legend
     dxf = d / "raumzeitlabor_floorplan.dxf"
     dxf_segments = dxf_truth(dxf, ("Base", "Wand (neu)")) * 0.01
     truths.append((dxf.name, "layers Base, Wand (neu)", sample_segments(dxf_segments, spacing), {}))
@@ -365,6 +367,7 @@ def main() -> None:
             loaded[key] = (result.plan.points, time.perf_counter() - start, result.notes)
         got, seconds, _ = loaded[key]
         stem = Path(name).stem + ("_no_openings" if label == "walls, no openings" else "")
+        stem += "_legend_scale" if name.endswith(".pdf") and not options else ""
         p, r = overlay(args.out / f"{stem}.png", truth, got, tol)
         shown = " ".join(f"--{k} {v!r}" for k, v in options.items()) or "none"
         print(f"| {name} | {label} | {shown} | {len(got):,} | {len(truth):,} | {p:.1%} | {r:.1%} | {seconds:.1f} s |")

@@ -18,7 +18,9 @@ filled. `pdf_walls` reads one page's paths with pdfminer.six, groups them into *
 Coordinates are the page as displayed (its /Rotate applied), in PDF points (1/72 inch on paper),
 x right and y up, scaled to metres with the drawing's print scale: given (`scale`: "1:100",
 '1"=24\\'', a ratio) or stated in the page's text (such as "SCALE 1/8\\" = 1'-0\\""), or metres per
-point directly (`resolution`). The result is the map frame, metres.
+point directly (`resolution`); a page that states none may give it by its legend: the areas it
+lists beside colour swatches against the rooms filled in those colours (`legend_scale`). The
+result is the map frame, metres.
 
 A page with no dark line work (a scanned drawing) is rendered by `pdf_raster` (pypdfium2) into a
 grey image for `PlanMap.from_image`.
@@ -372,7 +374,7 @@ def pdf_walls(
     Args:
         path: the PDF file.
         scale: the drawing's print scale ("1:100", '1"=24\\'', or the ratio, 100); None: the
-            scale the page's text states.
+            scale the page's text states, else the one its legend's areas give (`legend_scale`).
         resolution: metres in the building per PDF point, instead of `scale`.
         page: which page, from 1.
         colours: keep only paths of these colours ('#000000', 'black', (r, g, b) in 0..1),
@@ -409,7 +411,7 @@ def pdf_walls(
     except Exception as exc:  # noqa: BLE001 - pdfminer raises what its parser meets (PSEOF, PDFSyntaxError, ...)
         raise ValueError(f"{name} could not be read as PDF: {one_line(f'{type(exc).__name__}: {exc}')}") from None
 
-    metres, source = _scale(name, scale, resolution, text)
+    metres, source = _scale(name, scale, resolution, text, file, page)
     groups, classes = _classes(paths)
     all_layers = tuple(sorted({p.layer for p in paths if p.layer}))
     listing = "; ".join(c.describe() for c in classes[:8]) or "none"
@@ -486,11 +488,14 @@ def pdf_scale(
             text = extract_text(str(file), page_numbers=[page - 1])
         except Exception as exc:  # noqa: BLE001 - as in pdf_walls
             raise ValueError(f"PDF file {str(file)!r} could not be read as PDF: {one_line(str(exc))}") from None
-    return _scale(f"PDF file {str(file)!r}", scale, resolution, text)
+    return _scale(f"PDF file {str(file)!r}", scale, resolution, text, file, page)
 
 
-def _scale(name: str, scale: str | float | None, resolution: float | None, text: str) -> tuple[float, str]:
-    """Metres per PDF point and where that came from."""
+def _scale(
+    name: str, scale: str | float | None, resolution: float | None, text: str, file: Path | None = None, page: int = 1
+) -> tuple[float, str]:
+    """Metres per PDF point and where that came from: given, else the print scale the text
+    states, else (with `file`) the scale page `page`'s legend gives by its areas (`legend_scale`)."""
     if scale is not None and resolution is not None:
         raise ValueError("give the PDF's print scale or its resolution (metres per point), not both")
     if resolution is not None:
@@ -500,9 +505,16 @@ def _scale(name: str, scale: str | float | None, resolution: float | None, text:
         return POINT_METRES * ratio, f"print scale given: {scale} (1:{ratio:g})"
     stated = find_print_scale(text)
     if stated is None:
+        if file is not None:
+            from .legend_scale import legend_scale
+
+            legend = legend_scale(file, page=page)
+            if legend is not None:
+                return legend.metres_per_point, legend.describe()
         raise ValueError(
-            f"{name} states no print scale in its text: give it, e.g. scale='1:100' or '1\"=24\\'' "
-            "(planicp plan --scale '1:100'), or resolution= metres per PDF point"
+            f"{name} states no print scale in its text (nor areas in a legend beside the colours of its rooms): "
+            "give it, e.g. scale='1:100' or '1\"=24\\'' (planicp plan --scale '1:100'), or resolution= metres per "
+            "PDF point"
         )
     ratio, words = stated
     return POINT_METRES * ratio, f"print scale stated in the drawing: {words!r} (1:{ratio:g})"
