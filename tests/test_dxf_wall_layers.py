@@ -145,3 +145,30 @@ def test_layers_are_listed_even_when_the_walls_cannot_be_read(tmp_path: Path) ->
         dxf_walls(path)
     listed = {layer.name: (layer.state, layer.read_by_default) for layer in dxf_layers(path)}
     assert listed["Base"] == ("on", True) and listed["Stahltraeger"] == ("on", True)
+
+
+def test_a_non_finite_coordinate_is_refused_naming_the_file(tmp_path: Path) -> None:
+    from planicp.plans.dxf_plan import dxf_walls
+
+    path = _house(tmp_path, "Wand", "Base")
+    doc = ezdxf.readfile(path)
+    doc.modelspace().add_line((0, 0), (1e308, 0), dxfattribs={"layer": "Wand"})
+    doc.saveas(path)
+    text = path.read_text().replace("1e+308", "inf")
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"house\.dxf.*non-finite"):
+        dxf_walls(path)
+
+
+def test_a_shell_candidate_with_a_non_finite_coordinate_is_left_out(tmp_path: Path) -> None:
+    from planicp.plans.dxf_plan import dxf_walls
+
+    path = _house(tmp_path, "Wand", "Base")
+    doc = ezdxf.readfile(path)
+    doc.modelspace().add_line((0, 0), (1e308, 6), dxfattribs={"layer": "Base"})
+    doc.saveas(path)
+    path.write_text(path.read_text().replace("1e+308", "inf"))
+    walls = dxf_walls(path)
+    assert walls.layers == ("Wand",) and "Base: not named as walls" in walls.skipped_layers
+    with pytest.raises(ValueError, match=r"house\.dxf.*non-finite"):
+        dxf_walls(path, ["Wand", "Base"])

@@ -132,11 +132,15 @@ def shell_layers(
     if not walls or not candidates:
         return []
     wall_pts = np.concatenate(walls)
+    if not np.isfinite(wall_pts).all():
+        return []  # refused by the reader, naming the file
     found = []
     for name, chains in sorted(candidates.items()):
         if not chains:
             continue
         pts = np.concatenate(chains)
+        if not np.isfinite(pts).all():
+            continue
         touch = SHELL_TOUCH / metres_per_unit
         if (pts.min(axis=0) > wall_pts.min(axis=0) + touch).any() or (
             pts.max(axis=0) < wall_pts.max(axis=0) - touch
