@@ -176,19 +176,25 @@ def shell_layers(
         s = np.round((np.concatenate(samples) - lo) / cell).astype(np.int64)
         if float(enclosed[s[:, 1], s[:, 0]].mean()) < SHELL_ENCLOSED:
             continue
-        if _touches(chains, wall_pts, SHELL_TOUCH / metres_per_unit) >= SHELL_TOUCHES:
+        # Only the vertices in or next to a cell of its line work can meet it (cells >= 7.5 cm).
+        v = np.round((wall_pts - lo) / cell).astype(np.int64)
+        near = cv2.dilate(mask, np.ones((3, 3), np.uint8))[v[:, 1], v[:, 0]] > 0
+        if _touches(chains, wall_pts[near], SHELL_TOUCH / metres_per_unit) >= SHELL_TOUCHES:
             found.append(name)
     return found
 
 
 def _touches(chains: list[NDArray[np.float64]], points: NDArray[np.float64], tol: float) -> int:
-    """How many of `points` lie within `tol` of a segment of `chains`."""
+    """How many of `points` lie within `tol` of a segment of `chains` (counted until
+    `SHELL_TOUCHES`)."""
     a = np.concatenate([c[:-1] for c in chains])
     b = np.concatenate([c[1:] for c in chains])
     ab = b - a
     length2 = np.maximum((ab**2).sum(axis=1), 1e-300)
     count = 0
     for start in range(0, len(points), 256):
+        if count >= SHELL_TOUCHES:
+            break
         p = points[start : start + 256, None, :]  # (P, 1, 2) against (S, 2)
         t = np.clip(((p - a) * ab).sum(axis=2) / length2, 0.0, 1.0)
         d = np.hypot(*(a + t[..., None] * ab - p).transpose(2, 0, 1))
