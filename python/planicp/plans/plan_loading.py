@@ -118,7 +118,8 @@ def read_plan_file(
     * `.ifc`: a BIM model (`ifc_plan.ifc_walls`): the walls of `storey` (name or number from 1;
       default the lowest storey with walls) cut `cut_height` metres above its floor, doors and
       windows open;
-    * anything else: a plan image, which needs `resolution` (metres per pixel) and takes `origin`
+    * anything else: a plan image, at `resolution` metres per pixel or, without one, at the scale
+      its room labels give, read by OCR (`raster_scale`; needs `planicp[ocr]`); it takes `origin`
       (x, y, yaw of the image's lower-left corner in the map frame) and `image_options`
       (`threshold`, `open_px`, `close_px`, `edge_detector`, `walls`, `wall_extraction`: see
       `PlanMap.from_image`); with `explain`, the wall extraction's decisions are returned too
@@ -129,7 +130,8 @@ def read_plan_file(
     Raises:
         FileNotFoundError: `source` does not exist.
         ImportError: the optional extra the format needs is not installed (the message names it).
-        ValueError: an image without a resolution, a format planicp does not read (DWG, ...: the
+        ValueError: an image without a resolution whose labels give none (or without the extra
+            `ocr` to read them), a format planicp does not read (DWG, ...: the
             message says what to export instead), or a file the reader rejects.
     """
     path = Path(source)
@@ -154,14 +156,38 @@ def read_plan_file(
         return _svg_plan(path, resolution, scale, layers, spacing)
     if kind == "ifc":
         return _ifc_plan(path, storey, cut_height, spacing)
+    extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
+    scale_notes: tuple[str, ...] = ()
     if resolution is None:
-        raise ValueError(f"plan image {path} needs a resolution (metres per pixel, --resolution)")
+        resolution, scale_notes = _scale_from_labels(path, extraction_options)
     plan = PlanMap.from_image(path, resolution, tuple(origin), cache=cache, **image_options)
     if not explain:
-        return LoadedPlan(plan, kind)
-    extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
+        return LoadedPlan(plan, kind, scale_notes)
     drawing = explain_image(path, resolution, **extraction_options)
-    return LoadedPlan(plan, kind, drawing.notes, drawing)
+    return LoadedPlan(plan, kind, scale_notes + drawing.notes, drawing)
+
+
+def _scale_from_labels(path: Path, extraction_options: dict[str, Any]) -> tuple[float, tuple[str, ...]]:
+    """Metres per pixel of a plan image given without a resolution, read from its room labels by
+    OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the optional
+    extra `ocr` is missing (naming it too) or the labels give no scale (saying what OCR read)."""
+    from .drawing_text import OCR_EXTRA, ocr_available
+
+    refusal = f"plan image {path} needs a resolution (metres per pixel, --resolution)"
+    if not ocr_available():
+        raise ValueError(
+            f"{refusal}; with the optional extra {OCR_EXTRA!r} installed (pip install 'planicp[{OCR_EXTRA}]') "
+            "planicp reads it from the drawing's room labels (dimensions, areas)"
+        )
+    from .raster_scale import raster_label_scale
+
+    try:
+        found = raster_label_scale(path, **extraction_options)
+    except ValueError as exc:  # not an image, no ink: the missing resolution named first
+        raise ValueError(f"{refusal}; its room labels could not be read: {exc}") from None
+    if found.scale is None:
+        raise ValueError(f"{refusal}: its room labels give none ({found.describe()})")
+    return found.scale.metres_per_unit, (f"scale: {found.describe()}",)
 
 
 def _segments_plan(segments: Any, spacing: float, name: str) -> PlanMap:
