@@ -19,7 +19,9 @@ doors the room leaks into its neighbours, is larger than it is, and w * s(w) sta
 door's width (s(w) is at most the true scale); once w spans the doors the room is whole and s(w)
 is the drawing's scale. A room open to the paper through a window drawn as a gap is enclosed once
 w spans the window; one enclosed only by closing gaps wider than `WIDEST_OPENING` (an open-plan
-area cut off somewhere) is not measured.
+area cut off somewhere) is not measured. The closing bridges every gap that narrow, also
+between a wall and an island drawn near it (a table 0.5 m from the wall, in the ink read before
+the walls are extracted): that island and the strip beside it count as wall, not floor.
 
 Units: the mask's cells are `unit` drawing units (pixels: 1), the labels' positions are in drawing
 units with the mask's row 0 at y = 0 growing downwards (image order), as a PDF's text positions are
@@ -165,6 +167,6 @@ def label_scale(
     for scale, closing in (settled[i] for i in sorted(settled)):
         metres = closing * unit * scale.metres_per_unit
         if metres <= widest_opening:
-            closed = f"{scale.source}, gaps up to {metres:.2f} m closed"
-            kept.append(LabelScale(scale.metres_per_unit, scale.spread, 1, closed))
+            note = f"{scale.source}, gaps up to {metres:.2f} m closed"
+            kept.append(LabelScale(scale.metres_per_unit, scale.spread, 1, note))
     return combined_scale(kept, max_spread)
