@@ -40,7 +40,16 @@ from numpy.typing import NDArray
 
 from .scale_text import LabelScale, area_scale, combined_scale, dimension_scale, parse_area, parse_dimensions
 
-__all__ = ["DOOR_WIDTH", "WIDEST_OPENING", "RoomLabel", "close_gaps", "label_scale", "room_scales"]
+__all__ = [
+    "DOOR_WIDTH",
+    "LABEL_CELLS",
+    "WIDEST_OPENING",
+    "RoomLabel",
+    "close_gaps",
+    "label_scale",
+    "room_scales",
+    "segments_label_scale",
+]
 
 DOOR_WIDTH = 1.0
 """Metres: the widest door opening closed when rooms are measured (doors are 0.7 to 1.0 m)."""
@@ -48,6 +57,10 @@ DOOR_WIDTH = 1.0
 WIDEST_OPENING = 2.5
 """Metres: the widest gap a room's walls may have (a window drawn as an opening, a wide door); a
 room enclosed only when wider gaps are closed (an open-plan area) is not measured."""
+
+LABEL_CELLS = 4000
+"""Cells along the longer side of a vector drawing's walls when they are drawn into a mask to
+measure its rooms (`segments_label_scale`): a 60 m building at 1.5 cm per cell."""
 
 _GROWTH = 1.15
 """Ratio between one closing width tried and the next (the scale's closing is at most this coarse)."""
@@ -170,3 +183,27 @@ def label_scale(
             note = f"{scale.source}, gaps up to {metres:.2f} m closed"
             kept.append(LabelScale(scale.metres_per_unit, scale.spread, 1, note))
     return combined_scale(kept, max_spread)
+
+
+def segments_label_scale(
+    segments: NDArray[np.float64], labels: Sequence[RoomLabel], cells: int = LABEL_CELLS
+) -> LabelScale | None:
+    """Metres per drawing unit of a vector drawing (PDF points, SVG pixels) from its room labels:
+    the wall segments ((N, 2, 2), drawing units, y down as in an image) drawn as one-cell lines into
+    a mask `cells` cells across their longer extent, and `label_scale` run on it; the labels'
+    positions are in the segments' frame. None without segments or when no label gives a scale."""
+    cv2 = _cv2()
+    segs = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2)
+    if len(segs) == 0 or not labels:
+        return None
+    ends = segs.reshape(-1, 2)
+    lo, hi = ends.min(axis=0), ends.max(axis=0)
+    cell = max(float((hi - lo).max()) / cells, 1e-9)  # drawing units per cell
+    margin = 2
+    cols, rows = (np.ceil((hi - lo) / cell)).astype(np.int64) + 2 * margin + 1
+    mask = np.zeros((int(rows), int(cols)), np.uint8)
+    pixels = np.round((segs - lo) / cell + margin).astype(np.int32)
+    # 8-connected one-cell lines: 4-connected free space cannot cross them.
+    cv2.polylines(mask, list(pixels), False, 1, thickness=1, lineType=cv2.LINE_8)
+    shifted = [RoomLabel(t.text, t.x - lo[0] + margin * cell, t.y - lo[1] + margin * cell) for t in labels]
+    return label_scale(mask > 0, shifted, unit=cell)
