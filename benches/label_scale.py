@@ -18,6 +18,14 @@ references, metres per pixel, worked out without planicp's measurement:
   an area stated in whole square metres is known to +-0.5 m², so this reference to +-1.9 %.
 * `cubicasa_F1_original.png`: 0.0056, from the CubiCasa annotation's room label 5'4" x 20'4"
   against its polygon (the README); the drawing itself states no size ("not to scale").
+
+And the vector drawings read without a scale (`pdf_walls`, `svg_walls`: their text's room labels
+against the rooms their wall segments enclose; no OCR), metres per point or per SVG pixel:
+
+* `cubicasa_F1_model.svg`: 0.0100, the mean of its two rectangular labelled rooms' sides against
+  their polygons: 5'4" x 20'4" over 162.01 x 619.84 px (0.010034, 0.009999), 13'6" x 20'4" over
+  412.43 x 619.85 px (0.009977, 0.009998).
+* `cmu_newell_simon_floor3.pdf`: 0.1016, its print scale 1"=24' (24 feet per 72 points).
 """
 
 from __future__ import annotations
@@ -26,7 +34,9 @@ import argparse
 import time
 from pathlib import Path
 
+from planicp.plans.pdf_plan import pdf_walls
 from planicp.plans.raster_scale import raster_label_scale
+from planicp.plans.svg_plan import svg_walls
 
 REFERENCES = {
     "apartment_us_feet.png": 0.0246,
@@ -34,6 +44,9 @@ REFERENCES = {
     "cubicasa_F1_original.png": 0.0056,
 }
 """Metres per pixel of each drawing, worked out by hand (see the module's docstring)."""
+
+VECTOR_REFERENCES = {"cubicasa_F1_model.svg": 0.0100, "cmu_newell_simon_floor3.pdf": 0.1016}
+"""Metres per SVG pixel or PDF point (see the module's docstring)."""
 
 
 def main() -> None:
@@ -58,6 +71,22 @@ def main() -> None:
             )
         print(f"    {found.describe()}")
         print(f"    OCR read: {', '.join(repr(t.text) for t in found.text)}")
+    for name, reference in VECTOR_REFERENCES.items():
+        start, cpu = time.perf_counter(), time.process_time()
+        try:
+            if name.endswith(".svg"):
+                svg = svg_walls(args.drawings / name)
+                metres, source = svg.metres_per_pixel, svg.notes[0]
+            else:
+                pdf = pdf_walls(args.drawings / name)
+                metres, source = pdf.metres_per_point, pdf.scale_source
+        except ValueError as exc:
+            metres, source = None, f"refused: {exc}"
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+        found = "none" if metres is None else f"{metres:.5f}"
+        error = "-" if metres is None else f"{metres / reference - 1.0:+.1%}"
+        print(f"| `{name}` | {reference:.4g} | {found} | {error} | | | | {seconds:.1f} s | {cpu:.1f} s |")
+        print(f"    {source}")
 
 
 if __name__ == "__main__":
