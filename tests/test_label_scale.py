@@ -103,6 +103,8 @@ def test_rooms_are_measured_with_their_doors_and_windows_closed() -> None:
     assert found.metres_per_unit == pytest.approx(RES, rel=0.02)
     assert found.labels == 3  # each room, the one with the window too; not the paper's, not KITCHEN
     assert "gaps up to" in found.source and "disagreeing" not in found.source
+    # A label written on a wall gives nothing.
+    assert label_scale(walls, [RoomLabel("322 X 347", 45.0, labels[0].y)]) is None
     # Each room's label alone gives the scale (the area with the table counted as floor).
     for label in labels[:3]:
         alone = label_scale(walls, [label])
