@@ -19,5 +19,6 @@ drawings write them; `plan_scaling` a plan scaled about its origin (`PlanMap.sca
 rooms they sit in, their doors closed; `drawing_text` a raster drawing's text read by OCR (the
 optional extra `ocr`) and `raster_scale` a raster's scale from it; `default_plan` the office
 plan shipped in `planicp/data`; `plan_figure` the figure of the extracted points over the plan,
-and of a drawing's wall extraction over the drawing. The public names are exported by `planicp` itself; import them from there.
+and of a drawing's wall extraction over the drawing. The public names are exported by `planicp`
+itself; import them from there.
 """
