@@ -90,3 +90,31 @@ def test_without_the_extra_the_refusal_names_it(tmp_path: Path, monkeypatch: pyt
         assert len(load_plan(image, resolution=RES, cache=False)) > 0  # given one, nothing else changes
     finally:
         text_module._engine.cache_clear()
+
+
+def test_the_scale_read_from_labels_is_cached_with_the_plan(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The OCR runs once per drawing and options: a second load takes the scale from the plan
+    cache; another drawing, or other options, read it again. (OCR stood in for: no extra needed.)"""
+    from planicp.plans import raster_scale
+    from planicp.plans.label_scale import RoomLabel
+    from planicp.plans.scale_text import LabelScale
+
+    calls: list[Path] = []
+
+    def fake(source: Path, **options: object) -> raster_scale.RasterScale:
+        calls.append(source)
+        return raster_scale.RasterScale(LabelScale(RES, 0.0, 3, "3 room labels agree"), (RoomLabel("x", 0, 0),), 1)
+
+    monkeypatch.setattr(text_module, "ocr_available", lambda: True)
+    monkeypatch.setattr(raster_scale, "raster_label_scale", fake)
+    image = flat_image(tmp_path / "flat.png")
+    cache = tmp_path / "cache"
+    first = read_plan_file(image, cache=cache)
+    second = read_plan_file(image, cache=cache)
+    assert len(calls) == 1
+    assert first.notes == second.notes and "3 room labels agree" in first.notes[0]
+    assert second.plan.raster is not None and second.plan.raster.resolution == RES
+    read_plan_file(image, cache=cache, threshold=100)
+    assert len(calls) == 2
+    read_plan_file(image, cache=False)
+    assert len(calls) == 3

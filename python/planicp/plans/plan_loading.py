@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .image_files import check_image_file, require_regular_file
 from .plan_formats import missing_extra, plan_format, unsupported_format
 from .plan_map import CacheSetting, PlanMap
 from .wall_extraction import ExtractedWalls, explain_image
@@ -159,7 +161,7 @@ def read_plan_file(
     extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
     scale_notes: tuple[str, ...] = ()
     if resolution is None:
-        resolution, scale_notes = _scale_from_labels(path, extraction_options)
+        resolution, scale_notes = _scale_from_labels(path, extraction_options, cache)
     plan = PlanMap.from_image(path, resolution, tuple(origin), cache=cache, **image_options)
     if not explain:
         return LoadedPlan(plan, kind, scale_notes)
@@ -167,11 +169,23 @@ def read_plan_file(
     return LoadedPlan(plan, kind, scale_notes + drawing.notes, drawing)
 
 
-def _scale_from_labels(path: Path, extraction_options: dict[str, Any]) -> tuple[float, tuple[str, ...]]:
+LABEL_SCALE_FORMAT = 1
+"""Bumped whenever how a raster's scale is read from its labels changes (cached results are keyed by it)."""
+
+
+def _scale_from_labels(
+    path: Path, extraction_options: dict[str, Any], cache: CacheSetting
+) -> tuple[float, tuple[str, ...]]:
     """Metres per pixel of a plan image given without a resolution, read from its room labels by
     OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the optional
-    extra `ocr` is missing (naming it too) or the labels give no scale (saying what OCR read)."""
+    extra `ocr` is missing (naming it too) or the labels give no scale (saying what OCR read).
+    The result is kept in the plan cache (`plan_cache`), keyed by the image's bytes and the
+    options, so that a drawing is read by OCR once."""
+    import numpy as np
+
     from .drawing_text import OCR_EXTRA, ocr_available
+    from .plan_cache import cache_key, cached
+    from .plan_map import _cache_folder
 
     refusal = f"plan image {path} needs a resolution (metres per pixel, --resolution)"
     if not ocr_available():
@@ -181,13 +195,26 @@ def _scale_from_labels(path: Path, extraction_options: dict[str, Any]) -> tuple[
         )
     from .raster_scale import raster_label_scale
 
-    try:
-        found = raster_label_scale(path, **extraction_options)
-    except ValueError as exc:  # not an image, no ink: the missing resolution named first
+    def build() -> dict[str, Any]:
+        try:
+            found = raster_label_scale(path, **extraction_options)
+        except ValueError as exc:  # not an image, no ink: the missing resolution named first
+            raise ValueError(f"{refusal}; its room labels could not be read: {exc}") from None
+        metres = found.scale.metres_per_unit if found.scale is not None else math.nan
+        note = np.frombuffer(found.describe().encode(), dtype=np.uint8)
+        return {"metres": np.array([metres]), "note": note}
+
+    try:  # before its bytes are read for the cache key, as PlanMap.from_image does
+        require_regular_file(path, "plan image")
+        check_image_file(path, "plan image")
+    except ValueError as exc:
         raise ValueError(f"{refusal}; its room labels could not be read: {exc}") from None
-    if found.scale is None:
-        raise ValueError(f"{refusal}: its room labels give none ({found.describe()})")
-    return found.scale.metres_per_unit, (f"scale: {found.describe()}",)
+    params = {"format": LABEL_SCALE_FORMAT, **extraction_options}
+    arrays, _ = cached(_cache_folder(cache), cache_key("label_scale", params, [path.read_bytes()]), build)
+    metres, note = float(arrays["metres"][0]), bytes(arrays["note"]).decode()
+    if not math.isfinite(metres):
+        raise ValueError(f"{refusal}: its room labels give none ({note})")
+    return metres, (f"scale: {note}",)
 
 
 def _segments_plan(segments: Any, spacing: float, name: str) -> PlanMap:
