@@ -4,7 +4,7 @@
     python benches/label_scale.py [--drawings ../shared/data/drawings]
 
 For each raster drawing: what `raster_label_scale` (the scale `planicp plan FILE` takes when no
---resolution is given; needs planicp[ocr]) finds, its error against the reference scale, how many
+--resolution is given; needs RapidOCR and ONNX Runtime) finds, its error against the reference scale, how many
 labels agreed and were left out, the wall extractions it took, and the time (OCR included; CPU
 time of all threads, ONNX Runtime using every core). The
 references, metres per pixel, worked out without planicp's measurement:

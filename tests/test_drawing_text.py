@@ -1,5 +1,5 @@
-"""A raster drawing's scale from its room labels read by OCR (the optional extra `ocr`), and how
-a drawing without a resolution is refused without it."""
+"""A raster drawing's scale from its room labels read by OCR (RapidOCR, installed by hand), and
+how a drawing without a resolution is refused without it."""
 
 from __future__ import annotations
 
@@ -17,7 +17,9 @@ from planicp.plans.plan_loading import load_plan, read_plan_file
 from planicp.plans.scale_text import parse_area, parse_dimensions
 from test_label_scale import RES, flat
 
-needs_ocr = pytest.mark.skipif(not ocr_available(), reason="the optional extra 'ocr' is not installed")
+needs_ocr = pytest.mark.skipif(
+    not ocr_available(), reason="RapidOCR and ONNX Runtime are not installed (.ci/run installs them)"
+)
 
 
 def flat_image(path: Path) -> Path:
@@ -83,9 +85,11 @@ def test_without_the_extra_the_refusal_names_it(tmp_path: Path, monkeypatch: pyt
     text_module._engine.cache_clear()
     try:
         assert not ocr_available()
-        with pytest.raises(ImportError, match=r"optional extra 'ocr'.*pip install 'planicp\[ocr\]'"):
+        with pytest.raises(
+            ImportError, match=r"RapidOCR .*GEOS, LGPL-2.1.*pip install 'rapidocr>=3.10,<4' 'onnxruntime"
+        ):
             drawing_text(np.zeros((10, 10), np.uint8))
-        with pytest.raises(ValueError, match=r"needs a resolution.*pip install 'planicp\[ocr\]'.*room labels"):
+        with pytest.raises(ValueError, match=r"needs a resolution.*pip install 'rapidocr.*room labels"):
             load_plan(image, cache=False)
         assert len(load_plan(image, resolution=RES, cache=False)) > 0  # given one, nothing else changes
     finally:

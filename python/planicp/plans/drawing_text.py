@@ -3,8 +3,11 @@
 Room labels ("BEDROOM", `11'7" x 15'7"`, "13 m²") are what `label_scale` needs to find a drawing's
 scale. They are read with RapidOCR (`rapidocr`, Apache-2.0): PaddleOCR's PP-OCR text detector and
 recogniser as ONNX models shipped inside its wheel, run by ONNX Runtime (MIT), on the CPU, offline,
-nothing downloaded at run time. Both come with the optional extra `planicp[ocr]`; without it
-`drawing_text` raises an ImportError naming the extra, and `ocr_available()` says so beforehand.
+nothing downloaded at run time. planicp does not install them, not even as an optional extra:
+RapidOCR depends on Shapely, whose wheels bundle GEOS (LGPL-2.1), and the project's dependencies
+are permissive only (docs/plans.md, Licences). A user installs them knowingly
+(`OCR_REQUIREMENTS`); without them `drawing_text` raises an ImportError saying how, and
+`ocr_available()` says so beforehand.
 
 OCR confuses an inch mark after a number with a degree sign or an asterisk (`11'7° x 15'7"`,
 `10'1* x 10'8"`): `clean_ocr_text` puts the inch mark back where a foot mark precedes it.
@@ -27,15 +30,21 @@ from numpy.typing import NDArray
 
 from .label_scale import RoomLabel
 
-__all__ = ["OCR_EXTRA", "OCR_MISSING", "clean_ocr_text", "drawing_text", "ocr_available"]
+__all__ = ["OCR_INSTALL", "OCR_MISSING", "OCR_REQUIREMENTS", "clean_ocr_text", "drawing_text", "ocr_available"]
 
-OCR_EXTRA = "ocr"
-"""The optional extra that installs the OCR (`pip install 'planicp[ocr]'`)."""
+OCR_REQUIREMENTS = ("rapidocr>=3.10,<4", "onnxruntime>=1.17")
+"""What reads a drawing's text, installed by hand (CI installs them from here: .ci/run). RapidOCR 3
+uses opencv-python-headless, the OpenCV planicp has; rapidocr_onnxruntime 1.x wanted opencv-python,
+a second OpenCV in the same cv2 folder."""
+
+OCR_INSTALL = "pip install " + " ".join(f"'{r}'" for r in OCR_REQUIREMENTS)
+"""The command that installs `OCR_REQUIREMENTS`."""
 
 _OCR_MODULES = ("rapidocr", "onnxruntime")
 
 OCR_MISSING = (
-    "reading a drawing's text needs the optional extra 'ocr' (rapidocr, onnxruntime): pip install 'planicp[ocr]'"
+    "reading a drawing's text needs RapidOCR (Apache-2.0) and ONNX Runtime (MIT), which planicp does not "
+    f"install itself (RapidOCR depends on Shapely, whose wheels bundle GEOS, LGPL-2.1): {OCR_INSTALL}"
 )
 """The refusal when the OCR is not installed."""
 
@@ -47,7 +56,7 @@ _MISREAD_INCH = re.compile(r"(['’′]\s?)(\d+(?:\s+\d+/\d+)?)\s*[°*º˚]")
 
 
 def ocr_available() -> bool:
-    """True when the optional extra `ocr` is installed (RapidOCR and ONNX Runtime importable)."""
+    """True when RapidOCR and ONNX Runtime are installed (`OCR_REQUIREMENTS`)."""
     return all(importlib.util.find_spec(module) is not None for module in _OCR_MODULES)
 
 
@@ -80,7 +89,7 @@ def drawing_text(image: NDArray[np.uint8], min_confidence: float = MIN_CONFIDENC
         min_confidence: lines recognised with less confidence (0..1) are left out.
 
     Raises:
-        ImportError: the optional extra `ocr` is not installed (the message says how to install it).
+        ImportError: RapidOCR or ONNX Runtime is not installed (the message says how to install them).
         ValueError: an image that is not 8-bit grey or RGB.
     """
     engine = _engine()

@@ -121,7 +121,7 @@ def read_plan_file(
       default the lowest storey with walls) cut `cut_height` metres above its floor, doors and
       windows open;
     * anything else: a plan image, at `resolution` metres per pixel or, without one, at the scale
-      its room labels give, read by OCR (`raster_scale`; needs `planicp[ocr]`); it takes `origin`
+      its room labels give, read by OCR (`raster_scale`; needs RapidOCR, `drawing_text`); it takes `origin`
       (x, y, yaw of the image's lower-left corner in the map frame) and `image_options`
       (`threshold`, `open_px`, `close_px`, `edge_detector`, `walls`, `wall_extraction`: see
       `PlanMap.from_image`); with `explain`, the wall extraction's decisions are returned too
@@ -178,20 +178,21 @@ def _scale_from_labels(
 ) -> tuple[float, tuple[str, ...]]:
     """Metres per pixel of a plan image given without a resolution, read from its room labels by
     OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the optional
-    extra `ocr` is missing (naming it too) or the labels give no scale (saying what OCR read).
+    OCR is not installed (saying how to install it) or the labels give no scale (saying what OCR read).
     The result is kept in the plan cache (`plan_cache`), keyed by the image's bytes and the
     options, so that a drawing is read by OCR once."""
     import numpy as np
 
-    from .drawing_text import OCR_EXTRA, ocr_available
+    from .drawing_text import OCR_INSTALL, ocr_available
     from .plan_cache import cache_key, cached
     from .plan_map import _cache_folder
 
     refusal = f"plan image {path} needs a resolution (metres per pixel, --resolution)"
     if not ocr_available():
         raise ValueError(
-            f"{refusal}; with the optional extra {OCR_EXTRA!r} installed (pip install 'planicp[{OCR_EXTRA}]') "
-            "planicp reads it from the drawing's room labels (dimensions, areas)"
+            f"{refusal}; with RapidOCR and ONNX Runtime installed ({OCR_INSTALL}; not installed with planicp: "
+            "RapidOCR depends on Shapely, whose wheels bundle GEOS, LGPL-2.1) planicp reads it from the drawing's "
+            "room labels (dimensions, areas)"
         )
     from .raster_scale import raster_label_scale
 

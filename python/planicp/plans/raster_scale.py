@@ -1,6 +1,6 @@
 """The scale of a raster drawing read from its own room labels (OCR): metres per pixel.
 
-1. The drawing's text is read by OCR (`drawing_text`, the optional extra `planicp[ocr]`); only
+1. The drawing's text is read by OCR (`drawing_text`: RapidOCR, installed by hand); only
    dimension and area labels count ("10'1\\" x 11'1\\"", "13 m²": `scale_text`).
 2. A first scale from its ink (every dark pixel, the text's boxes erased), no resolution needed:
    `label_scale` measures each labelled room with the gaps up to a door's width closed.
@@ -93,7 +93,7 @@ def raster_label_scale(
     options are `PlanMap.from_image`'s, so that the rooms are measured in the walls the plan gets.
 
     Raises:
-        ImportError: the optional extra `ocr` is not installed (the message names it).
+        ImportError: RapidOCR or ONNX Runtime is not installed (the message says how to install them).
         ValueError: an unreadable image, or one without ink.
     """
     from .plan_raster import load_gray_and_chroma, load_rgb, wall_mask
