@@ -302,9 +302,11 @@ def _length(value: str | None, font_size: float) -> float:
 def svg_text(path: str | PathLike[str]) -> list[RoomLabel]:
     """Every <text> of an SVG with the estimated centre of its words, in user units after the
     transforms and the root's viewBox (y down), hidden text included (a label states a room's
-    size whether it is displayed or not: CubiCasa's annotations hide theirs). The centre is the
-    anchor moved by half the text's estimated width (0.6 em a character) for start-anchored text
-    and a third of an em up from the baseline."""
+    size whether it is displayed or not: CubiCasa's annotations hide theirs). The position is in
+    the first (start-anchored; the last for end-anchored, the middle for middle-anchored) glyph:
+    the anchor moved 0.3 em along the text and a third of an em up from the baseline. Without
+    the font's metrics the text's extent is unknown, but the room that holds the text holds that
+    glyph."""
     import xml.etree.ElementTree as ET
 
     from svgelements import Matrix  # type: ignore[import-untyped,unused-ignore]
@@ -333,7 +335,7 @@ def svg_text(path: str | PathLike[str]) -> list[RoomLabel]:
             words = " ".join("".join(element.itertext()).split())
             if words:
                 x, y = _length(element.get("x"), size), _length(element.get("y"), size)
-                shift = {"start": 0.3, "middle": 0.0, "end": -0.3}.get(anchored, 0.3) * size * len(words)
+                shift = {"start": 0.3, "middle": 0.0, "end": -0.3}.get(anchored, 0.3) * size
                 centre = here.point_in_matrix_space((x + shift, y - size / 3.0))
                 labels.append(RoomLabel(words, float(centre.x), float(centre.y)))
             return
