@@ -132,8 +132,8 @@ def read_plan_file(
     Raises:
         FileNotFoundError: `source` does not exist.
         ImportError: the optional extra the format needs is not installed (the message names it).
-        ValueError: an image without a resolution whose labels give none (or without the extra
-            `ocr` to read them), a format planicp does not read (DWG, ...: the
+        ValueError: an image without a resolution whose labels give none (or without RapidOCR
+            installed to read them), a format planicp does not read (DWG, ...: the
             message says what to export instead), or a file the reader rejects.
     """
     path = Path(source)
@@ -177,8 +177,8 @@ def _scale_from_labels(
     path: Path, extraction_options: dict[str, Any], cache: CacheSetting
 ) -> tuple[float, tuple[str, ...]]:
     """Metres per pixel of a plan image given without a resolution, read from its room labels by
-    OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the optional
-    OCR is not installed (saying how to install it) or the labels give no scale (saying what OCR read).
+    OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the OCR is not
+    installed (saying how to install it) or the labels give no scale (saying what OCR read).
     The result is kept in the plan cache (`plan_cache`), keyed by the image's bytes and the
     options, so that a drawing is read by OCR once."""
     import numpy as np
