@@ -5,7 +5,7 @@ the room the label is written in, as the 4-connected free region of the drawing'
 holds the label's position, whose extent (for dimensions: rooms are rectangles) or area with the
 islands inside it (for areas: a column or a piece of furniture drawn inside is floor all the same)
 is measured in the drawing's own units. Each label gives metres per unit; `combined_scale` takes
-their median and leaves out the labels that disagree. A label on a wall or outside any enclosed
+the median of the largest group that agrees and leaves the others out. A label on a wall or outside any enclosed
 room (on the paper around the building, in a room open to the edge) gives nothing.
 
 Doors are openings in a drawing's walls, so a room's free region runs through its doors into the
@@ -22,6 +22,9 @@ w spans the window; one enclosed only by closing gaps wider than `WIDEST_OPENING
 area cut off somewhere) is not measured. The closing bridges every gap that narrow, also
 between a wall and an island drawn near it (a table 0.5 m from the wall, in the ink read before
 the walls are extracted): that island and the strip beside it count as wall, not floor.
+
+A vector drawing (PDF, SVG) is measured the same way in a mask its wall segments are drawn into
+(`segments_label_scale`, `LABEL_CELLS` cells across).
 
 Units: the mask's cells are `unit` drawing units (pixels: 1), the labels' positions are in drawing
 units with the mask's row 0 at y = 0 growing downwards (image order), as a PDF's text positions are
@@ -72,8 +75,8 @@ class RoomLabel:
 
     Attributes:
         text: the words ("Bedroom 13 m²", "322 X 347").
-        x, y: where it is written (its centre), drawing units, in the mask's frame (column, row
-            from the top).
+        x, y: where it is written (a point inside the text: its centre when known), drawing units,
+            in the mask's frame (column, row from the top).
         box: (x0, y0, x1, y1) the text's bounding box in the same frame, when known (OCR), else None.
     """
 
