@@ -356,8 +356,26 @@ def test_svg_wall_class_outlined_with_the_door_open(tmp_path: Path) -> None:
     assert at_50.metres_per_pixel == pytest.approx(0.0254 / 96 * 50)
     with pytest.raises(ValueError, match="no shape matches class, id or layer sofa; its classes: .*wall"):
         svg_walls(path, resolution=RES, select="sofa")
-    with pytest.raises(ValueError, match=r"give its scale: resolution=.*--resolution.*scale=.*--scale"):
-        svg_walls(path)
+    with pytest.raises(ValueError, match=r"give its scale: resolution=.*--resolution.*scale=.*--scale.*room label"):
+        svg_walls(path)  # its only text, "Office", states no size
+
+
+@needs_svg
+def test_svg_without_a_scale_takes_it_from_a_room_label_hidden_or_not(tmp_path: Path) -> None:
+    from planicp.plans.svg_plan import svg_text, svg_walls
+
+    # The room is 560 x 360 px inside its walls, 5.60 x 3.60 m at RES; its door (0.9 m) opens
+    # to the paper. The label is placed by its group's transform and hidden, as CubiCasa's are.
+    label = '<g transform="translate(300,250)" style="display: none"><text x="0" y="0">5,60 x 3,60</text></g>'
+    path = tmp_path / "labelled.svg"
+    path.write_text(SVG_ROOM.replace("</svg>", label + "\n</svg>"))
+    texts = {t.text: t for t in svg_text(path)}
+    assert set(texts) == {"Office", "5,60 x 3,60"}
+    assert 300 < texts["5,60 x 3,60"].x < 400 and 230 < texts["5,60 x 3,60"].y < 250
+    walls = svg_walls(path)
+    assert walls.metres_per_pixel == pytest.approx(RES, rel=0.02)
+    assert walls.notes[0].startswith("scale: room labels: 1 room label agrees (room dimensions '5,60 x 3,60'")
+    np.testing.assert_allclose(np.ptp(walls.segments.reshape(-1, 2), axis=0), (6.0, 4.0), rtol=0.02)
 
 
 @needs_svg
@@ -719,3 +737,26 @@ def test_ifc_reader_refuses_any_damage_with_a_value_error(tmp_path: Path, cut: i
             read(path)
         except ValueError as exc:
             assert "damaged.ifc" in str(exc) or "cut_height" in str(exc)
+
+
+@needs_pdf
+def test_pdf_without_a_print_scale_takes_it_from_its_room_labels(tmp_path: Path) -> None:
+    from planicp.plans.pdf_plan import pdf_walls
+
+    # The two 5 x 8 m rooms of `room_content` (a 1 m door between them), labelled with their
+    # dimensions and area instead of the print scale; a label on the paper below gives nothing.
+    x0 = OFFSET
+    content = room_content(scale_text="5,00 x 8,00")
+    content += f"\nBT /F1 8 Tf {x0 + 6 * M:.2f} {x0 + 4 * M:.2f} Td (40 m2) Tj ET"
+    content += f"\nBT /F1 8 Tf {x0:.2f} {x0 - 40:.2f} Td (3,00 x 3,00) Tj ET"
+    content = content.replace(f"{x0 + 10:.2f} {x0 + 10:.2f} Td", f"{x0 + 1 * M:.2f} {x0 + 4 * M:.2f} Td")
+    walls = pdf_walls(write_pdf(tmp_path / "labelled.pdf", content))
+    assert walls.metres_per_point == pytest.approx(PT * RATIO, rel=0.02)
+    assert walls.scale_source.startswith("room labels: 2 room labels agree")
+    assert "'5,00 x 8,00'" in walls.scale_source and "'40 m2'" in walls.scale_source
+    ends = walls.segments.reshape(-1, 2)
+    np.testing.assert_allclose(ends.max(axis=0) - ends.min(axis=0), ROOM, rtol=0.02)
+    # Labels that state no size: refused as before, saying the labels were looked at.
+    unlabelled = write_pdf(tmp_path / "unlabelled.pdf", room_content(scale_text="LIVING ROOM"))
+    with pytest.raises(ValueError, match=r"states no print scale.*--scale.*no room label"):
+        pdf_walls(unlabelled)

@@ -311,8 +311,8 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument(
         "--resolution",
         type=float,
-        help="metres per pixel (images; rasterises a HouseExpo JSON; a YAML has its own); metres per "
-        "point of a PDF, per pixel of an SVG",
+        help="metres per pixel (images; without it, read from the drawing's room labels by OCR, with RapidOCR; "
+        "rasterises a HouseExpo JSON; a YAML has its own); metres per point of a PDF, per pixel of an SVG",
     )
     plan.add_argument(
         "--origin",

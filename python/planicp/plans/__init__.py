@@ -16,7 +16,9 @@ plan from whatever file the command line is given (`load_plan`, `read_plan_file`
 in, and `region_outline`, the outline of wall areas less openings); `print_scale` print scales as
 drawings write them; `plan_scaling` a plan scaled about its origin (`PlanMap.scaled`);
 `scale_text` the scale from room labels (dimensions, areas) and `label_scale` from labels and the
-rooms they sit in; `default_plan` the office plan shipped in `planicp/data`; `plan_figure` the
-figure of the extracted points over the plan, and of a drawing's wall extraction over the
-drawing. The public names are exported by `planicp` itself; import them from there.
+rooms they sit in, their doors closed; `drawing_text` a raster drawing's text read by OCR (RapidOCR,
+installed by hand) and `raster_scale` a raster's scale from it; `default_plan` the office
+plan shipped in `planicp/data`; `plan_figure` the figure of the extracted points over the plan,
+and of a drawing's wall extraction over the drawing. The public names are exported by `planicp`
+itself; import them from there.
 """

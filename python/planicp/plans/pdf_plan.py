@@ -19,8 +19,10 @@ Coordinates are the page as displayed (its /Rotate applied), in PDF points (1/72
 x right and y up, scaled to metres with the drawing's print scale: given (`scale`: "1:100",
 '1"=24\\'', a ratio) or stated in the page's text (such as "SCALE 1/8\\" = 1'-0\\""), or metres per
 point directly (`resolution`); a page that states none may give it by its legend: the areas it
-lists beside colour swatches against the rooms filled in those colours (`legend_scale`). The
-result is the map frame, metres.
+lists beside colour swatches against the rooms filled in those colours (`legend_scale`), or by
+its room labels (`label_scale.segments_label_scale`: a room's dimensions or area written inside
+it, against the room the wall segments enclose; the page's text lines and their positions read by
+pdfminer). The result is the map frame, metres.
 
 A page with no dark line work (a scanned drawing) is rendered by `pdf_raster` (pypdfium2) into a
 grey image for `PlanMap.from_image`.
@@ -42,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import one_line, positive
+from .label_scale import RoomLabel, segments_label_scale
 from .plan_formats import missing_extra
 from .print_scale import find_print_scale, parse_print_scale
 
@@ -411,7 +414,11 @@ def pdf_walls(
     except Exception as exc:  # noqa: BLE001 - pdfminer raises what its parser meets (PSEOF, PDFSyntaxError, ...)
         raise ValueError(f"{name} could not be read as PDF: {one_line(f'{type(exc).__name__}: {exc}')}") from None
 
-    metres, source = _scale(name, scale, resolution, text, file, page)
+    try:
+        metres, source = _scale(name, scale, resolution, text, file, page)
+        stated = True
+    except _NoStatedScale:  # its room labels may still say it (below, once the walls are known)
+        metres, source, stated = math.nan, "", False
     groups, classes = _classes(paths)
     all_layers = tuple(sorted({p.layer for p in paths if p.layer}))
     listing = "; ".join(c.describe() for c in classes[:8]) or "none"
@@ -453,6 +460,16 @@ def pdf_walls(
                 continue
             for chain in p.chains:
                 pieces.append(np.stack([chain[:-1], chain[1:]], axis=1))
+    if not stated:  # the page states no print scale: its room labels may say what it is
+        flipped = np.concatenate(pieces) * np.array([1.0, -1.0])  # y down, as label_scale measures
+        labels = [
+            RoomLabel(words, 0.5 * (x0 + x1), -0.5 * (y0 + y1))
+            for words, (x0, y0, x1, y1) in _text_lines(file, page - 1)
+        ]
+        found = segments_label_scale(flipped, labels)
+        if found is None:
+            raise ValueError(f"{_no_print_scale(name)}; no room label (dimensions, area) in a room gives it either")
+        metres, source = found.metres_per_unit, f"room labels: {found.source}"
     segments = np.concatenate(pieces) * metres
     keep = np.hypot(*(segments[:, 1] - segments[:, 0]).T) > 0.0
     segments = np.ascontiguousarray(segments[keep] if keep.any() else segments[:1])
@@ -491,11 +508,47 @@ def pdf_scale(
     return _scale(f"PDF file {str(file)!r}", scale, resolution, text, file, page)
 
 
+def _text_lines(file: Path, page_index: int) -> list[tuple[str, tuple[float, float, float, float]]]:
+    """Each line of text on page `page_index` (0-based) with its box (x0, y0, x1, y1), points, in
+    the frame of the page's paths (the page as displayed, y up)."""
+    from pdfminer.high_level import extract_pages
+    from pdfminer.layout import LTContainer, LTTextLine
+
+    lines: list[tuple[str, tuple[float, float, float, float]]] = []
+
+    def walk(item: Any) -> None:
+        if isinstance(item, LTTextLine):
+            lines.append((item.get_text().strip(), tuple(float(v) for v in item.bbox)))  # type: ignore[arg-type]
+        elif isinstance(item, LTContainer):
+            for child in item:
+                walk(child)
+
+    for page in extract_pages(str(file), page_numbers=[page_index]):
+        walk(page)
+    return lines
+
+
+class _NoStatedScale(ValueError):
+    """The page states no scale: no print scale in its text, no areas in a legend."""
+
+
+def _no_print_scale(name: str) -> str:
+    return (
+        f"{name} states no print scale in its text (nor areas in a legend beside the colours of its rooms): "
+        "give it, e.g. scale='1:100' or '1\"=24\\'' (planicp plan --scale '1:100'), or resolution= metres per "
+        "PDF point"
+    )
+
+
 def _scale(
     name: str, scale: str | float | None, resolution: float | None, text: str, file: Path | None = None, page: int = 1
 ) -> tuple[float, str]:
     """Metres per PDF point and where that came from: given, else the print scale the text
-    states, else (with `file`) the scale page `page`'s legend gives by its areas (`legend_scale`)."""
+    states, else (with `file`) the scale page `page`'s legend gives by its areas (`legend_scale`).
+
+    Raises:
+        _NoStatedScale: none of these gives it.
+    """
     if scale is not None and resolution is not None:
         raise ValueError("give the PDF's print scale or its resolution (metres per point), not both")
     if resolution is not None:
@@ -511,11 +564,7 @@ def _scale(
             legend = legend_scale(file, page=page)
             if legend is not None:
                 return legend.metres_per_point, legend.describe()
-        raise ValueError(
-            f"{name} states no print scale in its text (nor areas in a legend beside the colours of its rooms): "
-            "give it, e.g. scale='1:100' or '1\"=24\\'' (planicp plan --scale '1:100'), or resolution= metres per "
-            "PDF point"
-        )
+        raise _NoStatedScale(_no_print_scale(name))
     ratio, words = stated
     return POINT_METRES * ratio, f"print scale stated in the drawing: {words!r} (1:{ratio:g})"
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from .image_files import check_image_file, require_regular_file
 from .plan_formats import missing_extra, plan_format, unsupported_format
 from .plan_map import CacheSetting, PlanMap
 from .wall_extraction import ExtractedWalls, explain_image
@@ -118,7 +120,8 @@ def read_plan_file(
     * `.ifc`: a BIM model (`ifc_plan.ifc_walls`): the walls of `storey` (name or number from 1;
       default the lowest storey with walls) cut `cut_height` metres above its floor, doors and
       windows open;
-    * anything else: a plan image, which needs `resolution` (metres per pixel) and takes `origin`
+    * anything else: a plan image, at `resolution` metres per pixel or, without one, at the scale
+      its room labels give, read by OCR (`raster_scale`; needs RapidOCR, `drawing_text`); it takes `origin`
       (x, y, yaw of the image's lower-left corner in the map frame) and `image_options`
       (`threshold`, `open_px`, `close_px`, `edge_detector`, `walls`, `wall_extraction`: see
       `PlanMap.from_image`); with `explain`, the wall extraction's decisions are returned too
@@ -129,7 +132,8 @@ def read_plan_file(
     Raises:
         FileNotFoundError: `source` does not exist.
         ImportError: the optional extra the format needs is not installed (the message names it).
-        ValueError: an image without a resolution, a format planicp does not read (DWG, ...: the
+        ValueError: an image without a resolution whose labels give none (or without RapidOCR
+            installed to read them), a format planicp does not read (DWG, ...: the
             message says what to export instead), or a file the reader rejects.
     """
     path = Path(source)
@@ -154,14 +158,64 @@ def read_plan_file(
         return _svg_plan(path, resolution, scale, layers, spacing)
     if kind == "ifc":
         return _ifc_plan(path, storey, cut_height, spacing)
+    extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
+    scale_notes: tuple[str, ...] = ()
     if resolution is None:
-        raise ValueError(f"plan image {path} needs a resolution (metres per pixel, --resolution)")
+        resolution, scale_notes = _scale_from_labels(path, extraction_options, cache)
     plan = PlanMap.from_image(path, resolution, tuple(origin), cache=cache, **image_options)
     if not explain:
-        return LoadedPlan(plan, kind)
-    extraction_options = {k: v for k, v in image_options.items() if k != "edge_detector"}
+        return LoadedPlan(plan, kind, scale_notes)
     drawing = explain_image(path, resolution, **extraction_options)
-    return LoadedPlan(plan, kind, drawing.notes, drawing)
+    return LoadedPlan(plan, kind, scale_notes + drawing.notes, drawing)
+
+
+LABEL_SCALE_FORMAT = 1
+"""Bumped whenever how a raster's scale is read from its labels changes (cached results are keyed by it)."""
+
+
+def _scale_from_labels(
+    path: Path, extraction_options: dict[str, Any], cache: CacheSetting
+) -> tuple[float, tuple[str, ...]]:
+    """Metres per pixel of a plan image given without a resolution, read from its room labels by
+    OCR (`raster_scale`), and the note saying so; refused naming `--resolution` when the OCR is not
+    installed (saying how to install it) or the labels give no scale (saying what OCR read).
+    The result is kept in the plan cache (`plan_cache`), keyed by the image's bytes and the
+    options, so that a drawing is read by OCR once."""
+    import numpy as np
+
+    from .drawing_text import OCR_INSTALL, ocr_available
+    from .plan_cache import cache_key, cached
+    from .plan_map import _cache_folder
+
+    refusal = f"plan image {path} needs a resolution (metres per pixel, --resolution)"
+    if not ocr_available():
+        raise ValueError(
+            f"{refusal}; with RapidOCR and ONNX Runtime installed ({OCR_INSTALL}; not installed with planicp: "
+            "RapidOCR depends on Shapely, whose wheels bundle GEOS, LGPL-2.1) planicp reads it from the drawing's "
+            "room labels (dimensions, areas)"
+        )
+    from .raster_scale import raster_label_scale
+
+    def build() -> dict[str, Any]:
+        try:
+            found = raster_label_scale(path, **extraction_options)
+        except ValueError as exc:  # not an image, no ink: the missing resolution named first
+            raise ValueError(f"{refusal}; its room labels could not be read: {exc}") from None
+        metres = found.scale.metres_per_unit if found.scale is not None else math.nan
+        note = np.frombuffer(found.describe().encode(), dtype=np.uint8)
+        return {"metres": np.array([metres]), "note": note}
+
+    try:  # before its bytes are read for the cache key, as PlanMap.from_image does
+        require_regular_file(path, "plan image")
+        check_image_file(path, "plan image")
+    except ValueError as exc:
+        raise ValueError(f"{refusal}; its room labels could not be read: {exc}") from None
+    params = {"format": LABEL_SCALE_FORMAT, **extraction_options}
+    arrays, _ = cached(_cache_folder(cache), cache_key("label_scale", params, [path.read_bytes()]), build)
+    metres, note = float(arrays["metres"][0]), bytes(arrays["note"]).decode()
+    if not math.isfinite(metres):
+        raise ValueError(f"{refusal}: its room labels give none ({note})")
+    return metres, (f"scale: {note}",)
 
 
 def _segments_plan(segments: Any, spacing: float, name: str) -> PlanMap:

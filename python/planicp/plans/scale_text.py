@@ -14,7 +14,8 @@ user units) each label gives the metres per unit:
 * `dimension_scale`: metres per unit from a room's two sides and its extent in units (the
   dimension's sides matched to the extent's sorted sides: rooms are labelled width by length in
   either order); `area_scale` from an area and the room's area in square units.
-* `combined_scale`: the median of several labels' scales, with their spread and how many agreed.
+* `combined_scale`: the median of the largest group of labels that agree, with their spread and
+  how many agreed.
 
 Each returns the scale and where it came from, as `planicp plan` reports it. Units: metres,
 square metres; a drawing's unit is whatever its coordinates count.
@@ -172,14 +173,20 @@ def area_scale(text: str, area_units: float) -> LabelScale | None:
 
 
 def combined_scale(scales: Sequence[LabelScale], max_spread: float = 0.05) -> LabelScale | None:
-    """The median of several labels' scales; labels farther than `max_spread` (relative) from it
-    are left out and named as disagreeing. None without labels."""
+    """The labels' consensus: the median of the largest group of labels whose scales lie within
+    `max_spread` (relative) of one of them (ties: the group nearest the median of all); labels
+    outside it are left out and counted as disagreeing. None without labels."""
     if not scales:
         return None
     values = sorted(s.metres_per_unit for s in scales)
     n = len(values)
     median = values[n // 2] if n % 2 else 0.5 * (values[n // 2 - 1] + values[n // 2])
-    agreeing = [s for s in scales if abs(s.metres_per_unit / median - 1.0) <= max_spread]
+
+    def support(centre: float) -> int:
+        return sum(abs(v / centre - 1.0) <= max_spread for v in values)
+
+    centre = max(values, key=lambda v: (support(v), -abs(math.log(v / median))))
+    agreeing = [s for s in scales if abs(s.metres_per_unit / centre - 1.0) <= max_spread]
     kept = sorted(s.metres_per_unit for s in agreeing)
     k = len(kept)
     middle = kept[k // 2] if k % 2 else 0.5 * (kept[k // 2 - 1] + kept[k // 2])
@@ -187,7 +194,7 @@ def combined_scale(scales: Sequence[LabelScale], max_spread: float = 0.05) -> La
     mad = deviations[k // 2] if k % 2 else 0.5 * (deviations[k // 2 - 1] + deviations[k // 2])
     words = "; ".join(s.source for s in agreeing[:3]) + ("; ..." if k > 3 else "")
     left_out = n - k
-    source = f"{k} room label{'s' if k != 1 else ''} agree ({words})" + (
+    source = f"{k} room label{'s' if k != 1 else ''} agree{'s' if k == 1 else ''} ({words})" + (
         f", {left_out} disagreeing left out" if left_out else ""
     )
     return LabelScale(middle, 1.4826 * mad if k > 1 else 0.0, k, source)

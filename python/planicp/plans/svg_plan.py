@@ -22,6 +22,9 @@ the seams between wall polygons are no walls), less the areas of the door and wi
 that doors are gaps.
 Coordinates are flipped to y up (map frame), x right, and scaled to metres by `resolution`
 (metres per SVG pixel) or `scale` (a print scale: the drawing's physical size times the ratio).
+Without either, the room labels in its <text> (a room's dimensions or area written inside it,
+`svg_text`) give the scale against the rooms the wall segments enclose
+(`label_scale.segments_label_scale`), or the drawing is refused naming both.
 
 Needs the optional extra `svg`: ``pip install 'planicp[svg]'``.
 """
@@ -29,6 +32,7 @@ Needs the optional extra `svg`: ``pip install 'planicp[svg]'``.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from os import PathLike
@@ -39,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import one_line, positive
+from .label_scale import RoomLabel, segments_label_scale
 from .pdf_plan import StrokeClass, chain_length, connected_length, default_wall_class
 from .plan_formats import missing_extra
 from .print_scale import parse_print_scale
@@ -209,16 +214,17 @@ def svg_walls(
     name = f"SVG file {str(file)!r}"
     if not file.is_file():
         raise FileNotFoundError(f"{name} does not exist" if not file.exists() else f"{name} is not a file")
-    if (resolution is None) == (scale is None):
-        raise ValueError(
-            f"{name}: give its scale: resolution= metres per SVG pixel (--resolution), or scale= its print "
-            "scale such as '1:100' (--scale); " + ("not both" if resolution is not None else "it has none")
-        )
+    give = (
+        f"{name}: give its scale: resolution= metres per SVG pixel (--resolution), or scale= its print scale "
+        "such as '1:100' (--scale); "
+    )
+    if resolution is not None and scale is not None:
+        raise ValueError(give + "not both")
+    metres: float | None = None
     if resolution is not None:
         metres = positive(resolution, "resolution", "metres per SVG pixel")
         source = f"resolution given: {metres:g} m per SVG pixel"
-    else:
-        assert scale is not None
+    elif scale is not None:
         ratio = parse_print_scale(scale)
         metres = PIXEL_METRES * ratio
         source = f"print scale given: {scale} (1:{ratio:g}) of 1/96-inch SVG pixels"
@@ -266,6 +272,11 @@ def svg_walls(
         segments = region_outline(areas, holes, tolerance=1e-3)
     else:
         segments = np.concatenate([np.stack([c[:-1], c[1:]], axis=1) for s in chosen for c in s.chains])
+    if metres is None:  # neither given: the room labels in its text may say it
+        found = segments_label_scale(segments, svg_text(file))
+        if found is None:
+            raise ValueError(give + "it states none, and no room label in its text gives a room's size")
+        metres, source = found.metres_per_unit, f"room labels: {found.source}"
     segments[..., 1] = height - segments[..., 1]
     segments *= metres
     keep = np.hypot(*(segments[:, 1] - segments[:, 0]).T) > 0.0
@@ -277,6 +288,62 @@ def svg_walls(
         + (f"; {len(holes)} door and window areas taken away from the wall areas" if holes else ""),
     )
     return SvgWalls(segments, metres, selected, (len(chosen), len(shapes)), notes)
+
+
+def _length(value: str | None, font_size: float) -> float:
+    """An SVG coordinate attribute's first value in user units (px; em and ex of the font size)."""
+    match = re.match(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(em|ex|px)?", value or "")
+    if match is None:
+        return 0.0
+    number = float(match.group(1))
+    return number * {"em": font_size, "ex": 0.5 * font_size}.get(match.group(2) or "", 1.0)
+
+
+def svg_text(path: str | PathLike[str]) -> list[RoomLabel]:
+    """Every <text> of an SVG with the estimated centre of its words, in user units after the
+    transforms and the root's viewBox (y down), hidden text included (a label states a room's
+    size whether it is displayed or not: CubiCasa's annotations hide theirs). The position is in
+    the first (start-anchored; the last for end-anchored, the middle for middle-anchored) glyph:
+    the anchor moved 0.3 em along the text and a third of an em up from the baseline. Without
+    the font's metrics the text's extent is unknown, but the room that holds the text holds that
+    glyph."""
+    import xml.etree.ElementTree as ET
+
+    from svgelements import Matrix  # type: ignore[import-untyped,unused-ignore]
+
+    root = ET.parse(str(path)).getroot()
+    viewbox = [float(v) for v in re.split(r"[\s,]+", root.get("viewBox", "").strip()) if v] or None
+    top = Matrix()
+    if viewbox is not None and len(viewbox) == 4 and viewbox[2] > 0 and viewbox[3] > 0:
+        width = _length(root.get("width"), 16.0) or viewbox[2]
+        height = _length(root.get("height"), 16.0) or viewbox[3]
+        top = Matrix(f"translate({-viewbox[0]},{-viewbox[1]})") * Matrix(
+            f"scale({width / viewbox[2]},{height / viewbox[3]})"
+        )
+    labels: list[RoomLabel] = []
+
+    def style_of(element: Any, name: str) -> str | None:
+        found = re.search(rf"(?:^|;)\s*{name}\s*:\s*([^;]+)", element.get("style", ""))
+        return found.group(1).strip() if found else element.get(name)
+
+    def walk(element: Any, matrix: Any, font_size: float, anchor: str) -> None:
+        transform = element.get("transform")
+        here = (Matrix(transform) * matrix) if transform else matrix
+        size = _length(style_of(element, "font-size"), font_size) or font_size
+        anchored = style_of(element, "text-anchor") or anchor
+        if element.tag.rsplit("}", 1)[-1] == "text":
+            words = " ".join("".join(element.itertext()).split())
+            if words:
+                x, y = _length(element.get("x"), size), _length(element.get("y"), size)
+                shift = {"start": 0.3, "middle": 0.0, "end": -0.3}.get(anchored, 0.3) * size
+                centre = here.point_in_matrix_space((x + shift, y - size / 3.0))
+                labels.append(RoomLabel(words, float(centre.x), float(centre.y)))
+            return
+        for child in element:
+            walk(child, here, size, anchored)
+
+    walk(root, top, 16.0, "start")
+    return labels
 
 
 def svg_names(path: str | PathLike[str]) -> list[tuple[str, int]]:
