@@ -45,6 +45,7 @@ from .tracking.localizer import Estimate, Localizer
 from .tracking.lost_rule import LostRule
 from .tracking.motion_noise import MotionNoise
 from .tracking.occlusion_rule import OcclusionRule
+from .tracking.posterior_refinement import PosteriorRefinement
 from .tracking.recovery import RecoveryConfig
 from .tracking.scale_check import PlanScaleWarning, ScaleEstimate, ScaleRule
 from .tracking.scale_estimation import ScaleCandidate, ScaleSearch, estimate_scale
@@ -90,6 +91,7 @@ __all__ = [
     "MotionNoise",
     "PlanMap",
     "PlanScaleWarning",
+    "PosteriorRefinement",
     "PlanRaster",
     "RosMap",
     "PlanicpError",

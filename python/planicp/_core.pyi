@@ -61,6 +61,8 @@ class PointMap:
     def normals(self) -> NDArray[np.float64]: ...
     @property
     def raster_resolution(self) -> float: ...
+    @property
+    def spacing(self) -> float: ...
     def wall_index_stats(self) -> tuple[float, float, int, int, int, int]: ...
     def visible_indices(self, x: float, y: float, max_range: float) -> NDArray[np.uint32]: ...
     def view_from(
@@ -172,6 +174,37 @@ class OccupancyGrid:
         seed: int | None = None,
         discs: ArrayLike | None = None,
     ) -> NDArray[np.float64]: ...
+
+@final
+class LikelihoodGrid:
+    """The plan's likelihood field: exp(-d^2 / (2 sigma^2)) of the distance d to the nearest of the
+    points (metres, map frame) at cell centres `resolution` metres apart, bilinear between them."""
+
+    def __new__(cls, points: NDArray[np.float64], resolution: float, sigma: float) -> LikelihoodGrid: ...
+    @property
+    def resolution(self) -> float: ...
+    @property
+    def sigma(self) -> float: ...
+    @property
+    def shape(self) -> tuple[int, int]: ...
+    def value_and_gradient(self, x: float, y: float) -> tuple[float, tuple[float, float]]: ...
+    def cost(
+        self,
+        scan: NDArray[np.float64],
+        pose: tuple[float, float, float],
+        prior_pose: tuple[float, float, float],
+        prior_covariance: Sequence[Sequence[float]],
+        weight: float,
+    ) -> float: ...
+    def refine(
+        self,
+        scan: NDArray[np.float64],
+        start: tuple[float, float, float],
+        prior_pose: tuple[float, float, float],
+        prior_covariance: Sequence[Sequence[float]],
+        weight: float,
+        max_iterations: int = 30,
+    ) -> tuple[tuple[float, float, float], float, float, list[list[float]], int]: ...
 
 @final
 class LogOddsGrid:

@@ -7,7 +7,8 @@
 //! every 50 ms, so that Ctrl-C stops them with KeyboardInterrupt.
 //!
 //! One file per concept: `point_map` (the plan and what a pose sees of it), `alignment` (ICP
-//! settings, `align`), `occupancy_grid` (the simulated LIDAR's raster), `log_odds_grid`,
+//! settings, `align`), `occupancy_grid` (the simulated LIDAR's raster), `log_odds_grid`, `likelihood_grid` (the plan's
+//! likelihood field and the pose of highest posterior in it),
 //! `global_search` (relocalization); `errors`, `interrupt` and `conversions` are the
 //! boundary they share. This file only registers them in the module `_core`.
 
@@ -18,6 +19,7 @@ mod conversions;
 mod errors;
 mod global_search;
 mod interrupt;
+mod likelihood_grid;
 mod log_odds_grid;
 mod occupancy_grid;
 mod point_map;
@@ -36,6 +38,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<point_map::WallView>()?;
     m.add_class::<occupancy_grid::OccupancyGrid>()?;
     m.add_class::<log_odds_grid::LogOddsGrid>()?;
+    m.add_class::<likelihood_grid::LikelihoodGrid>()?;
     m.add_class::<global_search::GlobalMatcher>()?;
     m.add_class::<global_search::Relocalization>()?;
     m.add_class::<global_search::RelocalizationCandidate>()?;

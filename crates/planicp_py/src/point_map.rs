@@ -55,6 +55,12 @@ impl PyPointMap {
         self.inner.raster().resolution()
     }
 
+    /// Median distance between neighbouring wall points, metres (0.05 m when it cannot be told).
+    #[getter]
+    fn spacing(&self) -> f64 {
+        self.inner.spacing()
+    }
+
     /// Builds the nearest-wall index if not built yet (it is kept) and returns its sizes:
     /// (cell m, reach m, memory bytes, stored blocks, blocks, candidates).
     fn wall_index_stats(&self, py: Python<'_>) -> PyResult<(f64, f64, usize, usize, usize, usize)> {

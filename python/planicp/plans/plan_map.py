@@ -56,7 +56,7 @@ class PlanMap:
     number of alignments, from any number of threads.
     """
 
-    __slots__ = ("_native", "_points", "raster", "from_cache", "edge_detector", "metric")
+    __slots__ = ("_native", "_points", "_likelihood", "raster", "from_cache", "edge_detector", "metric")
 
     def __init__(
         self,
@@ -72,6 +72,7 @@ class PlanMap:
         points = native.points
         points.setflags(write=False)
         self._points = points
+        self._likelihood: _core.LikelihoodGrid | None = None
         self.raster = raster
         """The wall raster the plan was extracted from (None for plans built from points)."""
         self.from_cache = from_cache
@@ -373,6 +374,24 @@ class PlanMap:
     def raster_resolution(self) -> float:
         """Cell size of the visibility raster, metres."""
         return self._native.raster_resolution
+
+    @property
+    def spacing(self) -> float:
+        """Median distance between neighbouring wall points, metres (0.05 m when it cannot be
+        told): how finely the plan places its walls."""
+        return self._native.spacing
+
+    def likelihood_field(self) -> _core.LikelihoodGrid:
+        """The plan as a likelihood field (built on first use, then kept): at each point of the
+        plane `exp(-d^2 / (2 sigma^2))` of the distance `d` to the nearest wall point, with `sigma`
+        the plan's `spacing` (a plan places a wall no more finely than it samples it: a map_server
+        map's cell, a drawing's pixel or sampling step), sampled every `sigma` and interpolated
+        bilinearly. One byte per cell: 37 MB for a 305 x 305 m SLAM map at 5 cm. What
+        `planicp.tracking.posterior_refinement` climbs."""
+        if self._likelihood is None:
+            sigma = self.spacing
+            self._likelihood = _core.LikelihoodGrid(self._points, sigma, sigma)
+        return self._likelihood
 
     @property
     def extent(self) -> tuple[float, float, float, float]:

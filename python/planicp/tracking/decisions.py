@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from .degeneracy_rule import Degeneracy
 from .icp_result import IcpResult
+from .posterior_refinement import Refinement
 from .recovery import Hypothesis
 
 SearchCause = Literal["jump", "uncertain"]
@@ -246,6 +247,8 @@ class Correction:
         accepted: a fit was accepted (`kind` is not "prediction").
         degeneracy: the weak axis of the accepted fit, or None.
         kind: how `pose` was made (see `CorrectionKind`).
+        refinement: how `pose` was refined in the plan's likelihood field after it was made
+            (`planicp.tracking.posterior_refinement`), or None.
     """
 
     pose: Pose
@@ -253,16 +256,20 @@ class Correction:
     accepted: bool
     degeneracy: Degeneracy | None
     kind: CorrectionKind
+    refinement: Refinement | None = None
 
     @property
     def why(self) -> str:
         """One sentence on this decision."""
-        return {
+        text = {
             "fused": "the fit fused with the prediction",
             "weak_axis": "the fit, with the prediction kept along its degenerate axis as far as the variances say",
             "fit": "the fit alone",
             "prediction": "no accepted fit: the prediction",
         }[self.kind]
+        if self.refinement is not None and self.refinement.moved >= 0.005:
+            text += f", moved {100 * self.refinement.moved:.1f} cm to the scan's most likely pose"
+        return text
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ from .icp_result import IcpResult
 from .lost_rule import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .occlusion_rule import OcclusionFilter, OcclusionRule
+from .posterior_refinement import PosteriorRefinement
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .relocalize import Relocalization, prepare_search, relocalize
 from .scale_check import ScaleEstimate, ScaleMonitor, ScaleRule
@@ -176,6 +177,7 @@ class Localizer:
         occlusion: OcclusionRule | Literal[False] | None = None,
         fusion: FusionRule | None = None,
         scale: ScaleRule | None = None,
+        refinement: PosteriorRefinement | None = None,
     ) -> None:
         """
         Args:
@@ -200,6 +202,11 @@ class Localizer:
                 check for a map_server map (`PlanMap.metric`: made by SLAM in metres, its scale
                 is right; on the real logs' maps the check cost a third more time per scan and
                 flagged a correct map 2.6 % off); `ScaleRule(enabled=False)` turns it off).
+            refinement: how a corrected pose is refined to the pose of highest posterior in the
+                plan's likelihood field (None: `PosteriorRefinement()` on a map_server map
+                (`PlanMap.metric`: a SLAM occupancy grid, whose cells are where returns ended),
+                none on a drawing, whose walls ICP places more finely than the field;
+                `PosteriorRefinement(enabled=False)` keeps the fusion's pose).
         """
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a planicp.PlanMap, got {type(plan).__name__}")
@@ -219,6 +226,16 @@ class Localizer:
         if occlusion is not False and occlusion is not None and not isinstance(occlusion, OcclusionRule):
             raise TypeError(f"occlusion must be an OcclusionRule, False or None, got {type(occlusion).__name__}")
         self._occlusion = None if occlusion is False else OcclusionFilter(plan, occlusion or OcclusionRule())
+        if refinement is not None and not isinstance(refinement, PosteriorRefinement):
+            raise TypeError(
+                f"refinement must be a planicp.PosteriorRefinement or None, got {type(refinement).__name__}"
+            )
+        # Refined by default on an occupancy grid made by SLAM (`PlanMap.metric`), whose occupied
+        # cells are where returns ended: a likelihood, which ICP's nearest cell centres read as
+        # exact walls and slide along (docs/design.md, "The pose of highest posterior"). A
+        # drawing's walls are exact: ICP places them to the millimetre, the field (sampled every
+        # point spacing) to half a centimetre.
+        self.refinement = refinement if refinement is not None else PosteriorRefinement(enabled=plan.metric)
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         if scale is not None and not isinstance(scale, ScaleRule):
             raise TypeError(f"scale must be a planicp.ScaleRule or None, got {type(scale).__name__}")
@@ -242,6 +259,9 @@ class Localizer:
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.
         prepare_search(plan, self._recovery.config.search)
+        # And its likelihood field, which every tracking update climbs.
+        if self.refinement.enabled:
+            plan.likelihood_field()
         # So is the nearest-wall index the recovery and the searches align with (seconds on a
         # large plan; the KD-tree search of tracking goes through it too). A plan it cannot be
         # built for (more wall points than it holds) is aligned through the KD-tree there instead.
@@ -343,7 +363,7 @@ class Localizer:
             self._pending = search.pending if search.pending is not None else confirmation.kept
             # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
-            correction = correct(prediction, search, score, rules)
+            correction = correct(points, prediction, search, score, rules)
             # 7. Lost or not. 8. While lost, the recovery, which may adopt a place.
             lost = judge_lost(self._detector, score, correction, search, was_lost, rules)
             recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
@@ -414,6 +434,7 @@ class Localizer:
             self._occlusion,
             self._detector.rule,
             self._recovery.config,
+            self.refinement,
         )
 
 

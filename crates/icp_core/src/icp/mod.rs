@@ -11,6 +11,8 @@
 //! - [`termination`]: when an ICP stage stops.
 //! - [`acceleration`]: extrapolation of slowly converging iterations, with a safeguard.
 //! - [`covariance`]: the pose covariance of a finished alignment.
+//! - [`posterior_refinement`]: the pose of highest posterior in the plan's likelihood field, given
+//!   a prior (the odometry prediction).
 
 pub mod acceleration;
 pub mod alignment;
@@ -18,6 +20,7 @@ pub mod candidate_cache;
 pub mod correspondence;
 pub mod covariance;
 pub mod icp_config;
+pub mod posterior_refinement;
 pub mod rigid_solver;
 pub mod termination;
 pub mod visible_through_index;

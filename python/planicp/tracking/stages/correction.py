@@ -1,31 +1,63 @@
-"""Stage 6 of `Localizer.update`: the pose and covariance after an accepted fit (`correct`)."""
+"""Stage 6 of `Localizer.update`: the pose and covariance after an accepted fit (`correct`), the
+pose refined to the highest posterior in the plan's likelihood field (`posterior_refinement`)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._validation import Pose
 from ..decisions import Correction, Prediction, ScoreDecision, SearchDecision
 from ..degeneracy_rule import fuse_along_weak_axis
+from ..posterior_refinement import refine_pose
 from .rules import Rules
 
 
-def correct(prediction: Prediction, search: SearchDecision, score: ScoreDecision, rules: Rules) -> Correction:
+def correct(
+    points: NDArray[np.float64], prediction: Prediction, search: SearchDecision, score: ScoreDecision, rules: Rules
+) -> Correction:
     """The pose and covariance after an accepted fit: its fusion with the prediction; after an
     odometry fault (not fused) or a search, the fit alone, except along a degenerate axis, where
     the prediction is corrected only as far as the variances say. Without an accepted fit, the
-    prediction's."""
+    prediction's. A pose from a fit from the prediction is then refined to the pose of highest
+    posterior in the plan's likelihood field (`posterior_refinement`): with the prediction as
+    the prior where the two were fused or the fit is degenerate, none where the odometry faulted
+    and the scan constrains every direction; a search's place is kept as its alignment left it.
+    The covariance is the fusion's."""
     result = search.result
     if result is None or score.reason != "":
         return Correction(prediction.pose, prediction.covariance, False, None, "prediction")
     degeneracy = rules.degeneracy.check(result)
     fused = None if search.searched else rules.fusion.fuse(result, prediction.pose, prediction.covariance)
     if fused is not None:
-        return Correction(fused[0], fused[1], True, degeneracy, "fused")
+        correction = Correction(fused[0], fused[1], True, degeneracy, "fused")
+        return _refined(points, correction, ("prediction", prediction.pose, prediction.covariance), rules)
     if degeneracy is not None:
         pose, covariance = fuse_along_weak_axis(degeneracy, result, prediction.pose, prediction.covariance)
-        return Correction(pose, covariance, True, degeneracy, "weak_axis")
-    return Correction(result.pose, finite_or(result.covariance, prediction.covariance), True, None, "fit")
+        correction = Correction(pose, covariance, True, degeneracy, "weak_axis")
+        # Along the weak axis the scan says nothing, and the prediction is what is known there.
+        prior: tuple[str, Pose, NDArray[np.float64]] | None = ("prediction", prediction.pose, prediction.covariance)
+    else:
+        covariance = finite_or(result.covariance, prediction.covariance)
+        correction = Correction(result.pose, covariance, True, None, "fit")
+        prior = None  # the odometry faulted, and the scan constrains every direction
+    return correction if search.searched else _refined(points, correction, prior, rules)
+
+
+def _refined(
+    points: NDArray[np.float64],
+    correction: Correction,
+    prior: tuple[str, Pose, NDArray[np.float64]] | None,
+    rules: Rules,
+) -> Correction:
+    """`correction` with its pose refined (`refine_pose`; `prior`: its name, pose and covariance,
+    or None) when the rule is on."""
+    if not rules.refinement.enabled:
+        return correction
+    refinement = refine_pose(points, correction.pose, rules.plan, prior, rules.refinement)
+    return replace(correction, pose=refinement.pose, refinement=refinement)
 
 
 def finite_or(covariance: NDArray[np.float64], fallback: NDArray[np.float64]) -> NDArray[np.float64]:

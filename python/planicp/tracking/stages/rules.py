@@ -13,6 +13,7 @@ from ..icp_config import IcpConfig
 from ..lost_rule import LostRule
 from ..motion_noise import MotionNoise
 from ..occlusion_rule import OcclusionFilter
+from ..posterior_refinement import PosteriorRefinement
 from ..recovery import RecoveryConfig
 
 
@@ -30,6 +31,7 @@ class Rules:
         lost: the lost rule.
         recovery: the recovery's settings (its `local_radius`, `margin`, `min_inlier_ratio` and
             search serve the searches around the prediction too).
+        refinement: how a corrected pose is refined in the plan's likelihood field.
     """
 
     plan: PlanMap
@@ -43,3 +45,4 @@ class Rules:
     occlusion: OcclusionFilter | None
     lost: LostRule
     recovery: RecoveryConfig
+    refinement: PosteriorRefinement

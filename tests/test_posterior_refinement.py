@@ -1,0 +1,115 @@
+"""The corrected pose refined to the scan's most likely pose in the plan's likelihood field
+(`planicp.tracking.posterior_refinement`, `planicp._core.LikelihoodGrid`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planicp import Localizer, PlanMap, PosteriorRefinement, _core
+from planicp.tracking.posterior_refinement import refine_pose
+
+
+def room() -> PlanMap:
+    """A 6 x 4 m room with a 1 m pillar, walls sampled every 2 cm."""
+    segments = [
+        ((0, 0), (6, 0)),
+        ((6, 0), (6, 4)),
+        ((6, 4), (0, 4)),
+        ((0, 4), (0, 0)),
+        ((2, 1.5), (3, 1.5)),
+        ((3, 1.5), (3, 2.5)),
+        ((3, 2.5), (2, 2.5)),
+        ((2, 2.5), (2, 1.5)),
+    ]
+    return PlanMap.from_segments(np.array(segments, dtype=float), spacing=0.02)
+
+
+def corridor() -> PlanMap:
+    """Two parallel walls 2 m apart and 40 m long: nothing fixes x."""
+    return PlanMap.from_segments(np.array([((0, 0), (40, 0)), ((0, 2), (40, 2))], dtype=float), spacing=0.02)
+
+
+def scan_at(plan: PlanMap, pose: tuple[float, float, float], max_range: float = 8.0) -> np.ndarray:
+    """The plan's points within `max_range` of `pose`, in the robot frame (a scan of every wall,
+    seen through or not: enough for a likelihood)."""
+    pts = np.asarray(plan.points)
+    near = pts[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) < max_range][::3]
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    d = near - np.array(pose[:2])
+    return np.ascontiguousarray(np.column_stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]]))
+
+
+def test_the_field_peaks_on_the_walls_and_falls_as_a_gaussian_of_the_plan_spacing() -> None:
+    plan = room()
+    field = plan.likelihood_field()
+    assert field is plan.likelihood_field()  # built once, kept with the plan
+    assert field.sigma == pytest.approx(plan.spacing, rel=1e-9)
+    assert plan.spacing == pytest.approx(0.02, rel=0.05)
+    # Cell centres one sigma apart, bilinear between them: a wall half-way between two centres reads
+    # exp(-1/8) = 0.88 at both, and the interpolation falls short of the peak by up to a fifth.
+    on, _ = field.value_and_gradient(3.0, 0.0)
+    one_sigma, slope = field.value_and_gradient(3.0, field.sigma)
+    assert on > 0.75
+    assert one_sigma == pytest.approx(math.exp(-0.5), abs=0.12)
+    assert one_sigma < on
+    assert slope[1] < 0.0  # uphill towards the wall
+    assert field.value_and_gradient(3.0, 1.0)[0] == 0.0  # beyond three sigmas of every wall
+
+
+def test_a_pose_a_few_centimetres_off_is_brought_back_without_a_prior() -> None:
+    plan = room()
+    truth = (4.0, 1.0, 0.3)
+    scan = scan_at(plan, truth)
+    start = (4.035, 0.97, 0.3 + math.radians(1.0))
+    refined = refine_pose(scan, start, plan, None, PosteriorRefinement())
+    assert refined.prior == "none"
+    # From 4.6 cm and 1 degree off to within the field's own sampling (sigma = 2 cm).
+    assert math.dist(refined.pose[:2], truth[:2]) < 0.01, refined
+    assert abs(refined.pose[2] - truth[2]) < math.radians(0.3), refined
+    assert refined.cost < refined.start_cost
+    assert refined.moved == pytest.approx(math.dist(start[:2], refined.pose[:2]))
+
+
+def test_along_a_corridor_the_prior_decides_and_across_it_the_scan() -> None:
+    plan = corridor()
+    truth = (20.0, 0.8, 0.0)
+    scan = scan_at(plan, truth)
+    prior_pose = (20.3, 0.8, 0.0)  # 30 cm off along the corridor, where the scan says nothing
+    covariance = np.diag([0.1**2, 0.1**2, math.radians(2.0) ** 2])
+    start = (20.1, 0.86, 0.0)  # a fit 10 cm along and 6 cm across
+    refined = refine_pose(scan, start, plan, ("prediction", prior_pose, covariance), PosteriorRefinement())
+    assert refined.prior == "prediction"
+    assert refined.pose[0] == pytest.approx(prior_pose[0], abs=0.01)  # along: the prior's
+    assert refined.pose[1] == pytest.approx(truth[1], abs=0.005)  # across: the walls'
+
+
+def test_the_localizer_reports_the_refinement_and_can_be_told_not_to_refine() -> None:
+    plan = room()
+    truth = (4.0, 1.0, 0.3)
+    scan = scan_at(plan, truth)
+    on = Localizer(plan, (4.03, 1.02, 0.3), refinement=PosteriorRefinement())
+    estimate = on.update(scan, (0.0, 0.0, 0.0))
+    correction = estimate.decisions[5]
+    assert correction.refinement is not None and correction.refinement.prior == "prediction"
+    assert estimate.pose == correction.refinement.pose
+    assert math.dist(estimate.pose[:2], truth[:2]) < 0.02
+    off = Localizer(plan, (4.03, 1.02, 0.3), refinement=PosteriorRefinement(enabled=False))
+    assert off.update(scan, (0.0, 0.0, 0.0)).decisions[5].refinement is None
+
+
+def test_bad_refinement_inputs_are_refused_with_the_fix() -> None:
+    field = room().likelihood_field()
+    scan = scan_at(room(), (4.0, 1.0, 0.3))
+    with pytest.raises(_core.PlanicpError, match="prior_covariance must be finite and invertible"):
+        field.refine(scan, (4.0, 1.0, 0.3), (4.0, 1.0, 0.3), np.zeros((3, 3)).tolist(), 0.1)
+    with pytest.raises(_core.PlanicpError, match="weight must be a positive finite number"):
+        field.refine(scan, (4.0, 1.0, 0.3), (4.0, 1.0, 0.3), np.eye(3).tolist(), 0.0)
+    with pytest.raises(_core.PlanicpError, match="sigma"):
+        _core.LikelihoodGrid(np.zeros((3, 2)), 0.05, -1.0)
+    with pytest.raises(ValueError, match="return_weight"):
+        PosteriorRefinement(return_weight=0.0)
+    with pytest.raises(TypeError, match="refinement must be a planicp.PosteriorRefinement"):
+        Localizer(room(), (0.0, 0.0, 0.0), refinement=0.15)  # type: ignore[arg-type]
