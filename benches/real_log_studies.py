@@ -7,6 +7,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py nees         # how honest Estimate.covariance is on real logs
     python benches/real_log_studies.py alignments   # one alignment: ray-cast view against the index's masks
     python benches/real_log_studies.py views        # tracking's view cast, to the scan's range or per direction
+    python benches/real_log_studies.py refinement   # the Localizer with and without the posterior refinement
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -18,6 +19,9 @@ tracks each log with the defaults from the harness's synthetic odometry drawn wi
 nor lost, gives the normalised estimation error squared e^T P^-1 e of `Estimate.covariance` (and of
 the fit's own `IcpResult.covariance`) against the reference pose: a consistent estimator's median is
 the chi-square's, 2.366 (the reference poses' own error counts as the estimator's here).
+`refinement` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
+(on these map_server maps: the pose refined in the plan's likelihood field) and with
+`PosteriorRefinement(enabled=False)`, and gives the ATE and the share of scans more than 0.3 m off.
 `alignments` aligns 60 evenly spaced tracked scans of each log from guesses off the reference pose
 by a normal error (0.15 m per axis, 2.3 degrees; the size of a search candidate's or a followed
 place's error) with the `Localizer`'s settings, once through the view ray cast from the guess (the
@@ -47,7 +51,16 @@ from typing import Any
 import numpy as np
 
 import planicp
-from planicp import IcpConfig, Localizer, PlanMap, RelocalizationConfig, SearchInSteps, localize, relocalize
+from planicp import (
+    IcpConfig,
+    Localizer,
+    PlanMap,
+    PosteriorRefinement,
+    RelocalizationConfig,
+    SearchInSteps,
+    localize,
+    relocalize,
+)
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
@@ -124,11 +137,17 @@ def step_times(pm: PlanMap, scans: list[np.ndarray]) -> list[float]:
 
 
 def track(
-    harness: Any, plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray, config: IcpConfig | None = None
+    harness: Any,
+    plan: Any,
+    scans: list[np.ndarray],
+    ref: np.ndarray,
+    odom: np.ndarray,
+    config: IcpConfig | None = None,
+    refinement: PosteriorRefinement | None = None,
 ) -> tuple[dict[str, float], list[float]]:
     """The harness's error metrics (0.3 m for lost) of a `Localizer` started at the first reference
     pose, and the seconds each update took."""
-    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), config)
+    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), config, refinement=refinement)
     loc.update(scans[0], tuple(map(float, odom[0])))
     est, spent = [ref[0]], []
     for k in range(1, len(scans)):
@@ -148,6 +167,19 @@ def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> No
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
+
+
+def refinement_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+    print("| log | seed | without: ATE, lost | with (the default): ATE, lost |")
+    print("|---|---|---|---|")
+    for name in logs:
+        for seed in seeds:
+            data = load(harness, name, out, seed)
+            cells = []
+            for rule in (PosteriorRefinement(enabled=False), PosteriorRefinement()):
+                m, _ = track(harness, *data, refinement=rule)
+                cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
+            print(f"| {name} | {seed} | " + " | ".join(cells) + " |", flush=True)
 
 
 def nees_study(harness: Any, logs: list[str], out: str) -> None:
@@ -261,7 +293,7 @@ def views_study(harness: Any, logs: list[str], out: str) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments", "views"))
+    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement"))
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
@@ -277,6 +309,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds)
+        elif args.study == "refinement":
+            refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "nees":
             nees_study(harness, args.logs, out)
         elif args.study == "alignments":

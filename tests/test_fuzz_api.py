@@ -610,7 +610,7 @@ def test_readers_on_garbled_text(reader: str) -> None:
 @FUZZ
 @given(st.data())
 def test_robustness_api(data: Any) -> None:
-    """DegeneracyRule, LostRule, FusionRule, MotionNoise, RecoveryConfig, SearchRegion, relocalize,
+    """DegeneracyRule, LostRule, FusionRule, PosteriorRefinement, MotionNoise, RecoveryConfig, SearchRegion, relocalize,
     SearchInSteps and Localizer.relocalize/covariance with random settings, scans and poses."""
     number = st.one_of(values, anything, st.integers(-3, 100))
     call(planicp.DegeneracyRule, data.draw(number))
@@ -618,6 +618,9 @@ def test_robustness_api(data: Any) -> None:
     call(planicp.OcclusionRule, data.draw(number), data.draw(number), data.draw(number))
     call(planicp.LostRule, data.draw(number), data.draw(number), data.draw(number))
     fusion_ok, fusion = call(planicp.FusionRule, data.draw(number))
+    refinement_ok, refinement = call(
+        planicp.PosteriorRefinement, data.draw(st.one_of(st.booleans(), anything)), data.draw(number), data.draw(number)
+    )
     ok, noise = call(planicp.MotionNoise, *[data.draw(number) for _ in range(5)])
     if ok:
         ok, cov = call(noise.propagate, np.diag([0.01, 0.01, 0.001]), data.draw(poses), data.draw(poses))
@@ -660,6 +663,7 @@ def test_robustness_api(data: Any) -> None:
         None,
         initial_covariance=data.draw(st.one_of(st.none(), st.just(np.eye(3) * 0.01), anything)),
         fusion=fusion if fusion_ok else data.draw(st.one_of(st.none(), anything)),
+        refinement=refinement if refinement_ok else data.draw(st.one_of(st.none(), anything)),
     )
     if ok:
         ok, estimate = call(loc.update, data.draw(scans()), data.draw(poses))
@@ -724,6 +728,7 @@ def test_every_public_name_is_fuzzed() -> None:
         "ContinuityRule",
         "OcclusionRule",
         "FusionRule",
+        "PosteriorRefinement",
         "WallView",
         "ScaleRule",
         "estimate_scale",

@@ -111,13 +111,13 @@ def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
         scans[2], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
     )
     score = stages.judge_score(scans[2], prediction, fit, search, the_rules, False, None)
-    correction = stages.correct(prediction, search, score, the_rules)
+    correction = stages.correct(scans[2], prediction, search, score, the_rules)
     assert correction.accepted and correction.kind == "fused" and correction.degeneracy is None
     assert error(path[2], correction.pose)[0] < 0.01
     assert np.trace(correction.covariance) < np.trace(prediction.covariance) / 10
     assert np.linalg.det(correction.covariance) < np.linalg.det(prediction.covariance)
     rejected = ScoreDecision(score.score, False, None, "some reason")
-    kept = stages.correct(prediction, search, rejected, the_rules)
+    kept = stages.correct(scans[2], prediction, search, rejected, the_rules)
     assert not kept.accepted and kept.kind == "prediction" and kept.pose == prediction.pose
     assert kept.covariance is prediction.covariance
 
@@ -133,7 +133,7 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
         scans[1], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
     )
     score = stages.judge_score(scans[1], prediction, fit, search, the_rules, False, None)
-    correction = stages.correct(prediction, search, score, the_rules)
+    correction = stages.correct(scans[1], prediction, search, score, the_rules)
     assert not correction.accepted and search.cause == "jump" and search.pending is not None
     verdicts = [stages.judge_lost(detector, score, correction, search, False, the_rules) for _ in range(3)]
     assert [(v.lost, v.rejections, v.held, v.counted_accepted) for v in verdicts] == [

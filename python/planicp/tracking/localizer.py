@@ -203,9 +203,10 @@ class Localizer:
                 is right; on the real logs' maps the check cost a third more time per scan and
                 flagged a correct map 2.6 % off); `ScaleRule(enabled=False)` turns it off).
             refinement: how a corrected pose is refined to the pose of highest posterior in the
-                plan's likelihood field (None: `PosteriorRefinement()` on a map_server map
-                (`PlanMap.metric`: a SLAM occupancy grid, whose cells are where returns ended),
-                none on a drawing, whose walls ICP places more finely than the field;
+                plan's likelihood field (None: `PosteriorRefinement()` where the plan's points are
+                an occupancy grid's cell centres (`PlanMap.edge_detector == "centres"`: a
+                map_server map made by SLAM, whose cells are where returns ended), none on walls
+                drawn as material, which ICP places more finely than the field;
                 `PosteriorRefinement(enabled=False)` keeps the fusion's pose).
         """
         if not isinstance(plan, PlanMap):
@@ -230,12 +231,15 @@ class Localizer:
             raise TypeError(
                 f"refinement must be a planicp.PosteriorRefinement or None, got {type(refinement).__name__}"
             )
-        # Refined by default on an occupancy grid made by SLAM (`PlanMap.metric`), whose occupied
-        # cells are where returns ended: a likelihood, which ICP's nearest cell centres read as
-        # exact walls and slide along (docs/design.md, "The pose of highest posterior"). A
-        # drawing's walls are exact: ICP places them to the millimetre, the field (sampled every
-        # point spacing) to half a centimetre.
-        self.refinement = refinement if refinement is not None else PosteriorRefinement(enabled=plan.metric)
+        # Refined by default where the plan's points are an occupancy grid's occupied cell centres
+        # (a map_server map read as `from_ros_map` reads a SLAM map): where returns ended, a
+        # likelihood, which ICP's nearest centres read as exact walls and slide along
+        # (docs/design.md, "The pose of highest posterior"). Walls drawn as material (a drawing,
+        # a map that says so) are exact: ICP places them to the millimetre, the field (sampled
+        # every point spacing) to half a centimetre.
+        self.refinement = refinement if refinement is not None else PosteriorRefinement(
+            enabled=plan.edge_detector == "centres"
+        )
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         if scale is not None and not isinstance(scale, ScaleRule):
             raise TypeError(f"scale must be a planicp.ScaleRule or None, got {type(scale).__name__}")
