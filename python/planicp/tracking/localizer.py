@@ -237,8 +237,8 @@ class Localizer:
         # (docs/design.md, "The pose of highest posterior"). Walls drawn as material (a drawing,
         # a map that says so) are exact: ICP places them to the millimetre, the field (sampled
         # every point spacing) to half a centimetre.
-        self.refinement = refinement if refinement is not None else PosteriorRefinement(
-            enabled=plan.edge_detector == "centres"
+        self.refinement = (
+            refinement if refinement is not None else PosteriorRefinement(enabled=plan.edge_detector == "centres")
         )
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         if scale is not None and not isinstance(scale, ScaleRule):
