@@ -169,16 +169,25 @@ def _footprint(walls: NDArray[np.bool_], radius: int) -> tuple[NDArray[np.bool_]
     diameter), `footprint` the rest."""
     import cv2
 
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
     # The disc's centres: cells farther than `radius` from every wall, on the raster padded by
-    # more than `radius` (the disc comes from beyond the edge).
+    # more than `radius` (the disc comes from beyond the edge). Distances (exact Euclidean) rather
+    # than a dilation by a disc kernel: a 3 m gap at 5 mm per cell is a kernel of 600 x 600 cells,
+    # minutes on a drawing's raster, against a second.
     pad = radius + 1
-    blocked = cv2.dilate(np.pad(walls, pad, constant_values=False).astype(np.uint8), kernel)
-    centres = (blocked == 0).astype(np.uint8)
+    padded = np.pad(walls, pad, constant_values=False)
+    centres = (_distance_to(padded) > radius).astype(np.uint8)
     _, labels = cv2.connectedComponents(centres, connectivity=4)
-    reached = (labels == labels[0, 0]).astype(np.uint8)
-    outside = cv2.dilate(reached, kernel)[pad:-pad, pad:-pad].astype(np.bool_) & ~walls
+    reached = labels == labels[0, 0]
+    outside = (_distance_to(reached) <= radius)[pad:-pad, pad:-pad] & ~walls
     return ~outside, outside
+
+
+def _distance_to(mask: NDArray[np.bool_]) -> NDArray[np.float32]:
+    """Euclidean distance of every cell to the nearest True cell of `mask`, cells (0 on it)."""
+    import cv2
+
+    distances = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return np.asarray(distances, dtype=np.float32)
 
 
 def _grow(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
