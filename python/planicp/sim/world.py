@@ -234,9 +234,11 @@ class World:
         and does not overlap the robot at `robot` (centres `touching` metres apart touch)."""
         step = max(p.speed, GIVE_WAY_SPEED) * dt
         best: tuple[float, float, float, float] | None = None
+        headings = [p.heading + 2.0 * math.pi * k / GIVE_WAY_HEADINGS for k in range(GIVE_WAY_HEADINGS)]
         candidates = [(p.x, p.y, p.heading)] + [
-            (p.x + math.cos(h) * step, p.y + math.sin(h) * step, h)
-            for h in (p.heading + 2.0 * math.pi * k / GIVE_WAY_HEADINGS for k in range(GIVE_WAY_HEADINGS))
+            (p.x + math.cos(h) * step * share, p.y + math.sin(h) * step * share, h)
+            for share in (1.0, 0.5, 0.25)  # shorter steps out of a niche
+            for h in headings
         ]
         for nx, ny, heading in candidates:
             if math.hypot(nx - robot[0], ny - robot[1]) <= touching or not free(nx, ny, p):
