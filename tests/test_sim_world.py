@@ -95,7 +95,7 @@ def _corridor() -> Floor:
 def test_a_person_in_the_robots_way_gives_way_and_never_covers_it(heading: float, speed: float, seed: int) -> None:
     """The robot drives down the corridor's centre line at 0.5 m/s through where a person walks
     (away from it, at it, across). Before people gave way, the person froze once the robot was
-    within their keep-clear distance and the robot drove through them (centres 0.00-0.05 m apart,
+    within their keep-clear distance and the robot drove through them (centres 0.00-0.06 m apart,
     i.e. the person's disc over the LIDAR, in every one of these cases but the last)."""
     floor = _corridor()
     grid = _core.OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
