@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planicp import PlanMap
-from planicp.plans.plan_raster import load_gray
+from planicp.plans.plan_raster import PlanRaster, load_gray
 from planicp.plans.wall_extraction import explain_image
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -129,6 +129,23 @@ def plan_pixels(plan: PlanMap, resolution: float, height: int) -> NDArray[np.flo
     return np.column_stack([xy[:, 0] / resolution, height - xy[:, 1] / resolution])
 
 
+def true_building(drawings: Path) -> PlanRaster:
+    """The CubiCasa building's TRUE walls in the drawing's map frame (origin (0, 0, 0), 0.0056 m
+    per pixel): the SVG's wall polygons less the doors, the windows solid, registered to the
+    drawing's pixels; outside the footprint of its rooms and walls solid."""
+    name, resolution = "cubicasa_F1_original.png", DRAWINGS["cubicasa_F1_original.png"]
+    gray = load_gray(drawings / name)
+    polygons = svg_polygons(drawings / "cubicasa_F1_model.svg")
+    scale, shift, _ = register(polygons["Wall"], gray)
+    walls = fill(polygons["Wall"], gray.shape, scale, shift) & ~fill(polygons["Door"], gray.shape, scale, shift)
+    # The building's footprint: its rooms (the balcony too), walls, doors and windows. Outside it is
+    # solid, so that the robot stays in the building: the exterior door leads nowhere, and the
+    # balcony's open side (a railing in the drawing) is a barrier the LIDAR sees.
+    footprint = fill([p for k in ("Space", "Wall", "Door", "Window") for p in polygons[k]], gray.shape, scale, shift)
+    footprint = cv2.morphologyEx(footprint, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # seams between polygons
+    return PlanRaster((walls | (1 - footprint)).astype(bool), resolution, (0.0, 0.0, 0.0))
+
+
 def track_in_true_walls(
     drawings: Path, duration: float, seeds: list[int], walls_mode: str = "drawing"
 ) -> list[tuple[int, float, float, float, int, int]]:
@@ -140,20 +157,10 @@ def track_in_true_walls(
     every dark pixel a wall, as before). Both in the drawing's
     map frame (origin (0, 0, 0), 0.0056 m per pixel). Per seed: (seed, position RMS m, position
     max m, heading RMS deg, scans, lost scans)."""
-    from planicp.plans.plan_raster import PlanRaster
     from planicp.sim.experiment import ExperimentConfig, run_experiment
 
     name, resolution = "cubicasa_F1_original.png", DRAWINGS["cubicasa_F1_original.png"]
-    gray = load_gray(drawings / name)
-    polygons = svg_polygons(drawings / "cubicasa_F1_model.svg")
-    scale, shift, _ = register(polygons["Wall"], gray)
-    walls = fill(polygons["Wall"], gray.shape, scale, shift) & ~fill(polygons["Door"], gray.shape, scale, shift)
-    # The building's footprint: its rooms (the balcony too), walls, doors and windows. Outside it is
-    # solid, so that the robot stays in the building: the exterior door leads nowhere, and the
-    # balcony's open side (a railing in the drawing) is a barrier the LIDAR sees.
-    footprint = fill([p for k in ("Space", "Wall", "Door", "Window") for p in polygons[k]], gray.shape, scale, shift)
-    footprint = cv2.morphologyEx(footprint, cv2.MORPH_CLOSE, np.ones((5, 5), np.uint8))  # seams between polygons
-    building = PlanRaster((walls | (1 - footprint)).astype(bool), resolution, (0.0, 0.0, 0.0))
+    building = true_building(drawings)
     plan = PlanMap.from_image(drawings / name, resolution, walls=walls_mode, cache=False)
     rows = []
     for seed in seeds:

@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 import pytest
 
-from planicp import PlanRaster
+from planicp import PlanRaster, _core
 from planicp.plans.default_plan import load_default_plan
-from planicp.sim.world import Furnishing, World
+from planicp.se2 import compose
+from planicp.sim.experiment import ExperimentConfig, LidarModel, run_experiment
+from planicp.sim.floor import Floor
+from planicp.sim.world import Furnishing, Person, World
 
 
 @pytest.fixture(scope="module")
@@ -73,3 +78,61 @@ def test_people_walk_in_free_space_and_keep_clear_of_the_robot(raster: PlanRaste
     assert np.median(moved) > 0.5  # people do walk
     d = world.discs()
     assert np.all(np.hypot(d[:, 0] - robot[0], d[:, 1] - robot[1]) > d[:, 2] + 0.55)
+
+
+def _corridor() -> Floor:
+    """A corridor 2 m wide between 15 cm walls, 12 m long, closed at both ends (5 cm cells)."""
+    res = 0.05
+    walls = np.zeros((int(2.6 / res), int(12.0 / res)), dtype=bool)
+    walls[:6], walls[-6:], walls[:, :6], walls[:, -6:] = True, True, True, True
+    return Floor(walls, np.zeros_like(walls), res, (0.0, 0.0))
+
+
+@pytest.mark.parametrize(
+    ("heading", "speed", "seed"),
+    [(0.0, 0.3, 0), (0.0, 0.3, 1), (math.pi, 0.3, 0), (math.pi, 0.3, 2), (math.pi / 2, 0.3, 0), (0.0, 0.6, 1)],
+)
+def test_a_person_in_the_robots_way_gives_way_and_never_covers_it(heading: float, speed: float, seed: int) -> None:
+    """The robot drives down the corridor's centre line at 0.5 m/s through where a person walks
+    (away from it, at it, across). Before people gave way, the person froze once the robot was
+    within their keep-clear distance and the robot drove through them (centres 0.00-0.06 m apart,
+    i.e. the person's disc over the LIDAR, in every one of these cases but the last)."""
+    floor = _corridor()
+    grid = _core.OccupancyGrid(np.ascontiguousarray(floor.occupied()), floor.resolution, floor.origin)
+    world = World(floor, [Person(4.0, 1.3, heading, speed, 0.25)])
+    rng = np.random.default_rng(seed)
+    path = np.column_stack([1.0 + 0.05 * np.arange(181), np.full(181, 1.3)])  # 10 Hz, 0.5 m/s
+    lidar = LidarModel()
+    gaps, returns = [], []
+    for k, (x, y) in enumerate(path):
+        world.advance(0.1, rng, keep_clear=(x, y), robot_radius=0.3, robot_ahead=path[k + 1 : k + 21])
+        person = world.people[0]
+        gaps.append(math.hypot(person.x - x, person.y - y) - person.radius - 0.3)
+        assert _free_disc(floor, person)
+        ranges = grid.cast(
+            compose((x, y, 0.0), lidar.mount), lidar.angle_min, lidar.angle_increment, lidar.beams,
+            lidar.range_min, lidar.range_max, 0.0, 0.0, 0, world.discs(),
+        )  # fmt: skip
+        returns.append(np.mean(np.isfinite(ranges) & (ranges < lidar.range_max)))
+    assert min(gaps) > 0.0  # never overlaps the robot's footprint
+    assert min(returns) > 0.5  # so the LIDAR always sees the corridor
+
+
+def test_people_never_overlap_the_robot_in_a_crowded_drive() -> None:
+    """The drift experiment on the office plan with 5 people per 100 m^2: the people come close
+    to the robot (within half a metre of its footprint, blocking beams) but never onto it."""
+    recording, world = run_experiment(
+        load_default_plan(), ExperimentConfig(duration_s=60.0, seed=0, furnishing=Furnishing(people=5.0))
+    )
+    assert len(world.people) >= 20 and recording.person_gap is not None
+    metrics = recording.metrics()
+    assert 0.0 < metrics["closest_person_m"] < 0.5
+    assert metrics["lost_scans"] == 0 and metrics["planicp_position_rms_m"] < 0.03
+
+
+def _free_disc(floor: Floor, person: Person) -> bool:
+    """The person's disc touches no wall or furniture cell."""
+    occupied, res, (ox, oy) = floor.occupied(), floor.resolution, floor.origin
+    c0, c1 = int((person.x - person.radius - ox) / res), int((person.x + person.radius - ox) / res)
+    r0, r1 = int((person.y - person.radius - oy) / res), int((person.y + person.radius - oy) / res)
+    return not occupied[r0 : r1 + 1, c0 : c1 + 1].any()

@@ -11,7 +11,8 @@ from the image's edge, cannot reach without overlapping a wall (it passes no nar
 gaps of `GAPS` metres up to `max_gap`. The building is the largest
 4-connected region of the plan's own free cells within the footprint (its doors stay open, since
 the disc only draws the footprint), once the free cells on the footprint's edge at the gaps are
-sealed: those `sealed` cells are the shut door or window the simulation puts in each gap (a
+sealed: those `sealed` cells (a straight line across each gap, between the wall ends: the disc's
+edge there is an arc bulging into the rooms) are the shut door or window the simulation puts in each gap (a
 LIDAR sees them; the plan does not show them, as it does not show a closed door). The smallest gap
 that encloses a region at least `OPEN_RATIO` times the largest one enclosed without closing, and
 at least `BOX_SHARE` of the free space within the walls' bounding box (not a room shut off at its
@@ -111,13 +112,15 @@ def building_outline(walls: NDArray[np.bool_], resolution: float, max_gap: float
         candidate = largest_region(free & footprint & ~sealed)
         area = int(candidate.sum())
         if area >= max(OPEN_RATIO * base, cells_min, BOX_SHARE * box_free) and area > base:
+            sealed, candidate = _straighten(walls, sealed & _grow(candidate), candidate)
+            area = int(candidate.sum())
             note = (
                 f"the building's outline is open (gaps up to {gap:g} m lead out of it); the simulation closed "
                 f"them with {int((sealed & _grow(candidate)).sum())} cells the plan does not show (shut doors): "
                 f"{area * resolution**2:.0f} m^2 inside, against {base * resolution**2:.0f} m^2 enclosed by the "
                 "plan alone. Draw the missing outer walls to simulate the building as drawn"
             )
-            return BuildingOutline(candidate, sealed & _grow(candidate), gap, note)
+            return BuildingOutline(candidate, sealed, gap, note)
     if base < cells_min or base < REFUSE_SHARE * box_free:
         if base >= cells_min:
             raise ValueError(
@@ -132,6 +135,34 @@ def building_outline(walls: NDArray[np.bool_], resolution: float, max_gap: float
             "walls closed (a door or window as a wall), or crop the plan to the building"
         )
     return BuildingOutline(enclosed, np.zeros_like(walls), 0.0, "")
+
+
+def _straighten(
+    walls: NDArray[np.bool_], seals: NDArray[np.bool_], inside: NDArray[np.bool_]
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Each seal (an arc, the edge of the disc that stopped in the gap, bulging into the building:
+    a curved wall no drawing has) made a straight line of cells (8-connected: no ray or 4-connected
+    region passes it) between the two farthest of its cells that touch a wall: the shut door or
+    window in the line of the wall's ends. Returns (seals, inside); the arcs as they were when the
+    lines would not enclose the building whole."""
+    import cv2
+
+    count, labels = cv2.connectedComponents(seals.astype(np.uint8), connectivity=8)
+    touching = _grow(walls) & seals
+    lines = np.zeros(walls.shape, dtype=np.uint8)
+    for label in range(1, count):
+        rows, cols = np.nonzero((labels == label) & touching)
+        if len(rows) < 2:
+            return seals, inside
+        pts = np.column_stack([cols, rows])
+        a = pts[int(np.argmax(((pts - pts[0]) ** 2).sum(axis=1)))]
+        b = pts[int(np.argmax(((pts - a) ** 2).sum(axis=1)))]
+        cv2.line(lines, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), 1, thickness=1, lineType=cv2.LINE_8)
+    straight = lines.astype(np.bool_) & ~walls
+    region = largest_enclosed_region(~walls & ~straight)
+    if int(region.sum()) < int(inside.sum()) or (inside & ~region & ~straight).any():
+        return seals, inside
+    return straight & _grow(region), region
 
 
 def largest_enclosed_region(free: NDArray[np.bool_]) -> NDArray[np.bool_]:
@@ -169,16 +200,25 @@ def _footprint(walls: NDArray[np.bool_], radius: int) -> tuple[NDArray[np.bool_]
     diameter), `footprint` the rest."""
     import cv2
 
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
     # The disc's centres: cells farther than `radius` from every wall, on the raster padded by
-    # more than `radius` (the disc comes from beyond the edge).
+    # more than `radius` (the disc comes from beyond the edge). Distances (exact Euclidean) rather
+    # than a dilation by a disc kernel: a 3 m gap at 5 mm per cell is a kernel of 600 x 600 cells,
+    # minutes on a drawing's raster, against a second.
     pad = radius + 1
-    blocked = cv2.dilate(np.pad(walls, pad, constant_values=False).astype(np.uint8), kernel)
-    centres = (blocked == 0).astype(np.uint8)
+    padded = np.pad(walls, pad, constant_values=False)
+    centres = (_distance_to(padded) > radius).astype(np.uint8)
     _, labels = cv2.connectedComponents(centres, connectivity=4)
-    reached = (labels == labels[0, 0]).astype(np.uint8)
-    outside = cv2.dilate(reached, kernel)[pad:-pad, pad:-pad].astype(np.bool_) & ~walls
+    reached = labels == labels[0, 0]
+    outside = (_distance_to(reached) <= radius)[pad:-pad, pad:-pad] & ~walls
     return ~outside, outside
+
+
+def _distance_to(mask: NDArray[np.bool_]) -> NDArray[np.float32]:
+    """Euclidean distance of every cell to the nearest True cell of `mask`, cells (0 on it)."""
+    import cv2
+
+    distances = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return np.asarray(distances, dtype=np.float32)
 
 
 def _grow(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:

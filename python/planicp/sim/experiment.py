@@ -35,7 +35,7 @@ from ..tracking.localizer import Localizer
 from .diff_drive import DiffDriveLimits
 from .drive import simulate_drive
 from .odometry import ErrorGenerator, Odometry, OdometryNoise
-from .world import Furnishing, World
+from .world import GIVE_WAY_HORIZON, Furnishing, World
 
 
 @dataclass(frozen=True)
@@ -130,6 +130,8 @@ class Recording:
         odometry_stream: (M, 3) T_odom_base of every odometry message, or None: what a robot
             publishes on its odometry topic, e.g. to replay the drive to a ROS node.
         lost: (K,) whether the Localizer was lost after each scan (`Estimate.lost`), or None.
+        person_gap: (K,) metres between the robot's footprint and the nearest walking person's
+            disc at each scan (negative: they overlap; inf: no people), or None.
     """
 
     times: NDArray[np.float64]
@@ -146,6 +148,7 @@ class Recording:
     odometry_stream_times: NDArray[np.float64] | None = None
     odometry_stream: NDArray[np.float64] | None = None
     lost: NDArray[np.bool_] | None = None
+    person_gap: NDArray[np.float64] | None = None
 
     def errors(self, which: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(position error m, heading error rad) over time of "odometry" or "estimate"."""
@@ -204,7 +207,8 @@ class Recording:
     def metrics(self) -> dict[str, float]:
         """RMS, maximum and final errors of odometry and planicp (metres, degrees), acceptance
         statistics and, when the recording has them, the scans after which the Localizer was lost
-        (`lost_scans`) and whether it was lost after the last one (`lost_at_end`, 0 or 1)."""
+        (`lost_scans`) and whether it was lost after the last one (`lost_at_end`, 0 or 1), and the
+        closest a walking person came to the robot's footprint (`closest_person_m`, metres)."""
         out: dict[str, float] = {}
         for label, which in (("odometry", "odometry"), ("planicp", "estimate")):
             pos, yaw = self.errors(which)
@@ -219,6 +223,8 @@ class Recording:
         steps = np.hypot(*np.diff(self.estimate[:, :2], axis=0).T) if len(self.times) > 1 else np.zeros(1)
         true_steps = np.hypot(*np.diff(self.truth[:, :2], axis=0).T) if len(self.times) > 1 else np.zeros(1)
         out["largest_estimate_jump_beyond_truth_m"] = float(np.max(steps - true_steps)) if len(steps) else 0.0
+        if self.person_gap is not None and len(self.person_gap):
+            out["closest_person_m"] = float(self.person_gap.min())
         if self.lost is not None:
             out["lost_scans"] = float(self.lost.sum())
             out["lost_at_end"] = float(bool(self.lost[-1])) if len(self.lost) else 0.0
@@ -305,9 +311,11 @@ def run_experiment(
     lidar = config.lidar
     every = max(1, int(round(config.odometry_rate_hz / lidar.rate_hz)))
     start: Pose = tuple(float(v) for v in trajectory.poses[0])  # type: ignore[assignment]
+    world.clear_start((start[0], start[1]), rng, config.limits.radius)
+    ahead = int(round(GIVE_WAY_HORIZON * config.odometry_rate_hz))
     localizer = Localizer(plan, start, config.icp, gate=config.gate)
     times, truth, odom_map, odom_odom, scans, measured = [], [], [], [], [], []
-    estimate, accepted, ratio, rmse, lost = [], [], [], [], []
+    estimate, accepted, ratio, rmse, lost, person_gap = [], [], [], [], [], []
     stream = np.zeros((len(trajectory.times), 3))
     for k, (t, pose) in enumerate(zip(trajectory.times, trajectory.poses)):
         odom_pose = odometry.update(pose)
@@ -315,7 +323,16 @@ def run_experiment(
         if k % every:
             continue
         true_pose: Pose = (float(pose[0]), float(pose[1]), float(pose[2]))
-        world.advance(1.0 / lidar.rate_hz, rng, keep_clear=(true_pose[0], true_pose[1]))
+        world.advance(
+            1.0 / lidar.rate_hz,
+            rng,
+            keep_clear=(true_pose[0], true_pose[1]),
+            robot_radius=config.limits.radius,
+            robot_ahead=trajectory.poses[k + 1 : k + 1 + ahead : every, :2],
+        )
+        discs = world.discs()
+        gap = np.hypot(discs[:, 0] - true_pose[0], discs[:, 1] - true_pose[1]) - discs[:, 2] - config.limits.radius
+        person_gap.append(float(gap.min()) if len(gap) else math.inf)
         sensor = compose(true_pose, lidar.mount)
         ranges = grid.cast(
             sensor,
@@ -327,7 +344,7 @@ def run_experiment(
             lidar.range_sigma,
             lidar.dropout,
             int(rng.integers(2**63)),
-            world.discs(),
+            discs,
         )
         scan = scan_to_points(
             ranges, lidar.angle_min, lidar.angle_increment, lidar.range_min, lidar.range_max, sensor_pose=lidar.mount
@@ -361,5 +378,6 @@ def run_experiment(
         np.array(trajectory.times, dtype=np.float64),
         stream,
         np.array(lost, dtype=bool),
+        np.array(person_gap, dtype=np.float64),
     )
     return recording, world

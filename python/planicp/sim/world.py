@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,10 +21,24 @@ from numpy.typing import NDArray
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
 from .building_outline import MAX_GAP, OpenOutlineWarning, building_outline, largest_enclosed_region
+from .diff_drive import DiffDriveLimits
 from .floor import Floor
 
 DRAWING_RESOLUTION = 0.01
 """Metres per cell at which a plan made of points (a drawing) is rasterised for the simulation."""
+
+PERSONAL_SPACE = 0.3
+"""Metres a walking person keeps between their disc and the robot's footprint, and the distance at
+which the robot's path ahead makes them give way."""
+
+GIVE_WAY_SPEED = 1.0
+"""Least walking speed of a person giving way to the robot, m/s (the robot drives at 0.5 m/s)."""
+
+GIVE_WAY_HEADINGS = 16
+"""Directions, evenly spaced, a person giving way to the robot considers."""
+
+GIVE_WAY_HORIZON = 2.0
+"""Seconds of the robot's path ahead that the people see coming (`World.advance`)."""
 
 MAX_DRAWING_CELLS = 8_000_000
 """Most cells of a drawing's simulated building (a larger one is rasterised coarser): furnishing
@@ -156,22 +171,97 @@ class World:
         """(K, 3) people as (x, y, radius), metres."""
         return np.array([(p.x, p.y, p.radius) for p in self.people], dtype=np.float64).reshape(-1, 3)
 
-    def advance(self, dt: float, rng: np.random.Generator, keep_clear: tuple[float, float] | None = None) -> None:
-        """Moves every person `dt` seconds ahead; a person who would walk into an obstacle (or within
-        0.6 m of `keep_clear`, the robot) turns to a random new heading instead."""
+    def advance(
+        self,
+        dt: float,
+        rng: np.random.Generator,
+        keep_clear: tuple[float, float] | None = None,
+        *,
+        robot_radius: float = DiffDriveLimits.radius,
+        robot_ahead: NDArray[np.float64] | None = None,
+    ) -> None:
+        """Moves every person `dt` seconds ahead, as a body that walls, furniture and the robot stop.
+
+        A person walks straight on and turns to a random new heading when the next step would
+        touch a wall or furniture (with 5 cm to spare) or come within `PERSONAL_SPACE` of the
+        robot's footprint: the disc of `robot_radius` metres about `keep_clear` (the robot's true
+        (x, y) in the map frame, metres; None: no robot). The robot does not steer round people, so
+        a person it is about to reach gives way: when `robot_ahead` ((M, 2) map-frame positions
+        the robot will pass through next, metres, e.g. its planned path over `GIVE_WAY_HORIZON`
+        seconds) comes within `PERSONAL_SPACE` of the person, the person steps, at
+        `GIVE_WAY_SPEED` at least, to the free place of `GIVE_WAY_HEADINGS` that keeps farthest
+        from that path. A person never steps onto the robot's footprint; one cornered (no free place
+        to step) stands still."""
         occupied = self.floor.occupied()
         res, (ox, oy) = self.floor.resolution, self.floor.origin
         rows, cols = occupied.shape
+        ahead = None
+        if keep_clear is not None:
+            here = np.array([keep_clear], dtype=np.float64)
+            ahead = here if robot_ahead is None or len(robot_ahead) == 0 else np.vstack([here, robot_ahead[:, :2]])
+
+        def free(x: float, y: float, p: Person) -> bool:
+            return _disc_free(occupied, x, y, p.radius + 0.05, res, ox, oy, rows, cols)
+
         for p in self.people:
+            if keep_clear is not None and ahead is not None:
+                touching = p.radius + robot_radius
+                path_gap = float(np.min(np.hypot(ahead[:, 0] - p.x, ahead[:, 1] - p.y))) - touching
+                if path_gap < PERSONAL_SPACE:
+                    self._give_way(p, dt, ahead, touching, keep_clear, free)
+                    continue
             for _ in range(8):
                 nx = p.x + math.cos(p.heading) * p.speed * dt
                 ny = p.y + math.sin(p.heading) * p.speed * dt
-                if _disc_free(occupied, nx, ny, p.radius + 0.05, res, ox, oy, rows, cols) and (
-                    keep_clear is None or math.hypot(nx - keep_clear[0], ny - keep_clear[1]) > p.radius + 0.6
+                if free(nx, ny, p) and (
+                    keep_clear is None
+                    or math.hypot(nx - keep_clear[0], ny - keep_clear[1]) > p.radius + robot_radius + PERSONAL_SPACE
                 ):
                     p.x, p.y = nx, ny
                     break
                 p.heading = float(rng.uniform(-math.pi, math.pi))
+
+    @staticmethod
+    def _give_way(
+        p: Person,
+        dt: float,
+        ahead: NDArray[np.float64],
+        touching: float,
+        robot: tuple[float, float],
+        free: Callable[[float, float, Person], bool],
+    ) -> None:
+        """Steps `p` to the free place (or stays) that keeps farthest from the robot's path `ahead`
+        and does not overlap the robot at `robot` (centres `touching` metres apart touch)."""
+        step = max(p.speed, GIVE_WAY_SPEED) * dt
+        best: tuple[float, float, float, float] | None = None
+        headings = [p.heading + 2.0 * math.pi * k / GIVE_WAY_HEADINGS for k in range(GIVE_WAY_HEADINGS)]
+        candidates = [(p.x, p.y, p.heading)] + [
+            (p.x + math.cos(h) * step * share, p.y + math.sin(h) * step * share, h)
+            for share in (1.0, 0.5, 0.25)  # shorter steps out of a niche
+            for h in headings
+        ]
+        for nx, ny, heading in candidates:
+            if math.hypot(nx - robot[0], ny - robot[1]) <= touching or not free(nx, ny, p):
+                continue
+            gap = float(np.min(np.hypot(ahead[:, 0] - nx, ahead[:, 1] - ny)))
+            if best is None or gap > best[0] + 1e-9:
+                best = (gap, nx, ny, heading)
+        if best is None:
+            return  # cornered: nowhere free to step (`Recording.person_gap` shows if the robot reaches them)
+        _, p.x, p.y, p.heading = best
+        p.heading = math.atan2(math.sin(p.heading), math.cos(p.heading))
+
+    def clear_start(
+        self, position: tuple[float, float], rng: np.random.Generator, robot_radius: float = DiffDriveLimits.radius
+    ) -> None:
+        """Places anew (as `from_raster` does) every person standing within `PERSONAL_SPACE` of the
+        robot's footprint at `position` (map frame, metres): the world is furnished before the
+        robot's start is drawn."""
+        for p in self.people:
+            for _ in range(100):
+                if math.hypot(p.x - position[0], p.y - position[1]) > p.radius + robot_radius + PERSONAL_SPACE:
+                    break
+                p.x, p.y, p.heading = self.floor.sample_pose(rng, clearance=0.5)
 
 
 def drawing_raster(plan: PlanMap, resolution: float = DRAWING_RESOLUTION) -> PlanRaster:
