@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+import pdf_files
+
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("pdfminer") is None, reason="needs the pdf extra")
 
 M_PER_PT = 0.0254 / 72 * 200  # 1:200
@@ -20,28 +22,7 @@ def pt(metres: float) -> float:
 
 def write_pdf(path: Path, content: str, size: tuple[int, int] = (900, 700)) -> Path:
     """A one-page PDF with `content` as its content stream and Helvetica as /F1."""
-    stream = content.encode("latin-1")
-    objects = [
-        b"<< /Type /Catalog /Pages 2 0 R >>",
-        b"<< /Type /Pages /Kids [3 0 R] /Count 1 >>",
-        (
-            f"<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {size[0]} {size[1]}] /Contents 4 0 R "
-            "/Resources << /Font << /F1 5 0 R >> >> >>"
-        ).encode(),
-        f"<< /Length {len(stream)} >>\nstream\n".encode() + stream + b"\nendstream",
-        b"<< /Type /Font /Subtype /Type1 /BaseFont /Helvetica /Encoding /WinAnsiEncoding >>",
-    ]
-    out = bytearray(b"%PDF-1.5\n")
-    offsets = []
-    for number, body in enumerate(objects, start=1):
-        offsets.append(len(out))
-        out += f"{number} 0 obj\n".encode() + body + b"\nendobj\n"
-    xref = len(out)
-    out += f"xref\n0 {len(objects) + 1}\n0000000000 65535 f \n".encode()
-    out += b"".join(f"{o:010d} 00000 n \n".encode() for o in offsets)
-    out += f"trailer\n<< /Size {len(objects) + 1} /Root 1 0 R >>\nstartxref\n{xref}\n%%EOF\n".encode()
-    path.write_bytes(bytes(out))
-    return path
+    return pdf_files.write_pdf(path, content, size=size)
 
 
 def room(colour: str, x: float, y: float, w: float, h: float) -> str:

@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
+from pdf_files import write_pdf
 from planicp import PlanMap
 from planicp.cli import main as cli_main
 from planicp.plans import plan_formats
@@ -94,40 +95,6 @@ RATIO = 100.0  # the drawings' print scale, 1:100
 M = 1.0 / (PT * RATIO)  # points per metre of building
 OFFSET = 50.0  # the room's lower-left corner on the page, points
 ROOM = (10.0, 8.0)  # metres
-
-
-def write_pdf(
-    path: Path, content: str, *, layers: tuple[str, ...] = (), size: tuple[int, int] = (400, 320), rotate: int = 0
-) -> Path:
-    """A one-page PDF with `content` as its content stream, Helvetica as /F1, and optional
-    content groups `layers` named /OC0, /OC1, ... in the page's properties."""
-    first_layer = 6
-    refs = " ".join(f"{first_layer + i} 0 R" for i in range(len(layers)))
-    props = " ".join(f"/OC{i} {first_layer + i} 0 R" for i in range(len(layers)))
-    oc = f" /OCProperties << /OCGs [{refs}] /D << /ON [{refs}] >> >>" if layers else ""
-    stream = content.encode("latin-1")
-    objects = [
-        f"<< /Type /Catalog /Pages 2 0 R{oc} >>".encode(),
-        b"<< /Type /Pages /Kids [3 0 R] /Count 1 >>",
-        (
-            f"<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {size[0]} {size[1]}] /Rotate {rotate} /Contents 4 0 R "
-            f"/Resources << /Font << /F1 5 0 R >> /Properties << {props} >> >> >>"
-        ).encode(),
-        f"<< /Length {len(stream)} >>\nstream\n".encode() + stream + b"\nendstream",
-        b"<< /Type /Font /Subtype /Type1 /BaseFont /Helvetica >>",
-        *[f"<< /Type /OCG /Name ({name}) >>".encode() for name in layers],
-    ]
-    out = bytearray(b"%PDF-1.5\n")
-    offsets = []
-    for number, body in enumerate(objects, start=1):
-        offsets.append(len(out))
-        out += f"{number} 0 obj\n".encode() + body + b"\nendobj\n"
-    xref = len(out)
-    out += f"xref\n0 {len(objects) + 1}\n0000000000 65535 f \n".encode()
-    out += b"".join(f"{o:010d} 00000 n \n".encode() for o in offsets)
-    out += f"trailer\n<< /Size {len(objects) + 1} /Root 1 0 R >>\nstartxref\n{xref}\n%%EOF\n".encode()
-    path.write_bytes(bytes(out))
-    return path
 
 
 def room_walls_m() -> NDArray[np.float64]:
