@@ -73,22 +73,6 @@ def test_a_pose_a_few_centimetres_off_is_brought_back_without_a_prior() -> None:
     assert refined.moved == pytest.approx(math.dist(start[:2], refined.pose[:2]))
 
 
-def test_a_climb_within_the_fields_sigma_keeps_the_corrected_pose() -> None:
-    """The field places walls no finer than its sigma: a climb that ends closer than that to the
-    corrected pose leaves it as it is (ICP's, finer); one that ends farther is taken."""
-    plan = room()
-    truth = (4.0, 1.0, 0.3)
-    scan = scan_at(plan, truth)
-    near = (4.008, 1.004, 0.3)  # 9 mm off: within sigma = 2 cm
-    kept = refine_pose(scan, near, plan, None, PosteriorRefinement())
-    assert kept.pose == near and kept.moved == 0.0
-    assert math.dist(kept.climbed[:2], near[:2]) < plan.likelihood_field().sigma
-    far = (4.05, 1.0, 0.3)  # 5 cm off
-    taken = refine_pose(scan, far, plan, None, PosteriorRefinement())
-    assert taken.pose == taken.climbed and taken.moved >= plan.likelihood_field().sigma
-    assert math.dist(taken.pose[:2], truth[:2]) < 0.01
-
-
 def test_along_a_corridor_the_prior_decides_and_across_it_the_scan() -> None:
     plan = corridor()
     truth = (20.0, 0.8, 0.0)

@@ -65,9 +65,7 @@ class Refinement:
 
     Attributes:
         start: the corrected pose it started from, T_map_base.
-        pose: the pose taken, T_map_base: where the climb ended when that is at least the field's
-            sigma from `start` (another basin than the fit's), else `start`.
-        climbed: where the climb ended, T_map_base.
+        pose: the refined pose, T_map_base.
         prior: "prediction" (the fit was fused with it, or is degenerate) or "none" (the
             odometry faulted and the scan constrains every direction).
         cost, start_cost: the cost (see the module) at `pose` and at `start`.
@@ -76,7 +74,6 @@ class Refinement:
 
     start: Pose
     pose: Pose
-    climbed: Pose
     prior: str
     cost: float
     start_cost: float
@@ -84,8 +81,7 @@ class Refinement:
 
     @property
     def moved(self) -> float:
-        """How far the refinement moved the position (0 when the climb stayed within the field's
-        sigma), metres."""
+        """How far the refinement moved the position, metres."""
         return math.hypot(self.pose[0] - self.start[0], self.pose[1] - self.start[1])
 
 
@@ -118,9 +114,5 @@ def refine_pose(
         rule.return_weight,
         rule.max_iterations,
     )
-    climbed: Pose = (float(pose[0]), float(pose[1]), wrap_angle(float(pose[2])))
-    # The field places a wall no finer than its sigma (a band of cells two wide is flat on top):
-    # a climb that ends within it stays in the corrected pose's basin, where ICP is the finer.
-    moved = math.hypot(climbed[0] - start[0], climbed[1] - start[1])
-    taken = climbed if moved >= field.sigma else start
-    return Refinement(start, taken, climbed, name, float(cost), float(start_cost), int(iterations))
+    refined: Pose = (float(pose[0]), float(pose[1]), wrap_angle(float(pose[2])))
+    return Refinement(start, refined, name, float(cost), float(start_cost), int(iterations))
