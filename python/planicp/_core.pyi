@@ -13,6 +13,7 @@ __all__ = [
     "Alignment",
     "GlobalMatcher",
     "IcpSettings",
+    "LikelihoodGrid",
     "LogOddsGrid",
     "OccupancyGrid",
     "PlanicpError",
