@@ -18,7 +18,15 @@ metres per point = sqrt(stated area in m² / filled area in points²).
   legend swatches excepted; their area is the sum of their subpaths' areas (curves flattened);
 * each entry gives metres per point; the scale is their median, and it is only given when at
   least `MIN_AGREEING` entries agree with it within `AGREEMENT` (a legend whose areas count
-  something else than the filled shapes, or a colour also used for another purpose, disagrees).
+  something else than the filled shapes, or a colour also used for another purpose, disagrees);
+* the drawing was printed at a round scale: when exactly one round print scale of the areas'
+  units (`print_scale.round_print_scale`: 1:100, 1/8" = 1'-0", 1" = 24' ...) lies between the
+  least and the largest of the agreeing entries, each widened by `ROUND_TOLERANCE`, the scale is
+  that one. The rooms as filled never cover exactly the area the legend states (their outlines
+  are drawn a stroke's width in or out of the faces the areas were measured to, the stated areas
+  are rounded), so the median is a few tenths of a percent off, which over a building 70 m across
+  moves the far walls by 10 cm or more; the round scale the entries allow is exact. Where none,
+  or more than one, is allowed, the median stands.
 
 What the stated areas measure (usable, net or gross area) is the drawing's convention: usable
 areas leave out walls and shafts, as the filled rooms do when they are drawn to the walls' inner
@@ -36,6 +44,8 @@ from typing import Any
 
 import numpy as np
 
+from .print_scale import round_print_scale
+
 __all__ = ["LegendEntry", "LegendScale", "legend_scale"]
 
 SQUARE_FOOT = 0.09290304
@@ -46,6 +56,13 @@ AGREEMENT = 0.02
 
 MIN_AGREEING = 2
 """How many legend entries must agree on the scale for it to be given."""
+
+ROUND_TOLERANCE = 0.005
+"""How far (relative) one entry's scale may be from the drawing's round print scale: the rooms as
+filled are drawn a stroke's width in or out of the faces their stated areas were measured to."""
+
+POINT = 0.0254 / 72
+"""Metres per PDF point (1/72 inch)."""
 
 _AREA = re.compile(
     r"(?<![\d.,])(\d{1,3}(?:,\d{3})+|\d+(?:[.,]\d+)?)\s*"
@@ -70,24 +87,35 @@ class LegendEntry:
 
 @dataclass(frozen=True)
 class LegendScale:
-    """The scale the legend gives: `metres_per_point` (the median of the agreeing entries), the
-    entries read, and how many agree within `AGREEMENT`."""
+    """The scale the legend gives: `metres_per_point` (the round print scale the agreeing entries
+    bracket, else their median), the entries read, how many agree within `AGREEMENT`, their
+    median, and the round print scale as written ("" when the median stands)."""
 
     metres_per_point: float
     entries: tuple[LegendEntry, ...]
     agreeing: int
+    median: float = math.nan
+    round_scale: str = ""
 
     def describe(self) -> str:
         """One line for the notes: the scale, and the entries that disagree with it."""
+        median = self.metres_per_point if math.isnan(self.median) else self.median
         others = [
-            f"{e.text!r} ({e.metres_per_point / self.metres_per_point - 1.0:+.1%})"
+            f"{e.text!r} ({e.metres_per_point / median - 1.0:+.1%})"
             for e in self.entries
-            if abs(e.metres_per_point / self.metres_per_point - 1.0) > AGREEMENT
+            if abs(e.metres_per_point / median - 1.0) > AGREEMENT
         ]
+        said = (
+            f"{self.agreeing} of {len(self.entries)} entries agree within {AGREEMENT:.0%} on "
+            f"{median:.5g} m per point (1:{median / POINT:.0f} at print size)"
+        )
+        if self.round_scale:
+            said += (
+                f"; the one round print scale they allow, {self.round_scale}, taken: "
+                f"{self.metres_per_point:.5g} m per point ({self.metres_per_point / median - 1.0:+.2%})"
+            )
         return (
-            f"the legend's areas against the rooms filled in their colours: {self.agreeing} of "
-            f"{len(self.entries)} entries agree within {AGREEMENT:.0%} on {self.metres_per_point:.5g} m per point "
-            f"(1:{self.metres_per_point / (0.0254 / 72):.0f} at print size)"
+            f"the legend's areas against the rooms filled in their colours: {said}"
             + (f"; disagreeing: {', '.join(others)}" if others else "")
         )
 
@@ -104,6 +132,11 @@ def _rgb(value: Any) -> tuple[float, float, float] | None:
             c, m, y, k = (float(v) for v in value)
             return ((1 - c) * (1 - k), (1 - m) * (1 - k), (1 - y) * (1 - k))
     return None
+
+
+def _is_metric(text: str) -> bool:
+    """Whether a legend line (one `_area_m2` reads) states its area in square metres."""
+    return _AREA.findall(text)[0][1].casefold() in ("m²", "m2", "sqm", "qm")
 
 
 def _area_m2(text: str) -> float | None:
@@ -202,4 +235,11 @@ def legend_scale(path: str | PathLike[str], *, page: int = 1) -> LegendScale | N
     agreeing = [e for e in entries if abs(e.metres_per_point / median - 1.0) <= AGREEMENT]
     if len(agreeing) < MIN_AGREEING:
         return None
-    return LegendScale(float(np.median([e.metres_per_point for e in agreeing])), tuple(entries), len(agreeing))
+    scales = [e.metres_per_point for e in agreeing]
+    median = float(np.median(scales))
+    metric = [_is_metric(e.text) for e in agreeing]
+    low, high = min(scales) * (1.0 - ROUND_TOLERANCE) / POINT, max(scales) * (1.0 + ROUND_TOLERANCE) / POINT
+    found = round_print_scale(low, high, metric=any(metric), imperial=not all(metric))
+    if found is None:
+        return LegendScale(median, tuple(entries), len(agreeing), median)
+    return LegendScale(found[0] * POINT, tuple(entries), len(agreeing), median, found[1])

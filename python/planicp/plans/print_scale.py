@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["find_print_scale", "metres_per_paper_unit", "parse_print_scale"]
+__all__ = ["find_print_scale", "metres_per_paper_unit", "parse_print_scale", "round_print_scale"]
 
 _LENGTH_UNITS = {
     '"': 0.0254,
@@ -109,6 +109,68 @@ def find_print_scale(text: str) -> tuple[float, str] | None:
     if ratio_match is not None and float(ratio_match.group(1)) > 1.0:
         return float(ratio_match.group(1)), ratio_match.group(0)
     return None
+
+
+_METRIC_MANTISSAS = (1.0, 1.25, 2.0, 2.5, 5.0)
+"""The metric print scales drawn at (1:1, 1:1.25, 1:2, 1:2.5, 1:5 times a power of ten: 1:50,
+1:100, 1:125, 1:200, 1:250, 1:500; ISO 5455's series and the scales offices add to it)."""
+
+_INCH_FRACTIONS = (1 / 64, 1 / 32, 1 / 16, 3 / 32, 1 / 8, 3 / 16, 1 / 4, 3 / 8, 1 / 2, 3 / 4, 1.0, 1.5, 3.0)
+"""The inches to a foot of the US architect's scales (1/8" = 1'-0" ...)."""
+
+
+def _round_ratios(metric: bool, imperial: bool) -> list[tuple[float, str]]:
+    """The round print scales of a family, as (ratio, how they are written)."""
+    ratios: list[tuple[float, str]] = []
+    if metric:
+        for power in range(0, 5):
+            for mantissa in _METRIC_MANTISSAS:
+                ratio = mantissa * 10.0**power
+                ratios.append((ratio, f"1:{ratio:g}"))
+    if imperial:
+        ratios += [(12.0 / inches, f'{_inch_text(inches)}" = 1\'-0"') for inches in _INCH_FRACTIONS]
+        ratios += [(12.0 * feet, f'1" = {feet}\'') for feet in range(1, 1001)]  # the engineer's scales
+    return ratios
+
+
+def _inch_text(inches: float) -> str:
+    for denominator in (1, 2, 4, 8, 16, 32, 64):
+        numerator = inches * denominator
+        if abs(numerator - round(numerator)) < 1e-9:
+            whole, rest = divmod(round(numerator), denominator)
+            if rest == 0:
+                return f"{whole}"
+            return f"{whole} {rest}/{denominator}" if whole else f"{rest}/{denominator}"
+    return f"{inches:g}"
+
+
+def round_print_scale(low: float, high: float, *, metric: bool, imperial: bool) -> tuple[float, str] | None:
+    """The round print scale a measured one stands for, when the measurement says which.
+
+    A drawing is drawn and printed at a round scale (1:100, 1/8" = 1'-0", 1" = 24'), so a scale
+    measured from what the drawing states (its areas, its room dimensions) to within [low, high]
+    is that round scale when exactly one lies in the interval, and nothing when none or several
+    do. The round scales are those of the drawing's units: metric (1, 1.25, 2, 2.5, 5 times a
+    power of ten) for areas in square metres, imperial (a fraction of an inch to a foot, or an
+    inch to a whole number of feet) for areas in square feet.
+
+    Args:
+        low, high: the interval of ratios (building length / paper length) the measurement allows.
+        metric, imperial: the families of round scales to consider.
+
+    Returns:
+        (ratio, how it is written), or None.
+    """
+    if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low <= high):
+        return None
+    inside: dict[float, str] = {}
+    for ratio, text in _round_ratios(metric, imperial):
+        if low <= ratio <= high:
+            inside.setdefault(round(ratio, 9), text)  # 1" = 8' is 1/8" = 1'-0": one scale
+    if len(inside) != 1:
+        return None
+    ((ratio, text),) = inside.items()
+    return ratio, text
 
 
 def metres_per_paper_unit(ratio: float, paper_unit_metres: float) -> float:
