@@ -8,13 +8,18 @@ below the true pose's (docs/design.md, "The pose of highest posterior"). A parti
 misled there: it weighs poses by the likelihood of the whole scan in a likelihood field, and by
 the motion model.
 
-`refine_pose` does that weighing for the one pose tracking keeps: from the corrected pose it climbs
-(Levenberg-Marquardt, `planicp._core.LikelihoodGrid.refine`)
+`refine_pose` does that weighing for the one pose tracking keeps: it climbs (Levenberg-Marquardt,
+`planicp._core.LikelihoodGrid.refine`)
 
     cost(x) = w sum_i (1 - g(T_x s_i))^2 + (x - x_p)^T P^-1 (x - x_p)
 
 `g` the plan's likelihood field (`PlanMap.likelihood_field`), `w` the weight of one return
-(`PosteriorRefinement.return_weight`), `(x_p, P)` the prior. Where the fit was fused with the
+(`PosteriorRefinement.return_weight`), `(x_p, P)` the prior, from two places: the corrected pose and
+the prior's pose. The cost has a mode in each basin the scan fits, and one climb finds only the
+mode of the basin it starts in: ICP, having slid to a wrong basin, would leave the climb from its
+pose there, however much less probable that basin is than the one the prediction lies in. Of the
+two climbs' ends the one of lower cost, the higher posterior, is taken (both when they end in the
+same basin: the same pose). Where the fit was fused with the
 odometry prediction, and where the fit is degenerate (the field says nothing along a corridor),
 the prediction is the prior; where the fusion judged the odometry to have faulted and the scan
 constrains every direction, the prediction is no evidence and the scan's likelihood alone
@@ -69,7 +74,9 @@ class Refinement:
         prior: "prediction" (the fit was fused with it, or is degenerate) or "none" (the
             odometry faulted and the scan constrains every direction).
         cost, start_cost: the cost (see the module) at `pose` and at `start`.
-        iterations: accepted Levenberg-Marquardt steps.
+        iterations: accepted Levenberg-Marquardt steps of the climb that ended at `pose`.
+        from_prior: whether `pose` is the end of the climb from the prior's pose (True) or of
+            the climb from `start` (False).
     """
 
     start: Pose
@@ -78,6 +85,7 @@ class Refinement:
     cost: float
     start_cost: float
     iterations: int
+    from_prior: bool = False
 
     @property
     def moved(self) -> float:
@@ -92,7 +100,7 @@ def refine_pose(
     prior: tuple[str, Pose, NDArray[np.float64]] | None,
     rule: PosteriorRefinement,
 ) -> Refinement:
-    """`start` refined to the pose of lowest cost in its basin (see the module).
+    """The pose of lowest cost of two climbs, from `start` and from the prior's pose (see the module).
 
     Args:
         points: (N, 2) scan points in the robot frame, metres.
@@ -106,13 +114,21 @@ def refine_pose(
         name, prior_pose, prior_covariance = "none", start, np.eye(3) * NO_PRIOR_VARIANCE
     else:
         name, prior_pose, prior_covariance = prior
+    covariance = np.asarray(prior_covariance, dtype=np.float64).tolist()
     pose, cost, start_cost, _, iterations = field.refine(
-        points,
-        start,
-        prior_pose,
-        np.asarray(prior_covariance, dtype=np.float64).tolist(),
-        rule.return_weight,
-        rule.max_iterations,
+        points, start, prior_pose, covariance, rule.return_weight, rule.max_iterations
     )
+    from_prior = False
+    if prior is not None and _apart(prior_pose, start):
+        other, other_cost, _, _, other_iterations = field.refine(
+            points, prior_pose, prior_pose, covariance, rule.return_weight, rule.max_iterations
+        )
+        if other_cost < cost:
+            pose, cost, iterations, from_prior = other, other_cost, other_iterations, True
     refined: Pose = (float(pose[0]), float(pose[1]), wrap_angle(float(pose[2])))
-    return Refinement(start, refined, name, float(cost), float(start_cost), int(iterations))
+    return Refinement(start, refined, name, float(cost), float(start_cost), int(iterations), from_prior)
+
+
+def _apart(a: Pose, b: Pose) -> bool:
+    """Whether two poses are far enough apart (1 mm, 0.1 mrad) for their climbs to differ."""
+    return math.hypot(a[0] - b[0], a[1] - b[1]) > 1e-3 or abs(wrap_angle(a[2] - b[2])) > 1e-4
