@@ -155,8 +155,10 @@ def round_print_scale(low: float, high: float, *, metric: bool, imperial: bool) 
     inch to a whole number of feet) for areas in square feet.
 
     Args:
-        low, high: the interval of ratios (building length / paper length) the measurement allows.
-        metric, imperial: the families of round scales to consider.
+        low: the least ratio (building length / paper length) the measurement allows.
+        high: the largest.
+        metric: consider the metric round scales.
+        imperial: consider the imperial ones.
 
     Returns:
         (ratio, how it is written), or None.
