@@ -40,7 +40,10 @@ RED, GREEN, BLUE = "1 0 0", "0 0.6 0", "0 0 1"
 
 
 def floor(
-    *, blue_area: float = 10.0, entries: tuple[str, ...] = ("red", "green", "blue"), drawn: tuple[float, ...] = (1, 1, 1)
+    *,
+    blue_area: float = 10.0,
+    entries: tuple[str, ...] = ("red", "green", "blue"),
+    drawn: tuple[float, float, float] = (1.0, 1.0, 1.0),
 ) -> str:
     """Offices (red: two rooms, 1,000 sq ft in all), a lab (green, 24 m²) and a store (blue, 10 m²
     in the legend, `blue_area` m² drawn), from x = 10 m on the page; the legend at the left. Each
@@ -99,7 +102,7 @@ def test_round_print_scales_of_each_family() -> None:
     assert round_print_scale(99.0, 101.0, metric=True, imperial=False) == (100.0, "1:100")
     assert round_print_scale(248.0, 252.0, metric=True, imperial=False) == (250.0, "1:250")
     assert round_print_scale(95.5, 96.5, metric=False, imperial=True) == (96.0, '1/8" = 1\'-0"')
-    assert round_print_scale(286.0, 290.0, metric=False, imperial=True) == (288.0, '1" = 24\'')
+    assert round_print_scale(286.0, 290.0, metric=False, imperial=True) == (288.0, "1\" = 24'")
     assert round_print_scale(286.0, 290.0, metric=True, imperial=False) is None  # no metric scale there
     assert round_print_scale(270.0, 310.0, metric=False, imperial=True) is None  # 23', 24', 25': which?
     assert round_print_scale(101.0, 101.0, metric=True, imperial=False) is None

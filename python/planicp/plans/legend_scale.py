@@ -114,9 +114,8 @@ class LegendScale:
                 f"; the one round print scale they allow, {self.round_scale}, taken: "
                 f"{self.metres_per_point:.5g} m per point ({self.metres_per_point / median - 1.0:+.2%})"
             )
-        return (
-            f"the legend's areas against the rooms filled in their colours: {said}"
-            + (f"; disagreeing: {', '.join(others)}" if others else "")
+        return f"the legend's areas against the rooms filled in their colours: {said}" + (
+            f"; disagreeing: {', '.join(others)}" if others else ""
         )
 
 

@@ -123,13 +123,13 @@ def _round_ratios(metric: bool, imperial: bool) -> list[tuple[float, str]]:
     """The round print scales of a family, as (ratio, how they are written)."""
     ratios: list[tuple[float, str]] = []
     if metric:
-        for power in range(0, 5):
+        for power in range(5):
             for mantissa in _METRIC_MANTISSAS:
                 ratio = mantissa * 10.0**power
                 ratios.append((ratio, f"1:{ratio:g}"))
     if imperial:
         ratios += [(12.0 / inches, f'{_inch_text(inches)}" = 1\'-0"') for inches in _INCH_FRACTIONS]
-        ratios += [(12.0 * feet, f'1" = {feet}\'') for feet in range(1, 1001)]  # the engineer's scales
+        ratios += [(12.0 * feet, f"1\" = {feet}'") for feet in range(1, 1001)]  # the engineer's scales
     return ratios
 
 
