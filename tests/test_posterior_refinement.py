@@ -32,6 +32,12 @@ def corridor() -> PlanMap:
     return PlanMap.from_segments(np.array([((0, 0), (40, 0)), ((0, 2), (40, 2))], dtype=float), spacing=0.02)
 
 
+def comb() -> PlanMap:
+    """A 20 m wall with a 0.3 m stub every 0.5 m: a scan fits every 0.5 m along it equally well."""
+    segments = [((0, 0), (20, 0))] + [((x, 0), (x, 0.3)) for x in np.arange(0.0, 20.01, 0.5)]
+    return PlanMap.from_segments(np.array(segments, dtype=float), spacing=0.02)
+
+
 def scan_at(plan: PlanMap, pose: tuple[float, float, float], max_range: float = 8.0) -> np.ndarray:
     """The plan's points within `max_range` of `pose`, in the robot frame (a scan of every wall,
     seen through or not: enough for a likelihood)."""
@@ -84,6 +90,32 @@ def test_along_a_corridor_the_prior_decides_and_across_it_the_scan() -> None:
     assert refined.prior == "prediction"
     assert refined.pose[0] == pytest.approx(prior_pose[0], abs=0.01)  # along: the prior's
     assert refined.pose[1] == pytest.approx(truth[1], abs=0.005)  # across: the walls'
+
+
+def test_of_two_basins_the_one_of_higher_posterior_is_taken_wherever_the_fit_ended() -> None:
+    plan = comb()
+    truth = (10.0, 1.0, 0.0)
+    scan = scan_at(plan, truth, max_range=3.0)
+    covariance = np.diag([0.2**2, 0.2**2, math.radians(2.0) ** 2])
+    # ICP slid one stub along (0.5 m): from there alone the climb stays in that basin, whose scan
+    # likelihood is the true one's; the prediction, 3 cm off, makes the true basin's posterior the
+    # higher, and its climb is taken.
+    slid = (10.5, 1.0, 0.0)
+    prediction = (10.03, 1.0, 0.0)
+    field = plan.likelihood_field()
+    stayed = field.refine(scan, slid, prediction, covariance.tolist(), 0.3)
+    assert math.dist(stayed[0][:2], slid[:2]) < 0.02  # the one climb from the fit
+    refined = refine_pose(scan, slid, plan, ("prediction", prediction, covariance), PosteriorRefinement())
+    assert refined.from_prior
+    assert math.dist(refined.pose[:2], truth[:2]) < 0.015, refined  # the prior pulls it 1 cm its way
+    assert refined.cost < stayed[1] - 4.0  # (0.47 / 0.2)^2 = 5.5 of prior between them
+    # The prediction where the scan fits nothing (1 m above the wall, turned, a wide covariance): its
+    # climb gains nothing, and the fit's basin, of far higher posterior, is kept.
+    wide = np.diag([1.0, 1.0, math.radians(10.0) ** 2])
+    astray = (10.0, 2.0, 0.3)
+    kept = refine_pose(scan, (10.01, 1.0, 0.0), plan, ("prediction", astray, wide), PosteriorRefinement())
+    assert not kept.from_prior
+    assert math.dist(kept.pose[:2], truth[:2]) < 0.01, kept
 
 
 def test_the_localizer_reports_the_refinement_and_can_be_told_not_to_refine() -> None:
