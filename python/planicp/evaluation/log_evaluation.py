@@ -73,6 +73,7 @@ def plan_from_scans(
 ) -> PlanMap:
     """A plan rendered from scans at their reference poses: a pixel of `resolution` metres is wall
     when at least `min_hits` end points fall in it; the image covers the end points plus `margin`.
+    Its points are the wall pixels' centres, and it is `metric` (as a map_server map is).
 
     Raises:
         ValueError: a scan without a reference pose, or no pixel reaches `min_hits`.
@@ -112,7 +113,12 @@ def plan_from_scans(
     # Rows grow with +y here; images put the top row first. The wall pixels are where the surfaces
     # were seen, not solid walls: their centres are the surface points.
     raster = PlanRaster(walls[::-1], resolution, (float(lo[0]), float(lo[1]), 0.0))
-    return PlanMap.from_raster(raster, edge_detector="centres")
+    plan = PlanMap.from_raster(raster, edge_detector="centres")
+    # Drawn in the scans' own metres at their reference poses, as a SLAM map is: metric by
+    # construction, so its scale is not watched (its walls, bands of end points, would look like
+    # one in small rooms: docs/plans.md, "The flag during tracking").
+    plan.metric = True
+    return plan
 
 
 def synthesise_odometry(
