@@ -285,3 +285,24 @@ def test_a_scan_the_pending_place_does_not_explain_better_forgets_it(
     decision = stages.confirm_pending(scans[2], prediction, pending, fit, loc._rules())
     assert decision.place is not None and decision.confirmed is None and decision.kept is None
     assert decision.why == "this scan does not confirm the pending place: forgotten"
+
+
+def test_a_searched_place_must_be_more_probable_than_the_fit_it_would_replace(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """The search's place replaces an acceptable fit from an uncertain prediction only with a
+    higher posterior: the scan's likelihood in the plan's field with the prediction as the prior
+    (an inlier ratio a few points higher is not enough: along a corridor a place a metre off can
+    count more returns near some wall than the true one)."""
+    from planicp.tracking.stages.search import _more_probable
+
+    the_rules = rules(plan)
+    truth, points = path[3], scans[3]
+    uncertain = np.diag([0.25**2, 0.25**2, (5 * DEG) ** 2])
+    predicted = se2.compose(truth, (0.1, -0.08, 2 * DEG))
+    along = se2.compose(truth, (0.9, 0.0, 0.0))
+    assert not _more_probable(points, along, truth, predicted, uncertain, the_rules)
+    assert _more_probable(points, truth, along, predicted, uncertain, the_rules)
+    # A prediction 0.9 m along and certain of it outweighs the scan's preference for the truth.
+    certain = np.diag([0.05**2, 0.05**2, (1 * DEG) ** 2])
+    assert _more_probable(points, along, truth, along, certain, the_rules)

@@ -97,9 +97,9 @@ def _search_near(
 ) -> IcpResult | None:
     """The fit at the unambiguous best place around `predicted`, when it explains at least the
     recovery's `min_inlier_ratio` of the scan, (if the fit from the prediction was acceptable,
-    `accepted`) more of it than that fit by the recovery's `margin`, and (given the
-    prediction's covariance, `consistent_with`) lies within the chi-square bound of the
-    fusion (`CHI2_3_999`, 99.9 %) of the prediction; else None.
+    `accepted`) more of it than that fit by the recovery's `margin` and with a higher posterior
+    than it (`_more_probable`), and (given the prediction's covariance, `consistent_with`) lies
+    within the chi-square bound of the fusion (`CHI2_3_999`, 99.9 %) of the prediction; else None.
 
     With `consistent_with`, only the places that can pass that bound are searched: positions
     within `sqrt(CHI2_3_999)` standard deviations of the prediction along its widest axis and
@@ -129,11 +129,34 @@ def _search_near(
         return None
     if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
         return None
+    if accepted is not None and consistent_with is not None:
+        if not _more_probable(points, refined.pose, accepted.pose, predicted, consistent_with, rules):
+            return None
     if consistent_with is not None and not rules.fusion.innovation(refined, predicted, consistent_with) <= CHI2_3_999:
         # A place the prediction's own uncertainty rules out: with a short-range scanner a
         # wrong place can explain more of a scan than the right one.
         return None
     return refined
+
+
+def _more_probable(
+    points: NDArray[np.float64], place: Pose, fit: Pose, predicted: Pose, covariance: NDArray[np.float64], rules: Rules
+) -> bool:
+    """Whether the search's `place` has a higher posterior than the fit from the prediction:
+    a lower cost in the plan's likelihood field with the prediction as the prior (the cost the
+    refinement climbs, `planicp.tracking.posterior_refinement`).
+
+    The inlier ratio alone counts the returns within ICP's last correspondence distance of some
+    wall, and along a corridor a place a metre off can count more of them than the true one: on
+    the orebro log tracked from its even-numbered scans, after an odometry step of 4.9 m, a place
+    0.93 m along the corridor explained 74 % of the scan against 67 % for the fit from the
+    prediction, 2 cm from the reference, while the scan's cost in the field was higher there
+    (35.2 against 32.3) and the prediction, 0.25 m uncertain, all but ruled it out (posterior
+    cost 52.4 against 32.8)."""
+    field = rules.plan.likelihood_field()
+    prior = np.asarray(covariance, dtype=np.float64).tolist()
+    weight = rules.refinement.return_weight
+    return bool(field.cost(points, place, predicted, prior, weight) < field.cost(points, fit, predicted, prior, weight))
 
 
 def _distance(a: Pose, b: Pose) -> float:
