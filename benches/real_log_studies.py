@@ -8,6 +8,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py alignments   # one alignment: ray-cast view against the index's masks
     python benches/real_log_studies.py views        # tracking's view cast, to the scan's range or per direction
     python benches/real_log_studies.py refinement   # the Localizer with and without the posterior refinement
+    python benches/real_log_studies.py scan-sets    # other scan sets of the same logs: swapped, reversed
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -32,6 +33,13 @@ reference pose of every 10th tracked scan, once out to the scan's farthest retur
 stage distance in every direction and once only as far as a return could pair in each direction
 (`pair_distance`), and gives the median time and the visible points of each; then it times making
 a `Localizer` on a fresh copy of the plan (its nearest-wall index and occlusion grid).
+
+`scan-sets` tracks each log, with the defaults and the harness's odometry seed, on scan sets the
+harness does not use, so that what is tuned on its eight runs is checked on others: "swapped", the
+plan drawn from the odd-numbered scans and the even-numbered ones tracked; "reversed", the
+harness's plan and its tracked scans in reverse order (the robot driving the log backwards, its
+odometry drawn anew for that drive). It gives ATE, the share of scans more than 0.3 m off, the
+first of them, and the 99th percentile of the time per update.
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -71,19 +79,27 @@ SEARCH_SETTINGS = {
 }
 
 
-def load(harness: Any, name: str, out: str, seed: int = 7) -> tuple[Any, list[np.ndarray], np.ndarray, np.ndarray]:
+def load(
+    harness: Any, name: str, out: str, seed: int = 7, scan_set: str = "harness"
+) -> tuple[Any, list[np.ndarray], np.ndarray, np.ndarray]:
     """(plan image, tracked scans, their reference poses, their odometry poses), as the harness
-    makes them (its odometry drawn with `seed`; the harness's own is 7)."""
+    makes them (its odometry drawn with `seed`; the harness's own is 7), or on another `scan_set`
+    (see the module: "swapped", "reversed")."""
     path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
     log = harness.read_carmen_log(path)
     mapped, tracked = np.arange(0, len(log.scans), 2), np.arange(1, len(log.scans), 2)
+    if scan_set == "swapped":
+        mapped, tracked = tracked, mapped
     ends = np.vstack([harness.transform(log.scans[i], log.poses[i]) for i in mapped])
     plan = harness.render_endpoint_plan(ends, 0.05, 2)
     harness.save_ros_map(plan, out, f"{name}-plan")
     times, _ = harness.scan_times(log.times, 0.2)
+    stamps = times[tracked]
+    if scan_set == "reversed":
+        tracked, stamps = tracked[::-1], stamps[-1] - stamps[::-1]
     scans = [log.scans[i] for i in tracked]
     ref = log.poses[tracked]
-    _, odom = harness.synthesize_odometry(ref, times[tracked], np.random.default_rng(seed))
+    _, odom = harness.synthesize_odometry(ref, stamps, np.random.default_rng(seed))
     return plan, scans, ref, odom
 
 
@@ -167,6 +183,20 @@ def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> No
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
+
+
+def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | scan set | ATE | lost (> 0.3 m) | first off | p99 ms/update |")
+    print("|---|---|---|---|---|---|")
+    for scan_set in ("swapped", "reversed"):
+        for name in logs:
+            m, spent = track(harness, *load(harness, name, out, scan_set=scan_set))
+            first = "-" if m["first_lost_scan"] is None else str(m["first_lost_scan"])
+            print(
+                f"| {name} | {scan_set} | {100 * m['ate_rmse_m']:.1f} cm | {100 * m['lost_frac']:.1f} % | {first} | "
+                f"{1e3 * np.percentile(spent, 99):.1f} |",
+                flush=True,
+            )
 
 
 def refinement_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
@@ -293,7 +323,9 @@ def views_study(harness: Any, logs: list[str], out: str) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("study", choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement"))
+    parser.add_argument(
+        "study", choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement", "scan-sets")
+    )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
@@ -309,6 +341,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds)
+        elif args.study == "scan-sets":
+            scan_sets_study(harness, args.logs, out)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "nees":
