@@ -317,3 +317,33 @@ def test_a_search_in_steps_finds_what_one_search_finds_within_its_budget_per_cal
         planicp.RecoveryConfig(search_nodes=0)
     with pytest.raises(TypeError, match="plan must be a planicp.PlanMap"):
         SearchInSteps(scan, "plan.yaml")  # type: ignore[arg-type]
+
+
+def test_a_search_in_steps_out_of_time_stops_at_its_next_check_and_goes_on_from_there() -> None:
+    """With `seconds`, a call also stops where it is once that time has passed, at its next check
+    (every 1024 nodes): given none, each call scores one check's worth (three more at most), and
+    the calls together find what one search finds."""
+    plan = load_default_plan()
+    recording, _ = run_experiment(plan, ExperimentConfig(duration_s=3.0, seed=4))
+    scan = recording.scans[20]
+    whole = relocalize(scan, plan)
+    steps = SearchInSteps(scan, plan)
+    found, before = None, 0
+    while found is None:
+        found = steps.advance(10**9, seconds=0.0)
+        assert 1 <= steps.nodes - before <= 1024 + 3
+        before = steps.nodes
+    assert found.nodes == whole.nodes
+    assert [c.pose for c in found.candidates] == [c.pose for c in whole.candidates]
+    with pytest.raises(ValueError, match="seconds must be a finite number of seconds >= 0 or None"):
+        SearchInSteps(scan, plan).advance(100, seconds=-1.0)
+    with pytest.raises(ValueError, match="search_time"):
+        planicp.RecoveryConfig(search_time=0.0)
+    # An update's budget out of time scores nothing more: its searches wait for the next update.
+    from planicp.tracking.recovery import SearchBudget
+
+    spent = SearchBudget(20_000, 0, until=0.0)
+    assert spent.seconds(whole_plan=True) == 0.0
+    region = SearchRegion(center=tuple(map(float, recording.truth[20])), radius=1.0, yaw_tolerance=0.5)
+    assert spent.search(scan, plan, region, planicp.RelocalizationConfig(), 5) is None
+    assert spent.left == 20_000

@@ -3,7 +3,7 @@
 
 use crate::alignment::{Alignment, IcpSettings};
 use crate::conversions::points_from;
-use crate::errors::guarded;
+use crate::errors::{guarded, PlanicpError};
 use crate::interrupt::interruptible;
 use crate::point_map::PyPointMap;
 use icp_core::search::global_search::{
@@ -14,6 +14,7 @@ use icp_core::{PointMap, Pose2};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// (x, y, yaw) of a pose.
 type PoseTuple = (f64, f64, f64);
@@ -137,11 +138,24 @@ pub struct SearchRun {
 
 #[pymethods]
 impl SearchRun {
-    /// Scores `budget` (>= 1) more nodes (up to three more: an expansion scores four children);
-    /// returns whether the search has ended.
-    fn advance(&mut self, py: Python<'_>, budget: u64) -> PyResult<bool> {
+    /// Scores `budget` (>= 1) more nodes (up to three more: an expansion scores four children),
+    /// and, with `seconds`, stops where it is at the first poll (every 1024 nodes) after that
+    /// long; returns whether the search has ended.
+    #[pyo3(signature = (budget, seconds=None))]
+    fn advance(&mut self, py: Python<'_>, budget: u64, seconds: Option<f64>) -> PyResult<bool> {
+        let until = match seconds {
+            None => None,
+            Some(s) if s.is_finite() && s >= 0.0 => {
+                Some(Instant::now() + Duration::from_secs_f64(s.min(1e6)))
+            }
+            Some(s) => {
+                return Err(PlanicpError::new_err(format!(
+                    "seconds must be a finite number of seconds >= 0 or None, got {s}"
+                )))
+            }
+        };
         let (run, matcher) = (&mut self.run, &self.matcher);
-        interruptible(py, |cancel| run.advance(matcher, budget, cancel))
+        interruptible(py, |cancel| run.advance_until(matcher, budget, until, cancel))
     }
 
     /// Whether the search has ended.

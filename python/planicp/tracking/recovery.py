@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections import deque
 from dataclasses import dataclass, field
 from statistics import NormalDist
@@ -84,15 +85,25 @@ class RecoveryConfig(Settings):
             before this check. Needs the occlusion
             rule's ray casting (the `Localizer`'s default).
         search_nodes: most branch-and-bound nodes all the searches of one update score together
-            (`SearchBudget`; >= 1), so that an update never stalls: 20,000 take 2-3 ms on the
-            real logs' plans (docs/benchmarks.md). A search that needs more goes on over the next
-            updates (the recovery's), or finds nothing (the search around a prediction, whose
-            fit's own place then waits for the next scan). A whole-plan search of a 100 x 120 m
-            building scores 0.3-0.7 million: places found with an older scan are moved by the
-            odometry since and aligned again with the current one (`_found_again`), and a place
-            found near the last pose that explains the scans as well as sound tracking did is
-            adopted before it ends, on trial (`verify`). None: each search runs to its end within
-            the update that starts it (seconds on a large plan).
+            (`SearchBudget`; >= 1), so that an update never stalls: 20,000 take 2-3 ms early in
+            a search on the real logs' plans, 14-21 ms late in one on freiburg-campus's 280 x
+            270 m (docs/design.md; a node's cost grows with the plan, from memory). A search
+            that needs more goes on over the next updates (the recovery's), or finds nothing
+            (the search around a prediction, whose fit's own place then waits for the next
+            scan). A whole-plan search of a 100 x 120 m building scores 0.3-0.7 million: places
+            found with an older scan are moved by the odometry since and aligned again with the
+            current one (`_found_again`), and a place found near the last pose that explains the
+            scans as well as sound tracking did is adopted before it ends, on trial (`verify`).
+            None: each search runs to its end within the update that starts it (seconds on a
+            large plan).
+        search_time: most seconds all the searches of one update spend scoring nodes together
+            (`SearchBudget`): they stop where they are at the first check (every 1024 nodes)
+            after it, and go on in the next update: an update kept to a period whatever a node
+            costs on the plan, at the price of a track that depends on the machine's speed and
+            load. None (the default): `search_nodes` alone bounds them, and a run is the same on
+            any machine. (0.008 s kept freiburg-campus's updates within 13 ms, and, with two
+            runs sharing the machine, lost fhw for good on three of eight odometry draws and
+            campus on one, their recoveries' searches spread over more updates.)
     """
 
     search: Annotated[RelocalizationConfig, instance_of(RelocalizationConfig)] = field(
@@ -105,6 +116,7 @@ class RecoveryConfig(Settings):
     local_radius: Annotated[float, Real(ge=0.0, unit="metres")] = 3.0
     max_beyond: Annotated[float, Real(gt=0.0, le=1.0)] = 0.15
     search_nodes: Annotated[int, Whole(ge=1)] | None = 20_000
+    search_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = None
 
 
 @dataclass
@@ -117,11 +129,23 @@ class SearchBudget:
     reserved: int = 0
     """Nodes kept for the recovery's search of the whole plan, which no other search may take
     (so that searches around a wrong prediction cannot starve it)."""
+    until: float | None = None
+    """`time.perf_counter()` at which the update's searches stop where they are
+    (`RecoveryConfig.search_time`; None: no time limit). The other searches may use half of
+    what is left of it while nodes are reserved for the whole plan's."""
 
     @property
     def free(self) -> int | None:
         """What the other searches may still score (None: no limit)."""
         return None if self.left is None else max(self.left - self.reserved, 0)
+
+    def seconds(self, *, whole_plan: bool) -> float | None:
+        """Seconds the whole plan's search (`whole_plan`), or another, may still spend (None: no
+        limit; 0.0: none)."""
+        if self.until is None:
+            return None
+        left = max(self.until - time.perf_counter(), 0.0)
+        return left if whole_plan or self.reserved == 0 else left / 2.0
 
     def search(
         self,
@@ -137,10 +161,11 @@ class SearchBudget:
         re-searches of the whole plan's places, `whole_plan`): None when the search would score
         more (a search cut short proves nothing). Spends what it scored."""
         nodes = self.left if whole_plan else self.free
-        if nodes is not None and nodes <= 0:
+        seconds = self.seconds(whole_plan=whole_plan)
+        if (nodes is not None and nodes <= 0) or seconds == 0.0:
             return None
         steps = SearchInSteps(scan, plan, region=region, config=config, max_candidates=max_candidates)
-        found = steps.advance(_WHOLE_SEARCH if nodes is None else nodes)
+        found = steps.advance(_WHOLE_SEARCH if nodes is None else nodes, seconds)
         self.spend(steps.nodes)
         return found
 
@@ -286,8 +311,10 @@ class Recovery:
 
     def new_update(self) -> SearchBudget:
         """A fresh `search_nodes` budget for the searches of the update that begins (returned)."""
-        nodes = self.config.search_nodes
-        self.budget = SearchBudget(nodes, nodes // 2 if nodes is not None and self._whole is not None else 0)
+        nodes, seconds = self.config.search_nodes, self.config.search_time
+        reserved = nodes // 2 if nodes is not None and self._whole is not None else 0
+        until = None if seconds is None else time.perf_counter() + seconds
+        self.budget = SearchBudget(nodes, reserved, until)
         return self.budget
 
     def coast(self, motion: Pose) -> None:
@@ -331,9 +358,9 @@ class Recovery:
                     run.move(motion, self.motion_noise)
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
             self._near = self._start(scan, SearchRegion(last_pose, self.config.local_radius, math.pi))
-        if self._near is not None and self._advance(self._near, scan, self.budget.free):
+        if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
             self._near = None
-        if self._whole is not None and self._advance(self._whole, scan, self.budget.left):
+        if self._whole is not None and self._advance(self._whole, scan, self.budget.left, whole_plan=True):
             self._whole = None
             self._cycle, self._near = False, None
             self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
@@ -348,14 +375,16 @@ class Recovery:
             )
         )
 
-    def _advance(self, run: _Run, scan: NDArray[np.float64], nodes: int | None) -> bool:
-        """Scores up to `nodes` (None: no limit) of `run`, drawn from the update's budget; when the
-        search ends, its places, found again with the current `scan` (`_found_again`), join the
-        hypotheses. Returns whether it ended."""
-        if nodes is not None and nodes <= 0:
+    def _advance(self, run: _Run, scan: NDArray[np.float64], nodes: int | None, *, whole_plan: bool) -> bool:
+        """Scores up to `nodes` (None: no limit) of `run`, within the update's time for it
+        (`SearchBudget.seconds`), drawn from the update's budget; when the search ends, its
+        places, found again with the current `scan` (`_found_again`), join the hypotheses.
+        Returns whether it ended."""
+        seconds = self.budget.seconds(whole_plan=whole_plan)
+        if (nodes is not None and nodes <= 0) or seconds == 0.0:
             return False
         before = run.steps.nodes
-        search = run.steps.advance(_WHOLE_SEARCH if nodes is None else nodes)
+        search = run.steps.advance(_WHOLE_SEARCH if nodes is None else nodes, seconds)
         self.budget.spend(run.steps.nodes - before)
         if search is None:
             return False

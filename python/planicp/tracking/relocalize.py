@@ -290,13 +290,19 @@ class SearchInSteps:
         """Search nodes scored so far."""
         return self._run.nodes
 
-    def advance(self, budget: int) -> Relocalization | None:
-        """Scores up to `budget` (>= 1) more nodes; the result once the search has ended, else None.
-        Ctrl-C stops it between nodes with KeyboardInterrupt; advanced again, the search goes on
-        from there."""
+    def advance(self, budget: int, seconds: float | None = None) -> Relocalization | None:
+        """Scores up to `budget` (>= 1) more nodes, and with `seconds` stops as well where it is
+        once that long has passed (checked every 1024 nodes, so it may run over by the time of
+        that many: a tenth of a millisecond to a millisecond); the result once the search has
+        ended, else None. Ctrl-C stops it between nodes with KeyboardInterrupt; advanced again,
+        the search goes on from there."""
         nodes = whole_number(budget, "budget", 1, 2**62)
+        if seconds is not None and (
+            isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not (0 <= seconds < math.inf)
+        ):
+            raise ValueError(f"seconds must be a finite number of seconds >= 0 or None, got {seconds!r}")
         start = time.perf_counter()
-        if not self._run.advance(nodes):
+        if not self._run.advance(nodes, None if seconds is None else float(seconds)):
             self._seconds += time.perf_counter() - start
             return None
         config = self._config

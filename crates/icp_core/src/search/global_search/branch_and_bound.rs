@@ -9,6 +9,7 @@ use crate::search::global_search::node_scoring::{BestList, Node, RotatedScan};
 use crate::search::global_search::{Candidate, GlobalMatcher, SearchOutcome, NODES_PER_POLL};
 use crate::search::likelihood_field::LikelihoodPyramid;
 use std::collections::BinaryHeap;
+use std::time::Instant;
 
 /// A branch-and-bound search in progress (see [`crate::search::global_search`]), made by
 /// [`GlobalMatcher::start`]: each [`SearchRun::advance`] scores up to a budget of nodes and stops
@@ -51,6 +52,21 @@ impl SearchRun {
     /// run stays where it stopped, between two nodes: advanced again, it goes on as if it had not
     /// been interrupted.
     pub fn advance(&mut self, matcher: &GlobalMatcher, budget: u64, cancel: Cancel<'_>) -> Result<bool> {
+        self.advance_until(matcher, budget, None, cancel)
+    }
+
+    /// [`SearchRun::advance`], and stopped as well (`Ok(false)`, where it is) at the first poll
+    /// (every [`NODES_PER_POLL`] nodes) at or after `until`, when given: a time budget for a loop
+    /// that must keep to a period whatever a node costs on its plan (a node's cost grows with the
+    /// likelihood pyramid's size, from memory, not with the node count).
+    pub fn advance_until(
+        &mut self,
+        matcher: &GlobalMatcher,
+        budget: u64,
+        until: Option<Instant>,
+        cancel: Cancel<'_>,
+    ) -> Result<bool> {
+        let out_of_time = || until.is_some_and(|t| Instant::now() >= t);
         let pyramid = &matcher.pyramid;
         let mut next_poll = self.nodes.saturating_add(NODES_PER_POLL);
         let stop_at = self.nodes.saturating_add(budget.max(1));
@@ -63,6 +79,9 @@ impl SearchRun {
             }
             if self.nodes >= next_poll {
                 cancel::check(cancel)?;
+                if out_of_time() {
+                    return Ok(false);
+                }
                 next_poll = self.nodes.saturating_add(NODES_PER_POLL);
             }
             if self.nodes >= self.max_nodes {
@@ -91,6 +110,9 @@ impl SearchRun {
             }
             if self.nodes >= next_poll {
                 cancel::check(cancel)?;
+                if out_of_time() {
+                    return Ok(false);
+                }
                 next_poll = self.nodes.saturating_add(NODES_PER_POLL);
             }
             self.expand_next(pyramid);

@@ -325,3 +325,34 @@ fn rejects_bad_input() {
         Err(IcpError::InvalidParameter { name: "angular_step", .. })
     ));
 }
+
+#[test]
+fn a_run_out_of_time_stops_at_a_poll_and_resumes_to_the_same_result() {
+    let map = PointMap::new(asymmetric_floor(), None).unwrap();
+    let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
+    let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
+    assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to stop", whole.nodes);
+    // A time already past: each call scores up to its first poll (NODES_PER_POLL nodes, up to
+    // three more) and stops there, unfinished, however large its node budget.
+    let mut run = matcher.start(&scan, None).unwrap();
+    let mut calls = 0u64;
+    let mut before = 0;
+    while !run.advance_until(&matcher, u64::MAX, Some(std::time::Instant::now()), cancel::NEVER).unwrap() {
+        calls += 1;
+        assert!(
+            (NODES_PER_POLL..NODES_PER_POLL + 4).contains(&(run.nodes() - before)),
+            "{}",
+            run.nodes() - before
+        );
+        before = run.nodes();
+    }
+    assert!(calls >= whole.nodes / (NODES_PER_POLL + 3), "{calls} calls for {} nodes", whole.nodes);
+    assert_eq!(run.outcome(), whole);
+    // Time to spare: the node budget stops it, as `advance` does.
+    let mut run = matcher.start(&scan, None).unwrap();
+    let later = std::time::Instant::now() + std::time::Duration::from_secs(3600);
+    assert!(!run.advance_until(&matcher, 500, Some(later), cancel::NEVER).unwrap());
+    assert!((500..=503).contains(&run.nodes()));
+}
