@@ -145,3 +145,17 @@ def test_bad_refinement_inputs_are_refused_with_the_fix() -> None:
         PosteriorRefinement(return_weight=0.0)
     with pytest.raises(TypeError, match="refinement must be a planicp.PosteriorRefinement"):
         Localizer(room(), (0.0, 0.0, 0.0), refinement=0.15)  # type: ignore[arg-type]
+
+
+def test_a_plan_too_large_for_a_field_at_its_spacing_gets_a_coarser_one_with_the_same_sigma() -> None:
+    """A field at the plan's spacing over 820 m square would need 269 Mi cells, over the native
+    limit of 256 Mi: it is sampled every 1.25 spacings instead, and its Gaussian is the same (no
+    update that refines or weighs a place fails on a campus-size plan)."""
+    side = 820.0
+    segments = [((0, 0), (side, 0)), ((side, 0), (side, side)), ((side, side), (0, side)), ((0, side), (0, 0))]
+    plan = PlanMap.from_segments(np.array(segments, dtype=float), spacing=0.05)
+    field = plan.likelihood_field()
+    assert field.sigma == pytest.approx(plan.spacing, rel=1e-9)
+    assert field.resolution == pytest.approx(1.25 * plan.spacing, rel=1e-9)
+    assert field.value_and_gradient(400.0, 0.0)[0] > 0.7  # on the wall
+    assert field.value_and_gradient(400.0, 3 * field.sigma + 2 * field.resolution)[0] == 0.0

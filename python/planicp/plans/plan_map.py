@@ -386,11 +386,21 @@ class PlanMap:
         plane `exp(-d^2 / (2 sigma^2))` of the distance `d` to the nearest wall point, with `sigma`
         the plan's `spacing` (a plan places a wall no more finely than it samples it: a map_server
         map's cell, a drawing's pixel or sampling step), sampled every `sigma` and interpolated
-        bilinearly. One byte per cell: 37 MB for a 305 x 305 m SLAM map at 5 cm. What
-        `planicp.tracking.posterior_refinement` climbs."""
+        bilinearly. One byte per cell: 37 MB for a 305 x 305 m SLAM map at 5 cm. A plan whose
+        field would need more cells than the native limit (256 Mi: a square of 800 m at 5 cm) is
+        sampled coarser, by steps of a quarter, until it fits: the Gaussian keeps its `sigma`, the
+        interpolation between samples is coarser. What `planicp.tracking.posterior_refinement`
+        climbs, and what a searched place is weighed by (`tracking.stages.search`)."""
         if self._likelihood is None:
-            sigma = self.spacing
-            self._likelihood = _core.LikelihoodGrid(self._points, sigma, sigma)
+            sigma = resolution = self.spacing
+            while True:
+                try:
+                    self._likelihood = _core.LikelihoodGrid(self._points, resolution, sigma)
+                    break
+                except _core.PlanicpError as error:
+                    if "cells" not in str(error) or resolution > 1e3 * sigma:
+                        raise
+                    resolution *= 1.25
         return self._likelihood
 
     @property
