@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from .pdf_plan import POINT_METRES as POINT
 from .print_scale import round_print_scale
 
 __all__ = ["LegendEntry", "LegendScale", "legend_scale"]
@@ -60,9 +61,6 @@ MIN_AGREEING = 2
 ROUND_TOLERANCE = 0.005
 """How far (relative) one entry's scale may be from the drawing's round print scale: the rooms as
 filled are drawn a stroke's width in or out of the faces their stated areas were measured to."""
-
-POINT = 0.0254 / 72
-"""Metres per PDF point (1/72 inch)."""
 
 _AREA = re.compile(
     r"(?<![\d.,])(\d{1,3}(?:,\d{3})+|\d+(?:[.,]\d+)?)\s*"
@@ -133,9 +131,13 @@ def _rgb(value: Any) -> tuple[float, float, float] | None:
     return None
 
 
+_METRIC_AREAS = ("m²", "m2", "sqm", "qm")
+"""The area units of `_AREA` that are square metres (the others are square feet)."""
+
+
 def _is_metric(text: str) -> bool:
     """Whether a legend line (one `_area_m2` reads) states its area in square metres."""
-    return _AREA.findall(text)[0][1].casefold() in ("m²", "m2", "sqm", "qm")
+    return _AREA.findall(text)[0][1].casefold() in _METRIC_AREAS
 
 
 def _area_m2(text: str) -> float | None:
@@ -143,7 +145,7 @@ def _area_m2(text: str) -> float | None:
     if len(found) != 1:
         return None
     number, unit = found[0]
-    metric = unit.casefold() in ("m²", "m2", "sqm", "qm")
+    metric = unit.casefold() in _METRIC_AREAS
     value = float(number.replace(",", ".") if metric else number.replace(",", ""))
     return value if metric else value * SQUARE_FOOT
 

@@ -297,12 +297,8 @@ class SearchInSteps:
         ended, else None. Ctrl-C stops it between nodes with KeyboardInterrupt; advanced again,
         the search goes on from there."""
         nodes = whole_number(budget, "budget", 1, 2**62)
-        if seconds is not None and (
-            isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not (0 <= seconds < math.inf)
-        ):
-            raise ValueError(f"seconds must be a finite number of seconds >= 0 or None, got {seconds!r}")
         start = time.perf_counter()
-        if not self._run.advance(nodes, None if seconds is None else float(seconds)):
+        if not self._run.advance(nodes, seconds):  # the native call checks `seconds`
             self._seconds += time.perf_counter() - start
             return None
         config = self._config
