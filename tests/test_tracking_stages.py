@@ -9,7 +9,17 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp import AcceptanceGate, IcpConfig, Localizer, LostRule, MotionNoise, PlanMap, RecoveryConfig, se2
+from planicp import (
+    AcceptanceGate,
+    IcpConfig,
+    Localizer,
+    LostRule,
+    MotionNoise,
+    PlanMap,
+    PosteriorRefinement,
+    RecoveryConfig,
+    se2,
+)
 from planicp.tracking import stages
 from planicp.tracking.decisions import (
     Bookkeeping,
@@ -24,6 +34,7 @@ from planicp.tracking.decisions import (
 )
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
+from planicp.tracking.odometry_fault import CostHistory, scan_cost
 from planicp.tracking.recovery import Recovery, SearchBudget
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
@@ -88,7 +99,14 @@ def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained
     assert fit.passed and fit.kept is not None and fit.beyond is not None and fit.result is not None
     assert not fit.kept[-100:].any()  # the person is left out
     search = stages.search_near_prediction(
-        points, prediction_at(truth), fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+        points,
+        prediction_at(truth),
+        fit,
+        PendingDecision(None, None),
+        the_rules,
+        False,
+        SearchBudget(None),
+        CostHistory(),
     )
     assert search.cause is None and search.result is fit.result and not search.searched
     score = stages.judge_score(points, prediction_at(truth), fit, search, the_rules, False, None)
@@ -108,7 +126,7 @@ def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
     prediction = prediction_at(se2.compose(path[2], (0.04, -0.03, 1 * DEG)), wide)
     fit = stages.fit_from_prediction(scans[2], prediction, the_rules, False)
     search = stages.search_near_prediction(
-        scans[2], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+        scans[2], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
     )
     score = stages.judge_score(scans[2], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(scans[2], prediction, search, score, the_rules)
@@ -130,7 +148,7 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
     prediction = prediction_at(se2.compose(path[1], (0.25, 0.0, 0.0)))
     fit = stages.fit_from_prediction(scans[1], prediction, the_rules, False)
     search = stages.search_near_prediction(
-        scans[1], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None)
+        scans[1], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
     )
     score = stages.judge_score(scans[1], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(scans[1], prediction, search, score, the_rules)
@@ -306,3 +324,49 @@ def test_a_searched_place_must_be_more_probable_than_the_fit_it_would_replace(
     # A prediction 0.9 m along and certain of it outweighs the scan's preference for the truth.
     certain = np.diag([0.05**2, 0.05**2, (1 * DEG) ** 2])
     assert _more_probable(points, along, truth, along, certain, the_rules)
+
+
+def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fault(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # The odometry turned 20 degrees and moved 15 cm more than the robot did; its covariance
+    # (2 cm, 1 degree) rules the true pose out, so neither the gate nor the search for an
+    # uncertain prediction looks there.
+    the_rules = rules(plan, refinement=PosteriorRefinement(enabled=True))
+    truth = path[20]
+    prediction = prediction_at(se2.compose(truth, (0.15, 0.0, 20 * DEG)))
+    history = CostHistory()
+    for k in range(10, 20):
+        history.record(scan_cost(scans[k], path[k], plan, the_rules.refinement))
+    typical = history.typical()
+    assert typical is not None
+    fit = stages.fit_from_prediction(scans[20], prediction, the_rules, False)
+    assert fit.result is not None and error(truth, fit.result.pose)[1] > 5 * DEG  # ICP: the wrong basin
+    search = stages.search_near_prediction(
+        scans[20], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), history
+    )
+    assert search.cause == "fault" and search.fault is not None and search.pending is not None
+    assert search.fault.current_cost > typical + search.fault.threshold
+    assert search.fault.cost + search.fault.threshold < search.fault.current_cost
+    distance, turn = error(truth, search.pending[0])
+    assert distance < 0.03 and turn < 0.5 * DEG, (distance, turn)
+    # Not taken on this scan's word: the update goes on with its own fit (or the prediction).
+    assert not search.searched and search.result is fit.result
+    assert search.why.startswith("odometry fault suspected")
+    # No sweep before the track has a typical cost, nor without the fault component.
+    unknown = stages.search_near_prediction(
+        scans[20], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
+    )
+    assert unknown.cause is None and unknown.fault is None and unknown.pending is None
+    off = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))
+    never = stages.search_near_prediction(
+        scans[20], prediction, fit, PendingDecision(None, None), off, False, SearchBudget(None), history
+    )
+    assert never.cause is None and never.fault is None
+    # A scan the prediction explains as well as the track's: no sweep.
+    good = prediction_at(truth)
+    fit = stages.fit_from_prediction(scans[20], good, the_rules, False)
+    calm = stages.search_near_prediction(
+        scans[20], good, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), history
+    )
+    assert calm.cause is None and calm.fault is None and calm.why == "no search"

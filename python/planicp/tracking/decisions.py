@@ -32,13 +32,16 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from .degeneracy_rule import Degeneracy
 from .icp_result import IcpResult
+from .odometry_fault import FaultSweep
 from .posterior_refinement import Refinement
 from .recovery import Hypothesis
 
-SearchCause = Literal["jump", "uncertain"]
+SearchCause = Literal["jump", "uncertain", "fault"]
 """Why the plan is searched around the prediction: "jump", a good fit rejected only for the size of
 its correction; "uncertain", a prediction whose 3-sigma position uncertainty exceeds the gate's
-translation limit."""
+translation limit; "fault", a scan the update's pose explains so much worse than the track's
+recent scans that the odometry may have strayed far beyond its noise, and the heading sweep in the
+plan's likelihood field found a place of higher posterior (`planicp.tracking.odometry_fault`)."""
 
 CorrectionKind = Literal["fused", "weak_axis", "fit", "prediction"]
 """How `Correction.pose` was made: "fused", the Kalman update of the prediction with the fit
@@ -174,7 +177,9 @@ class SearchDecision:
         searched: `result` is a search's or a confirmed place's fit, over the whole scan (not
             fused with the prediction; adopted as `Estimate.relocalized`).
         pending: the place the next scan is to confirm (T_map_base) with this scan's odometry
-            pose, after a rejected jump; None otherwise.
+            pose, after a rejected jump or a suspected odometry fault; None otherwise.
+        fault: the heading sweep for an odometry fault, when it ran (`cause` is "fault" when
+            it found a place of higher posterior that ICP fits soundly); None otherwise.
     """
 
     cause: SearchCause | None
@@ -183,12 +188,27 @@ class SearchDecision:
     reason: str
     searched: bool
     pending: tuple[Pose, Pose] | None = None
+    fault: FaultSweep | None = None
 
     @property
     def why(self) -> str:
         """One sentence on this decision."""
         if self.cause is None:
-            return "the place a pending jump led to was confirmed" if self.searched else "no search"
+            if self.searched:
+                return "the place a pending jump led to was confirmed"
+            if self.fault is not None:
+                return (
+                    f"the scan's cost {self.fault.current_cost:.1f} exceeds the track's typical "
+                    f"{self.fault.typical:.1f} by over {self.fault.threshold:.1f}: the sweep for an odometry "
+                    f"fault found no place better by that (best {self.fault.cost:.1f})"
+                )
+            return "no search"
+        if self.cause == "fault":
+            assert self.fault is not None and self.pending is not None
+            return (
+                f"odometry fault suspected: the scan's cost {self.fault.current_cost:.1f} against a typical "
+                f"{self.fault.typical:.1f}; a place costing {self.fault.cost:.1f} is pending for the next scan"
+            )
         if self.cause == "uncertain":
             return (
                 "uncertain prediction: the search found a place, taken"

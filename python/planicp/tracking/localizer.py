@@ -25,6 +25,7 @@ from .icp_result import IcpResult
 from .lost_rule import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .occlusion_rule import OcclusionFilter, OcclusionRule
+from .odometry_fault import CostHistory, scan_cost
 from .posterior_refinement import PosteriorRefinement
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .relocalize import Relocalization, prepare_search, relocalize
@@ -280,6 +281,9 @@ class Localizer:
         # with the odometry pose of that scan: taken only when the next scan confirms it (see
         # `update`).
         self._pending: tuple[Pose, Pose] | None = None
+        # The scan's cost in the likelihood field at the last accepted poses: how well this
+        # track's scans are explained, against which a suspected odometry fault is judged.
+        self._costs = CostHistory()
         self._lock = threading.Lock()
 
     @property
@@ -308,6 +312,7 @@ class Localizer:
             self._last_odom = None
             self._anchor = None
             self._pending = None
+            self._costs.clear()
             self._detector.reset()
             self._recovery.clear()
 
@@ -363,7 +368,7 @@ class Localizer:
             # place pending for the next scan).
             pending, self._pending = self._pending, None
             confirmation = confirm_pending(points, prediction, pending, fit, rules)
-            search = search_near_prediction(points, prediction, fit, confirmation, rules, was_lost, budget)
+            search = search_near_prediction(points, prediction, fit, confirmation, rules, was_lost, budget, self._costs)
             self._pending = search.pending if search.pending is not None else confirmation.kept
             # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
@@ -389,6 +394,8 @@ class Localizer:
             self._last_odom = odom
             if records.anchored:
                 self._anchor = (points, odom)
+            if accepted and not now_lost and rules.refinement.enabled and rules.refinement.fault_probability > 0.0:
+                self._costs.record(scan_cost(points, pose, self.plan, rules.refinement))
             # The scale check observes the fit from the prediction when it stays where the
             # odometry says the robot is (a plan off in scale explains too little of the scans
             # for the gate long before its fits jump: it is rejected, but in the right place).

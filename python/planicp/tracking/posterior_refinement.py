@@ -57,11 +57,21 @@ class PosteriorRefinement(Settings):
             0.3 weighs a scan of 300 returns as about 90, as a particle filter that scores
             60-100 of a scan's beams does.
         max_iterations: most Levenberg-Marquardt steps taken.
+        fault_probability: the chance, per update, that the odometry strayed far beyond its
+            motion noise (the fault component of the motion model, see
+            `planicp.tracking.odometry_fault`): a place the scan fits better than the update's
+            own pose by `-2 ln(fault_probability)` (13.8 at 1e-3) is searched for and left
+            pending for the next scan to confirm. 0 turns the search off.
+        fault_heading_window: how far either way of the predicted heading that search starts
+            its climbs, radians (below 45 degrees: a building's rooms map onto one another by
+            90-degree turns).
     """
 
     enabled: Flag = True
     return_weight: Annotated[float, Real(gt=0.0, le=1.0)] = 0.3
     max_iterations: Annotated[int, Whole(ge=1, le=1000)] = 30
+    fault_probability: Annotated[float, Real(ge=0.0, lt=1.0, note="(0 disables it)")] = 1e-3
+    fault_heading_window: Annotated[float, Real(ge=0.0, lt=math.pi / 4.0, unit="radians")] = math.radians(44.0)
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,6 +15,7 @@ from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
 from ..localize import localize
 from ..motion_noise import largest_position_std
+from ..odometry_fault import CostHistory, sweep_for_fault
 from ..recovery import SearchBudget
 from ..relocalize import SearchRegion
 from .rules import Rules
@@ -27,6 +29,7 @@ def search_near_prediction(
     rules: Rules,
     lost: bool,
     budget: SearchBudget,
+    history: CostHistory,
 ) -> SearchDecision:
     """The fit the update goes on with after a search around the prediction, when the gate cannot
     vouch for it (`search_cause`; not while `lost`, nor after a confirmed pending place, which the
@@ -38,13 +41,19 @@ def search_near_prediction(
     search's, or the sound fit's where the search finds none) is not taken on one scan's word:
     it is left pending for the next scan (`confirm_pending`), which after a fault fits that place
     again and after a corrupted scan fits the prediction better. The search draws on the update's
-    `budget` of search nodes."""
+    `budget` of search nodes.
+
+    Where neither search leaves a place, a scan the update's pose explains far worse than the
+    track's recent scans (their costs in the plan's likelihood field, `history`) is swept for an
+    odometry fault (`_fault_search`)."""
     if pending.confirmed is not None:
         return SearchDecision(None, None, pending.confirmed, "", True)
     result, reason = fit.result, fit.reason
     cause = None if result is None or lost else search_cause(result, reason, prediction.covariance, rules)
     if result is None or cause is None:
-        return SearchDecision(None, None, result, reason, False)
+        return _fault_search(
+            points, prediction, SearchDecision(None, None, result, reason, False), rules, lost, history
+        )
     predicted = prediction.pose
     found = _search_near(
         points,
@@ -57,13 +66,44 @@ def search_near_prediction(
     if cause == "uncertain":
         if found is not None:
             return SearchDecision(cause, found, found, "", True)
-        return SearchDecision(cause, None, result, reason, False)
+        return _fault_search(
+            points, prediction, SearchDecision(cause, None, result, reason, False), rules, lost, history
+        )
     place = found if found is not None else result
     source = "a search found" if found is not None else "the fit puts the robot at"
     reason = (
         f"{reason}; {source} a place {_distance(predicted, place.pose):.2f} m away, taken if the next scan confirms it"
     )
     return SearchDecision(cause, found, result, reason, False, pending=(place.pose, prediction.odom))
+
+
+def _fault_search(
+    points: NDArray[np.float64],
+    prediction: Prediction,
+    decision: SearchDecision,
+    rules: Rules,
+    lost: bool,
+    history: CostHistory,
+) -> SearchDecision:
+    """`decision`, or, where the heading sweep for an odometry fault
+    (`planicp.tracking.odometry_fault.sweep_for_fault`) finds a place of higher posterior than
+    the update's pose (`decision`'s fit when accepted, else the prediction) and ICP from it fits
+    soundly, the same decision with that fit left pending for the next scan to confirm (cause
+    "fault"): the update goes on with its own fit, or the prediction, meanwhile. Not while `lost`
+    (the recovery searches then), for a scan that could not be aligned, nor without the posterior
+    refinement (whose likelihood field the sweep climbs)."""
+    if lost or decision.result is None or not rules.refinement.enabled:
+        return decision
+    current = decision.result.pose if decision.reason == "" else prediction.pose
+    sweep = sweep_for_fault(points, prediction.pose, current, rules.plan, rules.refinement, history)
+    if sweep is None:
+        return decision
+    if not sweep.more_probable:
+        return replace(decision, fault=sweep)
+    place = localize(points, rules.plan, sweep.pose, rules.wide_config)
+    if rules.gate.fit_rejection(place) != "":
+        return replace(decision, fault=sweep)
+    return replace(decision, cause="fault", found=place, pending=(place.pose, prediction.odom), fault=sweep)
 
 
 def search_cause(

@@ -1,0 +1,169 @@
+"""An odometry fault told from the scan: the heading sweep in the plan's likelihood field.
+
+The prediction's covariance (`MotionNoise`) is a Gaussian: it says how far wheel odometry strays
+over a motion, and it cannot say that the odometry sometimes strays far more (a wheel slips, the
+robot is pushed, a long pause lets a gyro drift; on fhw, scans up to a minute apart, the odometry
+turned 9-66 degrees more than the robot did on 16 of 243 updates). From a prediction 18 degrees
+off, ICP settles in the wrong basin and reports it with a 2 cm deviation; under the Gaussian the
+true pose, 7 of its standard deviations away, is less probable than that wrong fit, whatever the
+scan says. A particle filter survives such steps only when its motion noise happens to have
+spread particles that far.
+
+The motion model here is a max-mixture (Olson and Agarwal, "Inference on networks of mixtures for
+robust robot mapping", 2013): the Gaussian, or with probability `fault_probability` per update a
+fault that leaves the pose anywhere near the prediction. Under the fault component a place costs
+`F = -2 ln(fault_probability)` in the units of the refinement's cost (`w sum (1 - g)^2`, see
+`posterior_refinement`), wherever it lies. So a place beyond the Gaussian's reach is more probable
+than the update's own fit when the scan's cost there is lower by more than `F`; that can only
+happen when the fit's cost exceeds the track's typical cost (the median of the last accepted
+updates, `CostHistory`) by `F`, and only then is the sweep run (a few updates in a hundred on the
+real logs, none on most). A place the sweep finds is a fault found only when it also explains
+the scan as the track's scans are (its cost within `F` of the typical one): a place merely less
+bad than the fit is no evidence of where the robot is.
+
+The sweep climbs the likelihood field (no prior) from the prediction's position turned by every
+`FAULT_HEADING_STEP` within `fault_heading_window` either way, and then once more, fully, from the
+best end. The window stays below 45 degrees, half of the 90-degree turn that maps most buildings'
+rooms onto one another, so it cannot settle in a rotated copy of the room. What it finds is not
+taken on this scan's word: the search stage leaves it pending, for the next scan to confirm, as a
+place a rejected jump leads to (a corrupted scan, turned or shifted, fits some place too).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._validation import Pose
+from ..plans.plan_map import PlanMap
+from ..se2 import wrap_angle
+from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement
+
+FAULT_HEADING_STEP = math.radians(6.0)
+"""Radians between the sweep's starting headings: a climb from a heading within a few degrees of
+a mode reaches it (on fhw, starts 3 to 12 degrees apart ended at the same pose)."""
+
+SWEEP_POINTS = 64
+"""Most returns each climb of the sweep reads (every k-th of the scan); the best end is climbed
+again with all of them."""
+
+SWEEP_ITERATIONS = 10
+"""Levenberg-Marquardt steps of each climb of the sweep."""
+
+HISTORY = 20
+"""Accepted updates whose costs make the track's typical cost (their median)."""
+
+MIN_HISTORY = 5
+"""Accepted updates needed before a typical cost is known (before, no sweep runs)."""
+
+_NO_PRIOR = (np.eye(3) * NO_PRIOR_VARIANCE).tolist()
+
+
+def fault_cost(fault_probability: float) -> float:
+    """`F = -2 ln(fault_probability)`: what a place costs under the fault component."""
+    return -2.0 * math.log(fault_probability)
+
+
+class CostHistory:
+    """The scan's cost in the likelihood field (no prior) at the last `HISTORY` accepted poses."""
+
+    def __init__(self) -> None:
+        self._costs: deque[float] = deque(maxlen=HISTORY)
+
+    def record(self, cost: float) -> None:
+        """Adds the cost at an accepted pose."""
+        self._costs.append(float(cost))
+
+    def clear(self) -> None:
+        """Forgets every cost (the robot was placed anew)."""
+        self._costs.clear()
+
+    def typical(self) -> float | None:
+        """Median of the recorded costs; None before `MIN_HISTORY` are recorded."""
+        if len(self._costs) < MIN_HISTORY:
+            return None
+        return float(np.median(np.fromiter(self._costs, dtype=np.float64)))
+
+
+def scan_cost(points: NDArray[np.float64], pose: Pose, plan: PlanMap, rule: PosteriorRefinement) -> float:
+    """The scan's cost `w sum (1 - g)^2` in the plan's likelihood field at `pose` (no prior)."""
+    p = (float(pose[0]), float(pose[1]), float(pose[2]))
+    return float(plan.likelihood_field().cost(points, p, p, _NO_PRIOR, rule.return_weight))
+
+
+@dataclass(frozen=True)
+class FaultSweep:
+    """What the sweep found (see the module).
+
+    Attributes:
+        pose: the place of lowest cost the sweep reached, T_map_base.
+        cost: the scan's cost there (no prior).
+        current_cost: the scan's cost at the update's own pose (its fit, or the prediction).
+        typical: the track's typical cost (`CostHistory.typical`).
+        threshold: `F`, what the place's cost must undercut `current_cost` by.
+    """
+
+    pose: Pose
+    cost: float
+    current_cost: float
+    typical: float
+    threshold: float
+
+    @property
+    def more_probable(self) -> bool:
+        """Whether the place, as a fault, is more probable than the update's own pose, and
+        explains the scan as the track's scans are explained (its cost within the fault cost of
+        the typical one). A place that is only less bad (a climb that turned the heading right
+        but stayed 20 cm along a corridor, where the field's narrow basin could not reach the
+        truth) is no fault found: taken, it held the track 20 cm off with a 1 cm deviation."""
+        return self.cost + self.threshold < self.current_cost and self.cost <= self.typical + self.threshold
+
+
+def sweep_for_fault(
+    points: NDArray[np.float64],
+    predicted: Pose,
+    current: Pose,
+    plan: PlanMap,
+    rule: PosteriorRefinement,
+    history: CostHistory,
+) -> FaultSweep | None:
+    """The sweep around `predicted` when the scan's cost at `current` (the update's fit, or the
+    prediction) exceeds the track's typical cost by the fault cost; None when it does not, when
+    no typical cost is known yet, or when the rule has no fault component.
+
+    Args:
+        points: (N, 2) scan points in the robot frame, metres.
+        predicted: the odometry prediction, T_map_base.
+        current: the pose the update goes on with so far, T_map_base.
+        plan: the plan (its `likelihood_field`).
+        rule: the refinement's settings (`return_weight`, `fault_probability`,
+            `fault_heading_window`).
+        history: the track's recent costs.
+    """
+    if rule.fault_probability <= 0.0:
+        return None
+    typical = history.typical()
+    if typical is None:
+        return None
+    threshold = fault_cost(rule.fault_probability)
+    current_cost = scan_cost(points, current, plan, rule)
+    if current_cost <= typical + threshold:
+        return None
+    field = plan.likelihood_field()
+    step = max(1, -(-len(points) // SWEEP_POINTS))
+    sparse = np.ascontiguousarray(points[::step])
+    turns = int(rule.fault_heading_window // FAULT_HEADING_STEP)
+    best: tuple[float, tuple[float, float, float]] | None = None
+    for k in range(-turns, turns + 1):
+        start = (float(predicted[0]), float(predicted[1]), float(predicted[2]) + k * FAULT_HEADING_STEP)
+        end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
+        if best is None or cost < best[0]:
+            best = (cost, end)
+    assert best is not None  # turns >= 0: at least the prediction's own heading
+    end, cost, _, _, _ = field.refine(points, best[1], best[1], _NO_PRIOR, rule.return_weight, rule.max_iterations)
+    pose: Pose = (float(end[0]), float(end[1]), wrap_angle(float(end[2])))
+    return FaultSweep(pose, float(cost), current_cost, typical, threshold)

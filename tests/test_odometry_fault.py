@@ -1,0 +1,85 @@
+"""An odometry fault (the odometry turns far more than its noise allows) is found from the scans
+and taken once the next scan confirms it; a corrupted scan that looks like one is not
+(`planicp.tracking.odometry_fault`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planicp import Localizer, PlanMap, PosteriorRefinement, se2
+from planicp.tracking.odometry_fault import CostHistory, fault_cost
+
+# The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
+from test_localizer import DEG, DRIFT, drifting_odometry, error, office, path, plan, scans  # noqa: F401
+
+Pose = tuple[float, float, float]
+FAULT_AT = 20
+
+
+def faulty_odometry(path: list[Pose], turn: float) -> list[Pose]:
+    """Odometry drifting by DRIFT per step that, between scans FAULT_AT - 1 and FAULT_AT, turns
+    `turn` radians and moves 15 cm more than the robot did."""
+    odom = drifting_odometry(path, (3.0, -1.0, 0.7), DRIFT)
+    fault = (0.15, 0.0, turn)
+    return odom[:FAULT_AT] + [
+        se2.compose(se2.compose(odom[FAULT_AT - 1], fault), se2.between(odom[FAULT_AT - 1], o)) for o in odom[FAULT_AT:]
+    ]
+
+
+def drive(plan: PlanMap, path: list[Pose], scans: list[np.ndarray], odom: list[Pose], **refinement: float) -> list:
+    loc = Localizer(plan, path[0], refinement=PosteriorRefinement(enabled=True, **refinement))
+    return [loc.update(s, o) for s, o in zip(scans, odom)]
+
+
+def test_a_35_degree_odometry_fault_is_taken_when_the_next_scan_confirms_it(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    odom = faulty_odometry(path, 35 * DEG)
+    estimates = drive(plan, path, scans, odom)
+    assert estimates[FAULT_AT].decisions[3].cause == "fault"
+    assert error(path[FAULT_AT], estimates[FAULT_AT].pose)[1] > 5 * DEG  # this scan's own fit: wrong
+    confirmed = estimates[FAULT_AT + 1]
+    assert confirmed.relocalized and confirmed.decisions[2].confirmed is not None
+    for k in range(FAULT_AT + 1, len(path)):
+        distance, turn = error(path[k], estimates[k].pose)
+        assert distance < 0.03 and turn < 1 * DEG, (k, distance, turn)
+    # Without the fault component the track stays in the wrong basin.
+    stuck = drive(plan, path, scans, odom, fault_probability=0.0)
+    assert all(e.decisions[3].fault is None for e in stuck)
+    assert error(path[FAULT_AT + 1], stuck[FAULT_AT + 1].pose)[1] > 5 * DEG
+
+
+def test_one_scan_turned_35_degrees_never_moves_the_estimate(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    odom = drifting_odometry(path, (3.0, -1.0, 0.7), DRIFT)
+    c, s = math.cos(35 * DEG), math.sin(35 * DEG)
+    corrupted = [scan @ np.array([[c, s], [-s, c]]) if k == FAULT_AT else scan for k, scan in enumerate(scans)]
+    clean = drive(plan, path, scans, odom)
+    junk = drive(plan, path, corrupted, odom)
+    assert junk[FAULT_AT].decisions[3].cause == "fault"  # the turned scan fits a turned place...
+    for k in range(len(path)):  # ...which the next scan does not confirm
+        assert not junk[k].relocalized
+        assert error(clean[k].pose, junk[k].pose)[0] < 0.01, k
+
+
+def test_the_cost_history_and_the_fault_cost() -> None:
+    history = CostHistory()
+    for cost in (1.0, 2.0, 3.0, 4.0):
+        history.record(cost)
+    assert history.typical() is None  # fewer than five costs
+    history.record(100.0)
+    assert history.typical() == 3.0
+    for _ in range(30):
+        history.record(7.0)
+    assert history.typical() == 7.0  # only the last twenty count
+    history.clear()
+    assert history.typical() is None
+    assert fault_cost(1e-3) == pytest.approx(13.8155, abs=1e-4)
+    with pytest.raises(ValueError, match="fault_probability"):
+        PosteriorRefinement(fault_probability=1.0)
+    with pytest.raises(ValueError, match="fault_heading_window"):
+        PosteriorRefinement(fault_heading_window=math.radians(50.0))
