@@ -153,7 +153,11 @@ class Localizer:
     fit from the prediction, is adopted: at once for an uncertain prediction. After a rejected jump
     the place (or, when the search finds none, the fit's) is taken only when the next scan, aligned
     from it moved by the odometry, fits there soundly and better than from the prediction, since a
-    corrupted scan fits some place beyond the gate too.
+    corrupted scan fits some place beyond the gate too. Where the refinement runs, a scan far worse
+    explained than the track's recent ones may mean the odometry strayed beyond its noise (a
+    heading fault ICP cannot climb out of): the plan's likelihood field is swept for such a fault
+    (`planicp.tracking.odometry_fault`), and a place found is taken the same way, when the next
+    scan confirms it.
 
     `update` runs these steps as an ordered pipeline of stages (`planicp.tracking.stages`: predict,
     fit, confirm a pending place, search, score, correct, judge lost, recover, keep records), and
