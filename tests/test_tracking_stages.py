@@ -370,3 +370,19 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
         scans[20], good, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), history
     )
     assert calm.cause is None and calm.fault is None and calm.why == "no search"
+
+
+def test_a_pending_place_the_scan_prefers_as_a_fault_would_is_confirmed(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    from planicp.tracking.stages.pending import _fault_confirmed
+
+    the_rules = rules(plan, refinement=PosteriorRefinement(enabled=True))
+    truth, turned = path[20], se2.compose(path[20], (0.1, 0.0, 15 * DEG))
+    assert _fault_confirmed(scans[20], truth, turned, the_rules)
+    assert not _fault_confirmed(scans[20], turned, truth, the_rules)
+    # Within the fault cost of each other: not on the likelihood's word.
+    near = se2.compose(truth, (0.01, 0.0, 0.2 * DEG))
+    assert not _fault_confirmed(scans[20], truth, near, the_rules)
+    for off in (PosteriorRefinement(enabled=False), PosteriorRefinement(enabled=True, fault_probability=0.0)):
+        assert not _fault_confirmed(scans[20], truth, turned, rules(plan, refinement=off))
