@@ -9,6 +9,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py views        # tracking's view cast, to the scan's range or per direction
     python benches/real_log_studies.py refinement   # the Localizer with and without the posterior refinement
     python benches/real_log_studies.py scan-sets    # other scan sets of the same logs: swapped, reversed
+    python benches/real_log_studies.py junk         # corrupted scans: how far they move the estimates
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -40,6 +41,13 @@ plan drawn from the odd-numbered scans and the even-numbered ones tracked; "reve
 harness's plan and its tracked scans in reverse order (the robot driving the log backwards, its
 odometry drawn anew for that drive). It gives ATE, the share of scans more than 0.3 m off, the
 first of them, and the 99th percentile of the time per update.
+
+`junk` tracks each log with the defaults clean and with corrupted scans: the middle scan's points
+shifted 3 m along the base x axis; one scan in five (from the tenth on) turned by 30 degrees (within
+the heading window of the odometry-fault sweep, which a turned scan looks like) or by 90 degrees;
+one scan in five replaced by as many points uniform in a 20 x 20 m square around the robot. It
+gives the largest distance between a corrupted run's estimates and the clean run's, and the share
+of the corrupted run's scans more than 0.3 m off.
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -199,6 +207,45 @@ def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
+def estimates(plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray) -> np.ndarray:
+    """(N, 3) poses of a default `Localizer` started at the first reference pose."""
+    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])))
+    return np.array([loc.update(np.ascontiguousarray(s), tuple(map(float, o))).pose for s, o in zip(scans, odom)])
+
+
+def corrupted(scans: list[np.ndarray], kind: str, rng: np.random.Generator) -> list[np.ndarray]:
+    """`scans` with some corrupted as `kind` says (see the module's `junk`)."""
+    if kind == "shifted 3 m":
+        middle = len(scans) // 2
+        return [s + np.array([3.0, 0.0]) if k == middle else s for k, s in enumerate(scans)]
+    out = []
+    for k, s in enumerate(scans):
+        if k < 10 or k % 5:
+            out.append(s)
+        elif kind == "random clouds":
+            out.append(rng.uniform(-10.0, 10.0, size=s.shape))
+        else:
+            a = math.radians(30.0 if kind == "turned 30 degrees" else 90.0)
+            out.append(s @ np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]]))
+    return out
+
+
+def junk_study(harness: Any, logs: list[str], out: str) -> None:
+    kinds = ("shifted 3 m", "turned 30 degrees", "turned 90 degrees", "random clouds")
+    print("| log | clean: lost | " + " | ".join(f"{k}: apart, lost" for k in kinds) + " |")
+    print("|---|---|" + "---|" * len(kinds))
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out)
+        clean = estimates(plan, scans, ref, odom)
+        cells = [f"{100 * harness.error_metrics(clean, ref, 0.3)['lost_frac']:.1f} %"]
+        for kind in kinds:
+            est = estimates(plan, corrupted(scans, kind, np.random.default_rng(1)), ref, odom)
+            apart = float(np.max(np.hypot(*(est[:, :2] - clean[:, :2]).T)))
+            lost = harness.error_metrics(est, ref, 0.3)["lost_frac"]
+            cells.append(f"{100 * apart:.1f} cm, {100 * lost:.1f} %")
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+
+
 def refinement_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
     print("| log | seed | without: ATE, lost | with (the default): ATE, lost |")
     print("|---|---|---|---|")
@@ -324,7 +371,8 @@ def views_study(harness: Any, logs: list[str], out: str) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "study", choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement", "scan-sets")
+        "study",
+        choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement", "scan-sets", "junk"),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
@@ -343,6 +391,8 @@ def main() -> None:
             seeds_study(harness, args.logs, out, args.seeds)
         elif args.study == "scan-sets":
             scan_sets_study(harness, args.logs, out)
+        elif args.study == "junk":
+            junk_study(harness, args.logs, out)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "nees":

@@ -350,8 +350,13 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     assert search.fault.cost + search.fault.threshold < search.fault.current_cost
     distance, turn = error(truth, search.pending[0])
     assert distance < 0.03 and turn < 0.5 * DEG, (distance, turn)
-    # Not taken on this scan's word: the update goes on with its own fit (or the prediction).
+    # Not taken on this scan's word, and the fit, which the scan explains worse by the fault cost,
+    # is no evidence either: the update keeps the prediction.
     assert not search.searched and search.result is fit.result
+    assert search.reason.startswith("the scan fits a place 0.1"), search.reason
+    score = stages.judge_score(scans[20], prediction, fit, search, the_rules, False, None)
+    assert score.reason == search.reason
+    assert stages.correct(scans[20], prediction, search, score, the_rules).pose == prediction.pose
     assert search.why.startswith("odometry fault suspected")
     # No sweep before the track has a typical cost, nor without the fault component.
     unknown = stages.search_near_prediction(

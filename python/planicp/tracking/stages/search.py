@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._validation import Pose
+from ...se2 import wrap_angle
 from ..decisions import FitDecision, PendingDecision, Prediction, SearchCause, SearchDecision
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
@@ -103,7 +104,18 @@ def _fault_search(
     place = localize(points, rules.plan, sweep.pose, rules.wide_config)
     if rules.gate.fit_rejection(place) != "":
         return replace(decision, fault=sweep)
-    return replace(decision, cause="fault", found=place, pending=(place.pose, prediction.odom), fault=sweep)
+    # The scan prefers another place to the fit by the fault cost: either the odometry faulted
+    # and the fit is wrong, or the scan is corrupted and neither is right. The fit is no
+    # evidence either way, so the update keeps the prediction until the next scan decides.
+    reason = (
+        f"the scan fits a place {_distance(prediction.pose, place.pose):.2f} m and "
+        f"{math.degrees(abs(wrap_angle(place.pose[2] - prediction.pose[2]))):.1f} deg from the prediction "
+        f"better than the fit (cost {sweep.cost:.1f} against {sweep.current_cost:.1f}): an odometry fault "
+        "or a corrupted scan, taken if the next scan confirms it"
+    )
+    return replace(
+        decision, cause="fault", found=place, reason=reason, pending=(place.pose, prediction.odom), fault=sweep
+    )
 
 
 def search_cause(
