@@ -10,6 +10,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py refinement   # the Localizer with and without the posterior refinement
     python benches/real_log_studies.py scan-sets    # other scan sets of the same logs: swapped, reversed
     python benches/real_log_studies.py junk         # corrupted scans: how far they move the estimates
+    python benches/real_log_studies.py faults       # the Localizer with and without the odometry-fault sweep
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -42,6 +43,9 @@ harness's plan and its tracked scans in reverse order (the robot driving the log
 odometry drawn anew for that drive). It gives ATE, the share of scans more than 0.3 m off, the
 first of them, and the 99th percentile of the time per update.
 
+`faults` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
+and with `PosteriorRefinement(fault_probability=0)` (no sweep for an odometry fault), and gives the
+ATE and the share of scans more than 0.3 m off.
 `junk` tracks each log with the defaults clean and with corrupted scans: the middle scan's points
 shifted 3 m along the base x axis; one scan in five (from the tenth on) turned by 30 degrees (within
 the heading window of the odometry-fault sweep, which a turned scan looks like) or by 90 degrees;
@@ -246,14 +250,17 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
-def refinement_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+def refinement_study(
+    harness: Any, logs: list[str], out: str, seeds: list[int], without: PosteriorRefinement | None = None
+) -> None:
+    """Each log and seed tracked with `without` (default: no refinement) and with the defaults."""
     print("| log | seed | without: ATE, lost | with (the default): ATE, lost |")
     print("|---|---|---|---|")
     for name in logs:
         for seed in seeds:
             data = load(harness, name, out, seed)
             cells = []
-            for rule in (PosteriorRefinement(enabled=False), PosteriorRefinement()):
+            for rule in (without or PosteriorRefinement(enabled=False), PosteriorRefinement()):
                 m, _ = track(harness, *data, refinement=rule)
                 cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             print(f"| {name} | {seed} | " + " | ".join(cells) + " |", flush=True)
@@ -372,7 +379,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
         "study",
-        choices=("search", "visibility", "seeds", "nees", "alignments", "views", "refinement", "scan-sets", "junk"),
+        choices=(
+            "search",
+            "visibility",
+            "seeds",
+            "nees",
+            "alignments",
+            "views",
+            "refinement",
+            "scan-sets",
+            "junk",
+            "faults",
+        ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
@@ -395,6 +413,8 @@ def main() -> None:
             junk_study(harness, args.logs, out)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
+        elif args.study == "faults":
+            refinement_study(harness, args.logs, out, args.seeds, PosteriorRefinement(fault_probability=0.0))
         elif args.study == "nees":
             nees_study(harness, args.logs, out)
         elif args.study == "alignments":
