@@ -9,7 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ... import _core
+from ..._validation import Pose
 from ..decisions import FitDecision, Prediction
+from ..icp_config import IcpConfig
 from ..icp_result import IcpResult
 from ..localize import localize
 from ..motion_noise import largest_position_std
@@ -117,6 +119,19 @@ def _unoccluded(
     if remaining == len(points):
         return None, beyond, False, view
     return kept, beyond, False, view
+
+
+def aligned_from(points: NDArray[np.float64], pose: Pose, rules: Rules, config: IcpConfig | None = None) -> IcpResult:
+    """ICP from `pose` with `config` (default `rules.wide_config`, the KD-tree over the walls seen
+    from there): the fits at pending places and at places a search found. The walls are those the occlusion
+    filter's view shows over the scan's arc, as far as a return could pair (the cast the fit from
+    the prediction uses); `localize`'s own cast, over every direction to the scan's range, took
+    8-15 ms on freiburg-campus's 80 m ranges. Without the occlusion filter, `localize` casts."""
+    occlusion = rules.occlusion
+    config = rules.wide_config if config is None else config
+    casts = config.correspondence_search == "kd_tree" and config.use_visibility
+    view = occlusion.view(points, pose, config) if occlusion is not None and casts else None
+    return localize(points, rules.plan, pose, config, view=view)
 
 
 def poor_fit(score: float, reason: str, result: IcpResult, rules: Rules) -> bool:

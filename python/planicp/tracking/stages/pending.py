@@ -9,8 +9,8 @@ from numpy.typing import NDArray
 from ..._validation import Pose
 from ...se2 import between, compose
 from ..decisions import FitDecision, PendingDecision, Prediction
-from ..localize import localize
 from ..odometry_fault import fault_cost, scan_cost
+from .fit import aligned_from
 from .rules import Rules
 
 
@@ -34,7 +34,7 @@ def confirm_pending(
     there = compose(pending[0], between(pending[1], prediction.odom))
     if fit.result is None:
         return PendingDecision(None, None, kept=(there, prediction.odom))
-    follow = localize(points, rules.plan, there, rules.wide_config)
+    follow = aligned_from(points, there, rules)
     if rules.gate.rejection(follow, there):
         return PendingDecision(there, None, kept=(there, prediction.odom) if fit.reason != "" else None)
     if (

@@ -14,11 +14,11 @@ from ...se2 import wrap_angle
 from ..decisions import FitDecision, PendingDecision, Prediction, SearchCause, SearchDecision
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
-from ..localize import localize
 from ..motion_noise import largest_position_std
 from ..odometry_fault import CostHistory, sweep_for_fault
 from ..recovery import SearchBudget
 from ..relocalize import SearchRegion
+from .fit import aligned_from
 from .rules import Rules
 
 
@@ -101,7 +101,7 @@ def _fault_search(
         return decision
     if not sweep.more_probable:
         return replace(decision, fault=sweep)
-    place = localize(points, rules.plan, sweep.pose, rules.wide_config)
+    place = aligned_from(points, sweep.pose, rules)
     if rules.gate.fit_rejection(place) != "":
         return replace(decision, fault=sweep)
     # The scan prefers another place to the fit by the fault cost: either the odometry faulted
@@ -176,7 +176,7 @@ def _search_near(
     best = None if found is None else found.best
     if found is None or best is None or found.ambiguous or best.inlier_ratio < config.min_inlier_ratio:
         return None
-    refined = localize(points, rules.plan, best.pose, rules.config)
+    refined = aligned_from(points, best.pose, rules, rules.config)
     if rules.gate.rejection(refined, best.pose) or refined.inlier_ratio < config.min_inlier_ratio:
         return None
     if accepted is not None and refined.inlier_ratio <= accepted.inlier_ratio + config.margin:
