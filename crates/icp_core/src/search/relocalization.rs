@@ -161,22 +161,23 @@ mod tests {
         (map, matcher)
     }
 
+    /// `relocalize` of the whole plan with the default ICP and ranking settings.
+    fn relocalize_with_defaults(
+        map: &PointMap,
+        matcher: &GlobalMatcher,
+        scan: &[[f64; 2]],
+    ) -> Relocalization {
+        let (icp, ranking) = (IcpConfig::default(), RankingConfig::default());
+        relocalize(map, matcher, scan, None, &icp, &ranking, cancel::NEVER).unwrap()
+    }
+
     #[test]
     fn refines_the_best_candidate_to_the_true_pose() {
         let (map, matcher) = setup(asymmetric_floor());
         let mut rng = ChaCha8Rng::seed_from_u64(21);
         let truth = Pose2::new(3.7, 6.1, -1.3);
         let scan = scan_from(&map, truth, &mut rng, 0.01);
-        let out = relocalize(
-            &map,
-            &matcher,
-            &scan,
-            None,
-            &IcpConfig::default(),
-            &RankingConfig::default(),
-            cancel::NEVER,
-        )
-        .unwrap();
+        let out = relocalize_with_defaults(&map, &matcher, &scan);
         let best = &out.candidates[0];
         assert!((best.pose.x - truth.x).hypot(best.pose.y - truth.y) < 0.02, "{:?}", best.pose);
         assert!(wrap_angle(best.pose.yaw - truth.yaw).abs() < 0.005, "{:?}", best.pose);
@@ -201,16 +202,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(22);
         let truth = Pose2::new(2.6, 4.1, 2.0);
         let scan = scan_from(&map, truth, &mut rng, 0.005);
-        let out = relocalize(
-            &map,
-            &matcher,
-            &scan,
-            None,
-            &IcpConfig::default(),
-            &RankingConfig::default(),
-            cancel::NEVER,
-        )
-        .unwrap();
+        let out = relocalize_with_defaults(&map, &matcher, &scan);
         assert!(out.candidates.len() >= 2);
         assert!(out.ambiguous, "ambiguity {}", out.ambiguity);
         assert!(out.ambiguity > 0.95);
