@@ -173,7 +173,8 @@ class SearchDecision:
         result: the fit the update goes on with: the search's place for an uncertain prediction,
             the confirmed pending place (stage 3), else the fit from the prediction.
         reason: why `result` is not accepted ("" when it is, so far); after a rejected jump, the
-            gate's reason and where the pending place is.
+            gate's reason and where the pending place is; after a suspected odometry fault, where
+            the place the scan prefers to the fit is.
         searched: `result` is a search's or a confirmed place's fit, over the whole scan (not
             fused with the prediction; adopted as `Estimate.relocalized`).
         pending: the place the next scan is to confirm (T_map_base) with this scan's odometry

@@ -90,7 +90,8 @@ def _fault_search(
     (`planicp.tracking.odometry_fault.sweep_for_fault`) finds a place of higher posterior than
     the update's pose (`decision`'s fit when accepted, else the prediction) and ICP from it fits
     soundly, the same decision with that fit left pending for the next scan to confirm (cause
-    "fault"): the update goes on with its own fit, or the prediction, meanwhile. Not while `lost`
+    "fault") and a reason that refuses the update's own fit: the update keeps the prediction
+    meanwhile, since the scan prefers the place to the fit by the fault cost. Not while `lost`
     (the recovery searches then), for a scan that could not be aligned, nor without the posterior
     refinement (whose likelihood field the sweep climbs)."""
     if lost or decision.result is None or not rules.refinement.enabled:
