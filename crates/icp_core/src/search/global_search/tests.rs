@@ -236,14 +236,21 @@ fn a_run_advanced_in_small_budgets_finds_what_one_search_finds() {
     assert_eq!(run.nodes(), whole.nodes);
 }
 
-#[test]
-fn an_interrupted_run_stops_between_nodes_and_resumes_to_the_same_result() {
+/// A matcher of the asymmetric floor, a scan of it and the outcome of its whole search, which
+/// scores more than four polls' worth of nodes (so that a run can be stopped and resumed).
+fn a_search_of_several_polls() -> (GlobalMatcher, Vec<[f64; 2]>, SearchOutcome) {
     let map = PointMap::new(asymmetric_floor(), None).unwrap();
     let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
     let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
-    assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to interrupt", whole.nodes);
+    assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to stop a run", whole.nodes);
+    (matcher, scan, whole)
+}
+
+#[test]
+fn an_interrupted_run_stops_between_nodes_and_resumes_to_the_same_result() {
+    let (matcher, scan, whole) = a_search_of_several_polls();
     // Stop at the third poll: after 3 * NODES_PER_POLL nodes (up to three more), not later.
     let polls = std::cell::Cell::new(0u32);
     let third = || {
@@ -328,12 +335,7 @@ fn rejects_bad_input() {
 
 #[test]
 fn a_run_out_of_time_stops_at_a_poll_and_resumes_to_the_same_result() {
-    let map = PointMap::new(asymmetric_floor(), None).unwrap();
-    let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let scan = scan_from(&map, Pose2::new(3.2, 5.4, 0.7), &mut rng, 0.01);
-    let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
-    assert!(whole.nodes > 4 * NODES_PER_POLL, "{} nodes: too few to stop", whole.nodes);
+    let (matcher, scan, whole) = a_search_of_several_polls();
     // A time already past: each call scores up to its first poll (NODES_PER_POLL nodes, up to
     // three more) and stops there, unfinished, however large its node budget.
     let mut run = matcher.start(&scan, None).unwrap();
