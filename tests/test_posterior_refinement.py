@@ -159,3 +159,13 @@ def test_a_plan_too_large_for_a_field_at_its_spacing_gets_a_coarser_one_with_the
     assert field.resolution == pytest.approx(1.25 * plan.spacing, rel=1e-9)
     assert field.value_and_gradient(400.0, 0.0)[0] > 0.7  # on the wall
     assert field.value_and_gradient(400.0, 3 * field.sigma + 2 * field.resolution)[0] == 0.0
+
+
+def test_a_field_that_fits_at_no_useful_sampling_is_refused_with_the_cause() -> None:
+    """Points 10^8 m apart (a plan in the wrong units, a stray point) would need samples
+    thousands of sigmas apart: refused, naming the field, the resolution asked for and the fix."""
+    far = np.array([[0.0, 0.0], [1e8, 1e8]])
+    refused = r"likelihood field at 0.05 m would need .* cells .*\(wrong units, stray points\)"
+    with pytest.raises(_core.PlanicpError, match=refused):
+        _core.LikelihoodGrid.within_budget(far, 0.05, 0.05)
+    assert _core.LikelihoodGrid.within_budget(far[:1], 0.05, 0.05).resolution == 0.05

@@ -53,12 +53,15 @@ pub enum IcpError {
         /// What it must satisfy.
         requirement: &'static str,
     },
-    /// The visibility raster of a plan would be too large to hold.
+    /// A raster over a plan (its visibility raster, nearest-wall index or likelihood field) would
+    /// be too large to hold.
     #[error(
-        "the plan's visibility raster at {resolution} m would need {cells} cells (limit {limit}); \
-         give a coarser resolution"
+        "the plan's {what} at {resolution} m would need {cells} cells (limit {limit}); give a coarser \
+         resolution, or check the plan for points far from its walls (wrong units, stray points)"
     )]
     RasterTooLarge {
+        /// Which raster.
+        what: &'static str,
         /// Requested resolution, metres per cell.
         resolution: f64,
         /// Cells it would need.

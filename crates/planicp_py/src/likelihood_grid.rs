@@ -39,6 +39,20 @@ impl LikelihoodGrid {
         Ok(Self { inner: Arc::new(grid) })
     }
 
+    /// The field sampled every `resolution` metres, or coarser by steps of a quarter where that
+    /// would exceed the native limit of cells (see `icp_core`'s `LikelihoodGrid::within_budget`).
+    #[staticmethod]
+    fn within_budget(
+        py: Python<'_>,
+        points: PyReadonlyArray2<'_, f64>,
+        resolution: f64,
+        sigma: f64,
+    ) -> PyResult<Self> {
+        let pts = points_from("plan points", &points)?;
+        let grid = py.detach(|| guarded(|| CoreGrid::within_budget(&pts, resolution, sigma)))?;
+        Ok(Self { inner: Arc::new(grid) })
+    }
+
     /// Metres between cell centres.
     #[getter]
     fn resolution(&self) -> f64 {

@@ -389,18 +389,11 @@ class PlanMap:
         bilinearly. One byte per cell: 37 MB for a 305 x 305 m SLAM map at 5 cm. A plan whose
         field would need more cells than the native limit (256 Mi: a square of 800 m at 5 cm) is
         sampled coarser, by steps of a quarter, until it fits: the Gaussian keeps its `sigma`, the
-        interpolation between samples is coarser. What `planicp.tracking.posterior_refinement`
+        interpolation between samples is coarser (a `PlanicpError` when that would take samples
+        over a thousand `sigma`s apart: points 10^8 m apart). What `planicp.tracking.posterior_refinement`
         climbs, and what a searched place is weighed by (`tracking.stages.search`)."""
         if self._likelihood is None:
-            sigma = resolution = self.spacing
-            while True:
-                try:
-                    self._likelihood = _core.LikelihoodGrid(self._points, resolution, sigma)
-                    break
-                except _core.PlanicpError as error:
-                    if "cells" not in str(error) or resolution > 1e3 * sigma:
-                        raise
-                    resolution *= 1.25
+            self._likelihood = _core.LikelihoodGrid.within_budget(self._points, self.spacing, self.spacing)
         return self._likelihood
 
     @property

@@ -21,6 +21,31 @@ pub const MAX_FIELD_CELLS: usize = 256 * 1024 * 1024;
 /// Cut of the Gaussian, in `sigma`s: beyond it a cell holds 0 (`exp(-4.5)` is 1 % of the peak).
 pub const CUT_SIGMAS: f64 = 3.0;
 
+/// Most times `sigma` [`LikelihoodGrid::within_budget`] coarsens a field's sampling to.
+pub const MAX_COARSENING: f64 = 1e3;
+
+/// The lowest and highest coordinates of `points`.
+fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// [cols, rows] (as floats: they may not fit a usize) of a field over the box `lo`-`hi` sampled
+/// every `resolution` metres, with its margin of `CUT_SIGMAS * sigma` and two cells.
+fn raster_shape(lo: [f64; 2], hi: [f64; 2], resolution: f64, sigma: f64) -> [f64; 2] {
+    let margin = CUT_SIGMAS * sigma + 2.0 * resolution;
+    [
+        ((hi[0] - lo[0] + 2.0 * margin) / resolution).ceil() + 1.0,
+        ((hi[1] - lo[1] + 2.0 * margin) / resolution).ceil() + 1.0,
+    ]
+}
+
 /// A likelihood raster of the plan (see the module).
 #[derive(Debug, Clone)]
 pub struct LikelihoodGrid {
@@ -45,20 +70,18 @@ impl LikelihoodGrid {
             return Err(IcpError::Empty { what: "plan points" });
         }
         let reach = CUT_SIGMAS * sigma;
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounds(points);
         let margin = reach + 2.0 * resolution;
         let origin = [lo[0] - margin, lo[1] - margin];
-        let cols_f = ((hi[0] - lo[0] + 2.0 * margin) / resolution).ceil() + 1.0;
-        let rows_f = ((hi[1] - lo[1] + 2.0 * margin) / resolution).ceil() + 1.0;
+        let [cols_f, rows_f] = raster_shape(lo, hi, resolution, sigma);
         let cells_f = cols_f * rows_f;
         if !(cells_f.is_finite() && cells_f <= MAX_FIELD_CELLS as f64) {
-            return Err(IcpError::RasterTooLarge { resolution, cells: cells_f, limit: MAX_FIELD_CELLS });
+            return Err(IcpError::RasterTooLarge {
+                what: "likelihood field",
+                resolution,
+                cells: cells_f,
+                limit: MAX_FIELD_CELLS,
+            });
         }
         let (cols, rows) = (cols_f as usize, rows_f as usize);
         let mut cells = vec![0u8; cols * rows];
@@ -86,6 +109,38 @@ impl LikelihoodGrid {
             }
         }
         Ok(Self { resolution, sigma, origin, cols, rows, cells })
+    }
+
+    /// The field of `points` with a Gaussian of `sigma` metres, sampled every `resolution` metres,
+    /// or, where that would take more than [`MAX_FIELD_CELLS`] cells (a square of 800 m at 5 cm),
+    /// at the first of `resolution` times 1.25, 1.25^2, ... that fits: the Gaussian keeps its
+    /// `sigma`, the interpolation between samples is coarser. Errors as [`Self::new`], and
+    /// [`IcpError::RasterTooLarge`] (at `resolution`) when the fitting resolution would exceed
+    /// [`MAX_COARSENING`] times `sigma`: samples that far apart no longer show the Gaussian.
+    pub fn within_budget(points: &[[f64; 2]], resolution: f64, sigma: f64) -> Result<Self> {
+        if points.is_empty()
+            || !(resolution.is_finite() && resolution > 0.0 && sigma.is_finite() && sigma > 0.0)
+        {
+            return Self::new(points, resolution, sigma);
+        }
+        let (lo, hi) = bounds(points);
+        let cells = |res: f64| {
+            let [cols, rows] = raster_shape(lo, hi, res, sigma);
+            cols * rows
+        };
+        let mut fitting = resolution;
+        while !(cells(fitting) <= MAX_FIELD_CELLS as f64) {
+            fitting *= 1.25;
+            if !(fitting <= MAX_COARSENING * sigma) {
+                return Err(IcpError::RasterTooLarge {
+                    what: "likelihood field",
+                    resolution,
+                    cells: cells(resolution),
+                    limit: MAX_FIELD_CELLS,
+                });
+            }
+        }
+        Self::new(points, fitting, sigma)
     }
 
     /// Metres between cell centres.
@@ -149,6 +204,31 @@ mod tests {
         assert!(slope[1] < -5.0, "{slope:?}");
         assert_eq!(grid.value_and_gradient([2.0, 0.2]).0, 0.0);
         assert_eq!(grid.value_and_gradient([-5.0, 0.0]).0, 0.0);
+    }
+
+    #[test]
+    fn a_field_too_large_at_its_resolution_is_sampled_coarser_within_the_limit() {
+        // 820 m square at 5 cm: 269 Mi cells, over the 256 Mi limit.
+        let square = [[0.0, 0.0], [820.0, 0.0], [820.0, 820.0], [0.0, 820.0]];
+        assert!(matches!(LikelihoodGrid::new(&square, 0.05, 0.05), Err(IcpError::RasterTooLarge { .. })));
+        let grid = LikelihoodGrid::within_budget(&square, 0.05, 0.05).unwrap();
+        assert!((grid.resolution() - 0.0625).abs() < 1e-12, "{}", grid.resolution());
+        assert_eq!(grid.sigma(), 0.05);
+        let (cols, rows) = grid.shape();
+        assert!(cols * rows <= MAX_FIELD_CELLS);
+        assert!(grid.value_and_gradient([820.0, 820.0]).0 > 0.6);
+        // One that fits is sampled as asked.
+        assert_eq!(LikelihoodGrid::within_budget(&square[..2], 0.05, 0.05).unwrap().resolution(), 0.05);
+        // Two points 10^8 m apart would need samples 2,900 sigmas apart: refused, at the
+        // resolution asked for, and so are bad arguments.
+        match LikelihoodGrid::within_budget(&[[0.0, 0.0], [1e8, 1e8]], 0.05, 0.05) {
+            Err(IcpError::RasterTooLarge { what: "likelihood field", resolution, .. }) => {
+                assert_eq!(resolution, 0.05)
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(LikelihoodGrid::within_budget(&square, 0.05, -1.0).is_err());
+        assert!(LikelihoodGrid::within_budget(&[], 0.05, 0.05).is_err());
     }
 
     #[test]

@@ -56,7 +56,12 @@ impl WallRaster {
         let rows_f = ((hi[1] - origin[1]) / resolution).floor() + 2.0;
         let cells = cols_f * rows_f;
         if !(cells.is_finite() && cells <= MAX_RASTER_CELLS as f64) {
-            return Err(IcpError::RasterTooLarge { resolution, cells, limit: MAX_RASTER_CELLS });
+            return Err(IcpError::RasterTooLarge {
+                what: "visibility raster",
+                resolution,
+                cells,
+                limit: MAX_RASTER_CELLS,
+            });
         }
         let (cols, rows) = (cols_f as usize, rows_f as usize);
         let mut raster = Self {

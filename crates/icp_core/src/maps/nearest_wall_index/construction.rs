@@ -94,6 +94,7 @@ impl NearestWallIndex {
         let cells = block_cols_f * block_rows_f * BLOCK_CELLS as f64;
         if !(cells.is_finite() && cells <= MAX_INDEX_CELLS) {
             return Err(IcpError::RasterTooLarge {
+                what: "nearest-wall index",
                 resolution: cell,
                 cells,
                 limit: MAX_INDEX_CELLS as usize,
@@ -361,6 +362,7 @@ impl NearestWallIndex {
 
     fn lists_len(&self) -> Result<u32> {
         u32::try_from(self.lists.len()).ok().filter(|&n| n < LIST).ok_or(IcpError::RasterTooLarge {
+            what: "nearest-wall index",
             resolution: self.cell,
             cells: self.lists.len() as f64,
             limit: LIST as usize,
