@@ -129,9 +129,13 @@ impl LikelihoodGrid {
             cols * rows
         };
         let mut fitting = resolution;
-        while !(cells(fitting) <= MAX_FIELD_CELLS as f64) {
+        loop {
+            let needed = cells(fitting);
+            if needed.is_finite() && needed <= MAX_FIELD_CELLS as f64 {
+                break;
+            }
             fitting *= 1.25;
-            if !(fitting <= MAX_COARSENING * sigma) {
+            if fitting.is_nan() || fitting > MAX_COARSENING * sigma {
                 return Err(IcpError::RasterTooLarge {
                     what: "likelihood field",
                     resolution,
