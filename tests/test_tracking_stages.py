@@ -4,6 +4,7 @@ a synthetic office, and the decisions an `Estimate` lists."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -34,7 +35,7 @@ from planicp.tracking.decisions import (
 )
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
-from planicp.tracking.odometry_fault import CostHistory, scan_cost
+from planicp.tracking.odometry_fault import CostHistory, FaultSweep, scan_cost
 from planicp.tracking.recovery import Recovery, SearchBudget
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
@@ -138,6 +139,37 @@ def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
     kept = stages.correct(scans[2], prediction, search, rejected, the_rules)
     assert not kept.accepted and kept.kind == "prediction" and kept.pose == prediction.pose
     assert kept.covariance is prediction.covariance
+
+
+def test_a_fit_beyond_the_prediction_is_used_alone_unless_the_scan_is_far_worse_explained_than_usual(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # The odometry strayed 15 cm beyond a 2 cm deviation; ICP still finds the true pose: the two
+    # disagree beyond their covariances, and the fit is taken alone (an odometry fault).
+    the_rules = rules(plan)
+    truth = path[20]
+    prediction = prediction_at(se2.compose(truth, (0.15, 0.0, 0.0)))
+    fit = stages.fit_from_prediction(scans[20], prediction, the_rules, False)
+    assert fit.result is not None and fit.reason == "" and error(truth, fit.result.pose)[0] < 0.01
+    search = SearchDecision(None, None, fit.result, "", False)
+    score = stages.judge_score(scans[20], prediction, fit, search, the_rules, False, None)
+    assert score.reason == ""
+    alone = stages.correct(scans[20], prediction, search, score, the_rules)
+    assert alone.accepted and alone.kind == "fit" and alone.refused == ""
+    assert error(truth, alone.pose)[0] < 0.01
+    # The same fit when the scan's cost there exceeds the track's typical cost by the fault cost
+    # and the sweep found no place that explains it as usual: a corrupted scan is the likelier
+    # cause, and the update keeps the prediction.
+    sweep = FaultSweep(truth, cost=30.0, current_cost=40.0, typical=3.0, threshold=13.8)
+    assert not sweep.more_probable
+    corrupted = stages.correct(scans[20], prediction, replace(search, fault=sweep), score, the_rules)
+    assert not corrupted.accepted and corrupted.kind == "prediction" and corrupted.pose == prediction.pose
+    assert corrupted.refused.startswith("it disagrees with the prediction beyond their covariances")
+    assert "(cost 40.0 against a typical 3.0): a corrupted scan" in corrupted.why
+    # A fit fused with the prediction (the two agree) is never refused this way.
+    wide = prediction_at(prediction.pose, np.diag([0.2**2, 0.2**2, (2 * DEG) ** 2]))
+    fused = stages.correct(scans[20], wide, replace(search, fault=sweep), score, the_rules)
+    assert fused.accepted and fused.kind == "fused" and fused.refused == ""
 
 
 def test_the_lost_stage_turns_lost_after_max_rejections_rejections(

@@ -270,6 +270,9 @@ class Correction:
         kind: how `pose` was made (see `CorrectionKind`).
         refinement: how `pose` was refined in the plan's likelihood field after it was made
             (`planicp.tracking.posterior_refinement`), or None.
+        refused: why a fit the gate and the score accepted is not used ("" when it is, or
+            when there was none to refuse): it disagrees with the prediction beyond their
+            covariances and explains the scan far worse than the track's scans are explained.
     """
 
     pose: Pose
@@ -278,6 +281,7 @@ class Correction:
     degeneracy: Degeneracy | None
     kind: CorrectionKind
     refinement: Refinement | None = None
+    refused: str = ""
 
     @property
     def why(self) -> str:
@@ -288,6 +292,8 @@ class Correction:
             "fit": "the fit alone",
             "prediction": "no accepted fit: the prediction",
         }[self.kind]
+        if self.refused:
+            text += f" ({self.refused})"
         if self.refinement is not None and self.refinement.moved >= 0.005:
             text += f", moved {100 * self.refinement.moved:.1f} cm to the scan's most likely pose"
         return text

@@ -384,7 +384,8 @@ class Localizer:
             if lost.lost:
                 self._pending = None  # the recovery looks for the robot now
             if adopted is None:
-                pose, covariance, result, reason = correction.pose, correction.covariance, search.result, score.reason
+                pose, covariance, result = correction.pose, correction.covariance, search.result
+                reason = score.reason or correction.refused
                 accepted, now_lost = correction.accepted, lost.lost
             else:
                 assert recovery.covariance is not None  # given with every adopted place
