@@ -271,9 +271,8 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
             valid = np.ones(len(scans), dtype=bool)
             valid[junk] = False
             lost = harness.error_metrics(est, ref, 0.3)["lost_frac"]
-            cells.append(
-                f"{100 * moved:.1f} cm; {100 * apart.max():.1f} cm, {100 * apart[valid].max():.1f} cm; {100 * lost:.1f} %"
-            )
+            apart_cm = f"{100 * apart.max():.1f} cm, {100 * apart[valid].max():.1f} cm"
+            cells.append(f"{100 * moved:.1f} cm; {apart_cm}; {100 * lost:.1f} %")
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
