@@ -14,6 +14,7 @@
 //! with `y`. Outside the raster the field is 0.
 
 use crate::error::{invalid, IcpError, Result};
+use crate::maps::bounding_box::bounding_box;
 
 /// Most cells a field may hold (one byte each: 256 MiB).
 pub const MAX_FIELD_CELLS: usize = 256 * 1024 * 1024;
@@ -23,18 +24,6 @@ pub const CUT_SIGMAS: f64 = 3.0;
 
 /// Most times `sigma` [`LikelihoodGrid::within_budget`] coarsens a field's sampling to.
 pub const MAX_COARSENING: f64 = 1e3;
-
-/// The lowest and highest coordinates of `points`.
-fn bounds(points: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in points {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (lo, hi)
-}
 
 /// [cols, rows] (as floats: they may not fit a usize) of a field over the box `lo`-`hi` sampled
 /// every `resolution` metres, with its margin of `CUT_SIGMAS * sigma` and two cells.
@@ -70,7 +59,7 @@ impl LikelihoodGrid {
             return Err(IcpError::Empty { what: "plan points" });
         }
         let reach = CUT_SIGMAS * sigma;
-        let (lo, hi) = bounds(points);
+        let (lo, hi) = bounding_box(points);
         let margin = reach + 2.0 * resolution;
         let origin = [lo[0] - margin, lo[1] - margin];
         let [cols_f, rows_f] = raster_shape(lo, hi, resolution, sigma);
@@ -123,7 +112,7 @@ impl LikelihoodGrid {
         {
             return Self::new(points, resolution, sigma);
         }
-        let (lo, hi) = bounds(points);
+        let (lo, hi) = bounding_box(points);
         let cells = |res: f64| {
             let [cols, rows] = raster_shape(lo, hi, res, sigma);
             cols * rows

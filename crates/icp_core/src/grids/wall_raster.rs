@@ -7,6 +7,7 @@
 
 use crate::error::{check_finite, invalid, IcpError, Result};
 use crate::grids::clearance::chebyshev_clearance;
+use crate::maps::bounding_box::bounding_box;
 
 /// Most cells a raster may have (one byte each plus the point index).
 pub const MAX_RASTER_CELLS: usize = 256 * 1024 * 1024;
@@ -44,13 +45,7 @@ impl WallRaster {
         }
         // A NaN would be skipped by the bounds and then fall outside the raster.
         check_finite("plan", points)?;
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounding_box(points);
         let origin = [lo[0] - resolution, lo[1] - resolution];
         let cols_f = ((hi[0] - origin[0]) / resolution).floor() + 2.0;
         let rows_f = ((hi[1] - origin[1]) / resolution).floor() + 2.0;

@@ -4,6 +4,7 @@
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, IcpError, Result};
 use crate::grids::wall_raster::WallRaster;
+use crate::maps::bounding_box::bounding_box;
 use crate::maps::kd_tree::Tree2;
 use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::maps::wall_normals::estimate_normals;
@@ -192,13 +193,7 @@ impl PointMap {
         let cell = if let Some(cell) = self.index_cell {
             cell
         } else {
-            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for p in &self.points {
-                for k in 0..2 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-            }
+            let (lo, hi) = bounding_box(&self.points);
             let cell = DEFAULT_INDEX_CELL.max(self.spacing);
             cell_within_budget(cell, [hi[0] - lo[0], hi[1] - lo[1]], self.index_reach)
         };
@@ -332,13 +327,7 @@ pub fn median_spacing(points: &[[f64; 2]], tree: &Tree2) -> f64 {
 /// `spacing`, coarsened if the raster would exceed [`AUTO_RASTER_MAX_CELLS`] cells.
 pub fn estimate_raster_resolution(points: &[[f64; 2]], spacing: f64) -> f64 {
     let mut resolution = 1.5 * spacing;
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in points {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
+    let (lo, hi) = bounding_box(points);
     let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
     let area = (w + 2.0 * resolution) * (h + 2.0 * resolution);
     if area / (resolution * resolution) > AUTO_RASTER_MAX_CELLS {

@@ -29,6 +29,7 @@
 
 use crate::cancel::Cancel;
 use crate::error::{check_finite, invalid, Result};
+use crate::maps::bounding_box::bounding_box;
 use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::search::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};
@@ -213,13 +214,7 @@ impl GlobalMatcher {
     pub fn new(map: &PointMap, config: GlobalSearchConfig) -> Result<Self> {
         config.validate()?;
         let pyramid = LikelihoodPyramid::new(map.points(), config.resolution, config.sigma, config.levels)?;
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in map.points() {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounding_box(map.points());
         Ok(Self { pyramid, config, bounds: [lo, hi] })
     }
 

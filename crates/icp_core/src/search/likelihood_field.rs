@@ -16,6 +16,7 @@
 //! by the largest block size, so every value outside the stored cells is exactly 0.
 
 use crate::error::{invalid, IcpError, Result};
+use crate::maps::bounding_box::bounding_box;
 
 /// Most cells all levels of a pyramid may hold together (one byte each: 64 MiB).
 pub const MAX_PYRAMID_CELLS: usize = 64 * 1024 * 1024;
@@ -51,13 +52,7 @@ impl LikelihoodPyramid {
             return Err(IcpError::Empty { what: "plan" });
         }
         crate::error::check_finite("plan", points)?;
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounding_box(points);
         let pad = (1usize << (levels - 1)) as f64;
         let margin = 3.0 * sigma + resolution + pad * resolution;
         let origin = [lo[0] - margin, lo[1] - margin];

@@ -4,6 +4,7 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::{invalid, IcpError, Result};
+use crate::maps::bounding_box::bounding_box;
 use crate::maps::kd_tree::Tree2;
 use crate::maps::nearest_wall_index::{
     NearestWallIndex, Site, ALTERNATIVE_REACH, BLOCK, BLOCK_CELLS, EMPTY, LIST, MAX_INDEX_CELLS,
@@ -77,13 +78,7 @@ impl NearestWallIndex {
             .collect();
         // Never reported (it is never within reach), read without a branch.
         sites.push(Site { x: f64::INFINITY, y: f64::INFINITY, seen: SEEN_FROM_EVERYWHERE, plan: 0 });
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in points {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
+        let (lo, hi) = bounding_box(points);
         let margin = reach + cell;
         let origin = [lo[0] - margin, lo[1] - margin];
         let cols_f = ((hi[0] + margin - origin[0]) / cell).ceil().max(1.0);
