@@ -399,7 +399,7 @@ class Localizer:
             self._last_odom = odom
             if records.anchored:
                 self._anchor = (points, odom)
-            if accepted and not now_lost and rules.refinement.enabled and rules.refinement.fault_probability > 0.0:
+            if accepted and not now_lost and rules.refinement.weighs_faults:
                 self._costs.record(scan_cost(points, pose, self.plan, rules.refinement))
             # The scale check observes the fit from the prediction when it stays where the
             # odometry says the robot is (a plan off in scale explains too little of the scans

@@ -134,7 +134,7 @@ def sweep_for_fault(
 ) -> FaultSweep | None:
     """The sweep around `predicted` when the scan's cost at `current` (the update's fit, or the
     prediction) exceeds the track's typical cost by the fault cost; None when it does not, when
-    no typical cost is known yet, or when the rule has no fault component.
+    no typical cost is known yet, or when the rule weighs no faults (`weighs_faults`).
 
     Args:
         points: (N, 2) scan points in the robot frame, metres.
@@ -145,7 +145,7 @@ def sweep_for_fault(
             `fault_heading_window`).
         history: the track's recent costs.
     """
-    if rule.fault_probability <= 0.0:
+    if not rule.weighs_faults:
         return None
     typical = history.typical()
     if typical is None:

@@ -73,6 +73,12 @@ class PosteriorRefinement(Settings):
     fault_probability: Annotated[float, Real(ge=0.0, lt=1.0, note="(0 disables it)")] = 1e-3
     fault_heading_window: Annotated[float, Real(ge=0.0, lt=math.pi / 4.0, unit="radians")] = math.radians(44.0)
 
+    @property
+    def weighs_faults(self) -> bool:
+        """Whether the motion model's fault component is in use: the refinement runs (its field is
+        what a fault is judged in) and `fault_probability` is above 0."""
+        return self.enabled and self.fault_probability > 0.0
+
 
 @dataclass(frozen=True)
 class Refinement:

@@ -60,9 +60,10 @@ def _corrupted_scan(search: SearchDecision) -> str:
     for a fault ran, `SearchDecision.fault`, and found no place that explains the scan as usual)
     explains it far worse, which a corrupted scan does and a sound fit does not (on the real
     logs' maps one scan in five turned by 30 or 90 degrees was taken this way, 43-51 cm from the
-    prediction). The update then keeps the prediction, as for a fit the gate rejects."""
+    prediction). The update then keeps the prediction, as for a fit the gate rejects. (Only an
+    accepted fit gets here, so the sweep judged the fit's cost, not the prediction's.)"""
     sweep = search.fault
-    if sweep is None or sweep.more_probable or search.reason != "":
+    if sweep is None or sweep.more_probable:
         return ""
     return (
         f"it disagrees with the prediction beyond their covariances and explains the scan far worse than "

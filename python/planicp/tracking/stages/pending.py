@@ -54,7 +54,7 @@ def _fault_confirmed(points: NDArray[np.float64], place: Pose, fit: Pose, rules:
     of the aligned returns) is then taken on the scan's likelihood, as it was found. Only where
     the refinement's field is used and the fault component is on."""
     refinement = rules.refinement
-    if not refinement.enabled or refinement.fault_probability <= 0.0:
+    if not refinement.weighs_faults:
         return False
     threshold = fault_cost(refinement.fault_probability)
     return scan_cost(points, place, rules.plan, refinement) + threshold < scan_cost(points, fit, rules.plan, refinement)

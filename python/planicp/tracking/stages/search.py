@@ -94,7 +94,7 @@ def _fault_search(
     meanwhile, since the scan prefers the place to the fit by the fault cost. Not while `lost`
     (the recovery searches then), for a scan that could not be aligned, nor without the posterior
     refinement (whose likelihood field the sweep climbs)."""
-    if lost or decision.result is None or not rules.refinement.enabled:
+    if lost or decision.result is None:
         return decision
     current = decision.result.pose if decision.reason == "" else prediction.pose
     sweep = sweep_for_fault(points, prediction.pose, current, rules.plan, rules.refinement, history)
