@@ -214,11 +214,6 @@ def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
-def estimates(plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray) -> np.ndarray:
-    """(N, 3) poses of a default `Localizer` started at the first reference pose."""
-    return tracked(plan, scans, ref, odom)[0]
-
-
 def tracked(plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(N, 3) poses of a default `Localizer` started at the first reference pose, and the (N, 3)
     poses it predicted from the odometry before each scan (stage 1, `Prediction.pose`)."""
@@ -261,7 +256,7 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
     print("|---|---|" + "---|" * len(kinds))
     for name in logs:
         plan, scans, ref, odom = load(harness, name, out)
-        clean = estimates(plan, scans, ref, odom)
+        clean = tracked(plan, scans, ref, odom)[0]
         cells = [f"{100 * harness.error_metrics(clean, ref, 0.3)['lost_frac']:.1f} %"]
         for kind in kinds:
             est, predicted = tracked(plan, corrupted(scans, kind, np.random.default_rng(1)), ref, odom)
