@@ -14,7 +14,7 @@
 //! with `y`. Outside the raster the field is 0.
 
 use crate::error::{invalid, IcpError, Result};
-use crate::maps::bounding_box::bounding_box;
+use crate::grids::bounding_box::bounding_box;
 
 /// Most cells a field may hold (one byte each: 256 MiB).
 pub const MAX_FIELD_CELLS: usize = 256 * 1024 * 1024;

@@ -1,5 +1,6 @@
 //! Grids: rasters over the plane and the walks of beams through them.
 //!
+//! - [`bounding_box`]: the box around a set of points, which every raster over them spans.
 //! - [`cell_traversal`]: the cells a segment passes through (Amanatides-Woo).
 //! - [`clearance`]: each cell's distance to the nearest occupied one, so beams jump across empty space.
 //! - [`wall_raster`]: the raster of the plan's wall points that visibility casts through.
@@ -9,6 +10,7 @@
 //!
 //! Nothing here knows about plans' points beyond their coordinates, nor about ICP.
 
+pub mod bounding_box;
 pub mod cell_traversal;
 pub mod clearance;
 pub mod likelihood_grid;

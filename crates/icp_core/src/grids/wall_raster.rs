@@ -6,8 +6,8 @@
 //! cells, which a cell-by-cell ray traversal cannot slip through.
 
 use crate::error::{check_finite, invalid, IcpError, Result};
+use crate::grids::bounding_box::bounding_box;
 use crate::grids::clearance::chebyshev_clearance;
-use crate::maps::bounding_box::bounding_box;
 
 /// Most cells a raster may have (one byte each plus the point index).
 pub const MAX_RASTER_CELLS: usize = 256 * 1024 * 1024;

@@ -7,9 +7,7 @@
 //! - [`wall_normals`]: the wall normal at every plan point (a line fitted to its neighbours).
 //! - [`pair`]: a scan point paired with its nearest plan point, what the look-ups answer.
 //! - [`bucket_grid`]: exact fixed-radius range queries over a small point set.
-//! - [`bounding_box`]: the box around a set of plan points.
 
-pub mod bounding_box;
 pub mod bucket_grid;
 pub mod kd_tree;
 pub mod nearest_wall_index;

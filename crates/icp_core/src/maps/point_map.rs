@@ -3,8 +3,8 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::{check_finite, IcpError, Result};
+use crate::grids::bounding_box::bounding_box;
 use crate::grids::wall_raster::WallRaster;
-use crate::maps::bounding_box::bounding_box;
 use crate::maps::kd_tree::Tree2;
 use crate::maps::nearest_wall_index::{cell_within_budget, NearestWallIndex};
 use crate::maps::wall_normals::estimate_normals;

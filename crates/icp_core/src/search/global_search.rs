@@ -29,7 +29,7 @@
 
 use crate::cancel::Cancel;
 use crate::error::{check_finite, invalid, Result};
-use crate::maps::bounding_box::bounding_box;
+use crate::grids::bounding_box::bounding_box;
 use crate::maps::point_map::PointMap;
 use crate::pose::Pose2;
 use crate::search::likelihood_field::{LikelihoodPyramid, MAX_LEVELS};

@@ -16,7 +16,7 @@
 //! by the largest block size, so every value outside the stored cells is exactly 0.
 
 use crate::error::{invalid, IcpError, Result};
-use crate::maps::bounding_box::bounding_box;
+use crate::grids::bounding_box::bounding_box;
 
 /// Most cells all levels of a pyramid may hold together (one byte each: 64 MiB).
 pub const MAX_PYRAMID_CELLS: usize = 64 * 1024 * 1024;

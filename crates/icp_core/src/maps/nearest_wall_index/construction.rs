@@ -4,7 +4,7 @@
 
 use crate::cancel::{self, Cancel};
 use crate::error::{invalid, IcpError, Result};
-use crate::maps::bounding_box::bounding_box;
+use crate::grids::bounding_box::bounding_box;
 use crate::maps::kd_tree::Tree2;
 use crate::maps::nearest_wall_index::{
     NearestWallIndex, Site, ALTERNATIVE_REACH, BLOCK, BLOCK_CELLS, EMPTY, LIST, MAX_INDEX_CELLS,

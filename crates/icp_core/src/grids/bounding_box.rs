@@ -1,4 +1,4 @@
-//! The axis-aligned box around a set of plan points.
+//! The axis-aligned box around a set of points (a plan's, a scan's): what a raster over them spans.
 
 /// `(lo, hi)`: the lowest and highest x and y of `points` (metres); `([inf, inf], [-inf, -inf])`
 /// for no points. A NaN coordinate is skipped (`f64::min`/`max` ignore it): callers that must not
