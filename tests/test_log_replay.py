@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import carmen_excerpt as ex
-from planicp import PlanMap, PlanScaleWarning
+from planicp import IcpConfig, PlanMap, PlanScaleWarning
 from planicp.cli import main as cli_main
 from planicp.evaluation.figures import plot_quality
 from planicp.evaluation.log_evaluation import OdometryDrift, evaluate_log, plan_from_scans, synthesise_odometry
@@ -160,6 +160,9 @@ def test_evaluate_log_on_a_simulated_run(recording: Recording) -> None:
     frames = recording.scan_frames()
     evaluation = evaluate_log(frames)
     assert evaluation.plan_scans == 101 and evaluation.tracked_scans == 100 and evaluation.skipped_scans == 0
+    # Tracked as a user who loads the drawn plan is: its cell centres matched through the index.
+    assert evaluation.config == IcpConfig.for_tracking(evaluation.plan)
+    assert evaluation.config.correspondence_search == "wall_index"
     m = evaluation.tracked.metrics()
     # The bar for the Intel log; the plan drawn here has the 2.5 cm quantisation noted above.
     assert m["planicp"]["ate_rms_m"] < 0.05 and m["planicp"]["position_max_m"] < 0.15
@@ -171,6 +174,8 @@ def test_evaluate_log_on_a_simulated_run(recording: Recording) -> None:
         evaluate_log(frames, odometry="wheel")
     with pytest.raises(ValueError, match="needs a log with odometry"):
         evaluate_log([replace(f, odometry=None) for f in frames], odometry="log")
+    with pytest.raises(ValueError, match="max_correspondence_distance"):
+        evaluate_log(frames, icp={"max_correspondence_distance": -1.0})
 
 
 def test_plan_from_scans_puts_walls_where_the_scans_end(carmen_log: Path) -> None:

@@ -39,7 +39,18 @@ def write_scan_map(frames: list[ScanFrame], folder: Path) -> Path:
 
 def track(plan: planicp.PlanMap, scans: list[np.ndarray], reference: np.ndarray, odometry: np.ndarray) -> np.ndarray:
     """Position errors (metres) of a default `Localizer` started at the first reference pose."""
-    localizer = planicp.Localizer(plan, tuple(reference[0]))
+    return track_with(plan, scans, reference, odometry, None)
+
+
+def track_with(
+    plan: planicp.PlanMap,
+    scans: list[np.ndarray],
+    reference: np.ndarray,
+    odometry: np.ndarray,
+    config: planicp.IcpConfig | None,
+) -> np.ndarray:
+    """Position errors (metres) of a `Localizer` with `config` started at the first reference pose."""
+    localizer = planicp.Localizer(plan, tuple(reference[0]), config)
     errors = []
     for scan, odom, ref in zip(scans, odometry, reference):
         estimate = localizer.update(scan, tuple(odom))
@@ -79,6 +90,28 @@ def test_a_real_recording_tracked_from_a_map_loaded_from_its_yaml(
     ates = [float(np.sqrt(np.mean(e**2))) for e in errors]
     worst = max(float(e.max()) for e in errors)
     assert np.mean(ates) < 0.055 and worst < 0.25, (ates, worst)  # measured: mean 4.3 cm, worst 17 cm
+
+
+def test_a_slam_map_is_matched_through_the_index_masks_and_a_drawn_plan_through_the_cast(
+    killian: tuple[Path, list[np.ndarray], np.ndarray, list[np.ndarray]],
+) -> None:
+    """A map_server map's cell centres are where returns ended, seen from every pose the map was
+    made from: the default `Localizer` pairs them through the nearest-wall index's masks (hidden
+    only by walls within 0.6 m), not through a cast from the prediction that stops at every speck
+    (`IcpConfig.for_tracking`). The same walls read as material are cast through. Both track the
+    excerpt equally well (measured: 4.36 and 4.33 cm mean ATE over the six draws)."""
+    yaml_path, scans, reference, odometries = killian
+    slam = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
+    drawn = planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False)
+    assert planicp.Localizer(slam, tuple(reference[0])).config.correspondence_search == "wall_index"
+    assert planicp.Localizer(drawn, tuple(reference[0])).config.correspondence_search == "kd_tree"
+    assert planicp.IcpConfig.for_tracking().correspondence_search == "kd_tree"  # no plan: as if drawn
+    cast = planicp.IcpConfig.for_tracking(slam, correspondence_search="kd_tree")
+    by_masks = np.mean([np.sqrt(np.mean(track(slam, scans, reference, o) ** 2)) for o in odometries])
+    by_cast = np.mean(
+        [np.sqrt(np.mean(e**2)) for e in (track_with(slam, scans, reference, o, cast) for o in odometries)]
+    )
+    assert by_masks < by_cast + 0.003, (by_masks, by_cast)
 
 
 def test_an_occupancy_grid_is_read_as_surfaces_not_as_wall_material(

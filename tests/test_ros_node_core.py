@@ -10,11 +10,12 @@ from __future__ import annotations
 import importlib.util
 import math
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from planicp import _core
+from planicp import IcpConfig, _core
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
 from planicp.ros import (
@@ -390,6 +391,11 @@ def test_settings_from_parameters() -> None:
     )
     assert s.initial_pose == (1.0, 2.0, 0.5) and s.laser_pose == (0.1, 0.0, 0.0)
     assert s.icp_config().subsample == 2 and s.icp_config().auto_trim  # on top of the tracking defaults
+    # ...for the plan the node localizes in: a SLAM map's cells are matched through the index.
+    slam = PlanMap.from_ros_map(Path(__file__).parent / "data" / "tb3_sandbox.yaml", cache=False)
+    assert s.icp_config(slam) == IcpConfig.for_tracking(slam, subsample=2)
+    assert s.icp_config(slam).correspondence_search == "wall_index"
+    assert s.icp_config(load_default_plan()).correspondence_search == "kd_tree"
     assert s.acceptance_gate().min_inlier_ratio == 0.3
     with pytest.raises(ValueError, match=r"unknown planicp_node parameters \['scan_toppic'\]"):
         NodeSettings.from_params({"scan_toppic": "scan"})

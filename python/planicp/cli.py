@@ -131,10 +131,9 @@ def _read_log(args: argparse.Namespace) -> Any:
     return log
 
 
-def _icp_config(args: argparse.Namespace) -> Any:
-    from .tracking.icp_config import IcpConfig
-
-    return IcpConfig.for_tracking(max_correspondence_distance=args.max_distance)
+def _icp_changes(args: argparse.Namespace) -> dict[str, Any]:
+    """The changes the options make to the `Localizer`'s default ICP settings for the plan."""
+    return {} if args.max_distance is None else {"max_correspondence_distance": args.max_distance}
 
 
 def _replay(args: argparse.Namespace) -> int:
@@ -143,6 +142,7 @@ def _replay(args: argparse.Namespace) -> int:
     from .mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
     from .plans.plan_loading import load_plan
     from .progress import progress_bar
+    from .tracking.icp_config import IcpConfig
 
     if args.out_bag is not None:  # before the long part: a missing rosbags or an existing bag
         from .ros.estimate_bag import refuse_existing_bag
@@ -155,7 +155,7 @@ def _replay(args: argparse.Namespace) -> int:
         log,
         plan,
         initial_pose=args.initial_pose,
-        config=_icp_config(args),
+        config=IcpConfig.for_tracking(plan, **_icp_changes(args)),
         grid=grid,
         progress=progress_bar(sys.stdout, len(log), "scans"),
     )
@@ -200,7 +200,7 @@ def _evaluate_log(args: argparse.Namespace) -> int:
         min_hits=args.min_hits,
         odometry=args.odometry,
         seed=args.seed,
-        config=_icp_config(args),
+        icp=_icp_changes(args),
         progress=progress_bar(sys.stdout, (len(log) + 1) // 2, "scans"),
     )
     print()
@@ -217,7 +217,7 @@ def _evaluate_log(args: argparse.Namespace) -> int:
             "min_hits": args.min_hits,
             "odometry": args.odometry,
             "seed": args.seed,
-            "max_correspondence_distance_m": args.max_distance,
+            "max_correspondence_distance_m": evaluation.config.max_correspondence_distance,
         },
     }
     metrics = write_outputs(evaluation.tracked, plan, evaluation.grid, args.out, extra)
@@ -277,7 +277,12 @@ def _add_log_options(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="which laser of a CARMEN log (default: the first one found)",
     )
-    parser.add_argument("--max-distance", type=float, default=0.25, help="ICP max correspondence distance, metres")
+    parser.add_argument(
+        "--max-distance",
+        type=float,
+        default=None,
+        help="ICP max correspondence distance, metres (default: the Localizer's, 0.25)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output folder")
 
 

@@ -22,8 +22,9 @@ but they see the same walls (and the same furniture, which in a real office is i
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -163,6 +164,7 @@ class LogEvaluation:
         grid: the enhanced occupancy grid of the tracked scans at planicp's poses.
         plan_scans, tracked_scans, skipped_scans: how many scans drew the plan, were tracked, and
             were left out for lack of a reference pose.
+        config: the ICP settings the scans were tracked with.
     """
 
     plan: PlanMap
@@ -171,6 +173,7 @@ class LogEvaluation:
     plan_scans: int
     tracked_scans: int
     skipped_scans: int
+    config: IcpConfig
 
 
 def evaluate_log(
@@ -181,14 +184,16 @@ def evaluate_log(
     drift: OdometryDrift | None = None,
     odometry: str = "synthetic",
     seed: int = 0,
-    config: IcpConfig | None = None,
+    icp: Mapping[str, Any] | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> LogEvaluation:
-    """Runs the protocol of the module documentation on `frames` (e.g. a `ScanLog`).
+    """Runs the protocol of the module documentation on `frames` (e.g. a `ScanLog`), tracking
+    with the `Localizer`'s default ICP settings for the plan drawn (`IcpConfig.for_tracking(plan)`,
+    as a user who loads that plan gets them) changed by `icp` (field names and values).
 
     Raises:
         ValueError: fewer than 4 scans with reference poses, an unknown `odometry` source, or
-            `odometry="log"` on a log without odometry.
+            `odometry="log"` on a log without odometry; an unknown or bad `icp` setting.
     """
     if odometry not in ODOMETRY_SOURCES:
         raise ValueError(f"odometry must be one of {ODOMETRY_SOURCES}, got {odometry!r}")
@@ -207,5 +212,6 @@ def evaluate_log(
             raise ValueError("odometry='log' needs a log with odometry; this one has none")
         tracked_frames = odd
     grid = EnhancedOccupancyGrid(plan, resolution)
+    config = IcpConfig.for_tracking(plan, **dict(icp or {}))
     tracked = track_log(tracked_frames, plan, config=config, grid=grid, progress=progress)
-    return LogEvaluation(plan, tracked, grid, len(even), len(odd), len(frames) - len(usable))
+    return LogEvaluation(plan, tracked, grid, len(even), len(odd), len(frames) - len(usable), config)

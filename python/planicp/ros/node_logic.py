@@ -71,7 +71,11 @@ class PlanicpNodeCore:
         s = self.settings
         self.plan = plan
         self.localizer = Localizer(
-            plan, s.initial_pose, s.icp_config(), gate=s.acceptance_gate(), initial_covariance=s.initial_covariance()
+            plan,
+            s.initial_pose,
+            s.icp_config(plan),
+            gate=s.acceptance_gate(),
+            initial_covariance=s.initial_covariance(),
         )
         self._odometry = OdometryBuffer(s.odometry_span)
         self._eog = EnhancedOccupancyGrid(plan, s.eog_resolution) if s.eog_topic else None

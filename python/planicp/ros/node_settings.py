@@ -175,9 +175,10 @@ class NodeSettings(Settings):
             raise TypeError(f"params must be a mapping, got {type(params).__name__}")
         return read(cls, params, what="planicp_node parameters")
 
-    def icp_config(self) -> IcpConfig:
-        """`IcpConfig.for_tracking()` with the `icp` overrides (unknown fields: ValueError)."""
-        return _icp_config(self.icp)
+    def icp_config(self, plan: PlanMap | None = None) -> IcpConfig:
+        """`IcpConfig.for_tracking(plan)` (the `Localizer`'s default for `plan`) with the `icp`
+        overrides (unknown fields: ValueError)."""
+        return _icp_config(self.icp, plan)
 
     def acceptance_gate(self) -> AcceptanceGate:
         """`AcceptanceGate()` with the `gate` overrides (unknown fields: ValueError)."""
@@ -197,9 +198,9 @@ class NodeSettings(Settings):
         return load_plan(self.plan, resolution=self.resolution, origin=self.origin)
 
 
-def _icp_config(overrides: Mapping[str, Any]) -> IcpConfig:
+def _icp_config(overrides: Mapping[str, Any], plan: PlanMap | None = None) -> IcpConfig:
     try:
-        return IcpConfig.from_dict({**IcpConfig.for_tracking().to_dict(), **overrides})
+        return IcpConfig.from_dict({**IcpConfig.for_tracking(plan).to_dict(), **overrides})
     except ValidationError as exc:
         raise ValueError(f"icp: {first_error(exc)}") from None
 

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from functools import cached_property
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic.dataclasses import dataclass
 
 from .. import _core
 from .._settings import SETTINGS, Flag, Items, Real, Settings, Whole, non_empty
+
+if TYPE_CHECKING:
+    from ..plans.plan_map import PlanMap
 
 CorrespondenceSearch = Literal["wall_index", "kd_tree"]
 
@@ -99,14 +102,28 @@ class IcpConfig(Settings):
         return _core.IcpSettings(self)
 
     @classmethod
-    def for_tracking(cls, **changes: Any) -> IcpConfig:
-        """The settings the `Localizer` uses by default: these defaults with `auto_trim` on, since
-        the odometry prediction is close, the covariance scale calibrated for tracking (4), and the
-        KD-tree search over the walls visible from the prediction (through the plan's index, so
-        at about the index's speed): on the real Intel log the index's own visibility masks gave
-        a 3.8 cm ATE with a 29 cm worst error, against 3.5 cm and 11 cm (`changes` override
-        fields)."""
-        return cls(**{"auto_trim": True, "covariance_scale": 4.0, "correspondence_search": "kd_tree", **changes})
+    def for_tracking(cls, plan: PlanMap | None = None, **changes: Any) -> IcpConfig:
+        """The settings the `Localizer` uses by default for `plan`: these defaults with `auto_trim`
+        on, since the odometry prediction is close, the covariance scale calibrated for tracking
+        (4), and the visibility that suits how the plan's walls were read (`changes` override
+        fields):
+
+        - walls drawn as material (a drawing, an image, vector walls, or None): the KD-tree over
+          the walls the ray cast from the prediction shows (`"kd_tree"`, through the plan's index,
+          so at about the index's speed). A drawn wall stops every beam, and its far face, a
+          wall's thickness behind the near one, must stay hidden however far the robot is.
+        - an occupancy grid's occupied cell centres (`plan.edge_detector == "centres"`: a
+          map_server map made by SLAM): the nearest-wall index's masks (`"wall_index"`), where a
+          wall point is hidden only by another wall within 0.6 m of it. A SLAM map marks where
+          returns ended, from every pose the map was made from: trees, posts and parked cars are
+          specks that beams from other poses pass, and a cast from the prediction stops at them
+          and hides the walls behind: on freiburg-campus ICP from the reference pose through the
+          cast drifted to places the scan's likelihood rejects, and stayed at the reference
+          through the masks, which also take a fraction of the cast's time
+          (docs/benchmarks.md, "Visibility on real logs")."""
+        cells = plan is not None and plan.edge_detector == "centres"
+        search = "wall_index" if cells else "kd_tree"
+        return cls(**{"auto_trim": True, "covariance_scale": 4.0, "correspondence_search": search, **changes})
 
     @property
     def stage_distances(self) -> tuple[float, ...]:

@@ -188,7 +188,8 @@ class Localizer:
         Args:
             plan: the plan to localize in.
             initial_pose: (x, y, yaw) of the robot in the map at the first update.
-            config: ICP settings (None: `IcpConfig.for_tracking()`).
+            config: ICP settings (None: `IcpConfig.for_tracking(plan)`: the visibility of a drawn
+                plan's walls is cast from the prediction, a SLAM map's is its index's masks).
             gate: acceptance rules (None: `AcceptanceGate()`).
             motion_noise: odometry uncertainty for the covariance (None: `MotionNoise()`).
             degeneracy: when a fit is degenerate (None: `DegeneracyRule()`).
@@ -221,7 +222,7 @@ class Localizer:
         if gate is not None and not isinstance(gate, AcceptanceGate):
             raise TypeError(f"gate must be a planicp.AcceptanceGate, got {type(gate).__name__}")
         self.plan = plan
-        self.config = config if config is not None else IcpConfig.for_tracking()
+        self.config = config if config is not None else IcpConfig.for_tracking(plan)
         self.gate = gate if gate is not None else AcceptanceGate()
         self.motion_noise = motion_noise if motion_noise is not None else MotionNoise()
         self.degeneracy = degeneracy if degeneracy is not None else DegeneracyRule()

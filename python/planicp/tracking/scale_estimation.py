@@ -106,7 +106,7 @@ def estimate_scale(
         initial_pose: (x, y, yaw) of the robot at the first scan in the plan's map frame
             (where the drawing shows the robot: in the plan's own, possibly wrong, metres).
         ratios: plan / world scales tried (> 0); the best one is refined.
-        config: ICP settings of the alignments (None: `IcpConfig.for_tracking()`).
+        config: ICP settings of the alignments (None: `IcpConfig.for_tracking(plan)`).
         gate: which fits are followed (None: `AcceptanceGate()`); the others follow the odometry.
 
     Returns:
@@ -133,7 +133,7 @@ def estimate_scale(
     grid = [float(r) for r in ratios]
     if not grid or not all(math.isfinite(r) and r > 0.0 for r in grid):
         raise ValueError(f"ratios must be finite plan / world scales > 0, got {list(ratios)!r}")
-    config = config if config is not None else IcpConfig.for_tracking()
+    config = config if config is not None else IcpConfig.for_tracking(plan)
     gate = gate if gate is not None else AcceptanceGate()
     motions = [between(_pose(odom[i - 1]), _pose(odom[i])) for i in range(1, len(odom))]
     lookup = WallLookup(plan)
