@@ -178,6 +178,24 @@ def test_evaluate_log_on_a_simulated_run(recording: Recording) -> None:
         evaluate_log(frames, icp={"max_correspondence_distance": -1.0})
 
 
+def test_a_log_spanning_more_than_a_grid_holds_is_evaluated_with_a_coarser_grid(recording: Recording) -> None:
+    # Two of the plan's scans placed 300 m away (a campus's span): the plan at 5 cm holds them, the
+    # enhanced occupancy grid at 5 cm would need 3.6e7 cells, more than it may have (2^24).
+    frames = recording.scan_frames()
+    far = {2: (300.0, 0.0), 4: (0.0, 300.0)}
+    moved = [
+        replace(f, reference=(f.reference[0] + far[i][0], f.reference[1] + far[i][1], f.reference[2]))
+        if i in far and f.reference is not None
+        else f
+        for i, f in enumerate(frames)
+    ]
+    with pytest.warns(UserWarning, match=r"the enhanced occupancy grid is made at 0\.0[78] m"):
+        evaluation = evaluate_log(moved)
+    assert evaluation.plan.raster is not None and evaluation.plan.raster.resolution == 0.05
+    assert 0.07 <= evaluation.grid.resolution <= 0.08
+    assert evaluation.tracked.metrics()["planicp"]["ate_rms_m"] < 0.05  # the tracking is as without
+
+
 def test_plan_from_scans_puts_walls_where_the_scans_end(carmen_log: Path) -> None:
     log = open_log(carmen_log)
     plan = plan_from_scans(log.frames, RES, min_hits=2)

@@ -22,6 +22,7 @@ but they see the same walls (and the same furniture, which in a real office is i
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -31,7 +32,7 @@ from numpy.typing import NDArray
 
 from .._validation import Pose, positive, whole_number
 from ..io.scan_log import ScanFrame
-from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid
+from ..mapping.enhanced_occupancy_grid import EnhancedOccupancyGrid, finest_resolution
 from ..plans.image_files import MAX_IMAGE_PIXELS
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
@@ -211,7 +212,15 @@ def evaluate_log(
         if not any(f.odometry is not None for f in odd):
             raise ValueError("odometry='log' needs a log with odometry; this one has none")
         tracked_frames = odd
-    grid = EnhancedOccupancyGrid(plan, resolution)
+    # The grid at the plan's resolution, or as fine as fits where the log spans a campus.
+    finest = finest_resolution(plan)
+    if finest > resolution:
+        warnings.warn(
+            f"the scans span more than an occupancy grid of {resolution:g} m cells holds: the enhanced "
+            f"occupancy grid is made at {finest:g} m (the plan and the tracking keep {resolution:g} m)",
+            stacklevel=2,
+        )
+    grid = EnhancedOccupancyGrid(plan, max(resolution, finest))
     config = IcpConfig.for_tracking(plan, **dict(icp or {}))
     tracked = track_log(tracked_frames, plan, config=config, grid=grid, progress=progress)
     return LogEvaluation(plan, tracked, grid, len(even), len(odd), len(frames) - len(usable), config)

@@ -73,6 +73,23 @@ def _finest_resolution(width: float, height: float, max_cells: int) -> float:
     return math.ceil(r / digits) * digits
 
 
+def _span(plan: PlanMap) -> NDArray[np.float64]:
+    """(width, height) in metres the grid must cover: the plan's points, and its raster's corners."""
+    xmin, ymin, xmax, ymax = plan.extent
+    span = np.array([xmax - xmin, ymax - ymin])
+    if plan.raster is not None:
+        corners = _raster_corners(plan)
+        span = np.maximum(span, corners.max(axis=0) - corners.min(axis=0))
+    return span
+
+
+def finest_resolution(plan: PlanMap, margin: float = 1.0, max_cells: int = 1 << 24) -> float:
+    """Metres: the finest cell size at which an `EnhancedOccupancyGrid` over `plan` (with `margin`)
+    fits in `max_cells` cells, rounded up to two significant digits."""
+    w, h = (float(v) for v in _span(plan) + 2.0 * margin)
+    return _finest_resolution(w, h, max_cells)
+
+
 class EnhancedOccupancyGrid:
     """Scans at estimated poses fused with the plan; see the module documentation for the states.
 
@@ -121,11 +138,7 @@ class EnhancedOccupancyGrid:
 
         # The budget from the arithmetic first: the walls' samples at a fine resolution (k^2 per wall
         # pixel) would take gigabytes before the grid could refuse its size.
-        xmin, ymin, xmax, ymax = plan.extent
-        span = np.array([xmax - xmin, ymax - ymin])
-        if plan.raster is not None:
-            corners = _raster_corners(plan)
-            span = np.maximum(span, corners.max(axis=0) - corners.min(axis=0))
+        span = _span(plan)
         upper = float(np.prod(np.ceil((span + 2.0 * margin) / self.resolution) + 2.0))
         if upper > max_cells:
             # The finest cell that fits: (w/r + 2)(h/r + 2) <= max_cells, solved for r (slightly rounded up).
