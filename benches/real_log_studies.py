@@ -11,6 +11,8 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py scan-sets    # other scan sets of the same logs: swapped, reversed
     python benches/real_log_studies.py junk         # corrupted scans: how far they move the estimates
     python benches/real_log_studies.py faults       # the Localizer with and without the odometry-fault sweep
+    python benches/real_log_studies.py slam-visibility  # a SLAM map's visibility: the index's masks or a cast
+    python benches/real_log_studies.py log-odometry     # the logs' own odometry: the masks or a cast
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -43,6 +45,16 @@ harness's plan and its tracked scans in reverse order (the robot driving the log
 odometry drawn anew for that drive). It gives ATE, the share of scans more than 0.3 m off, the
 first of them, and the 99th percentile of the time per update.
 
+`slam-visibility` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s
+defaults (on these map_server maps: pairs through the nearest-wall index's masks) and with the
+view cast from the prediction (`IcpConfig.for_tracking(correspondence_search="kd_tree")`, what a
+drawn plan gets), on the harness's plan and on two noisier ones drawn from the same scans (every
+cell one end point falls in; 10 cm cells), and gives the mean ATE, the mean share of scans more
+than 0.3 m off and the worst draw's. `seeds --search kd_tree` tracks with the cast too.
+`log-odometry` tracks each log from its own odometry (the robot's wheels, not the harness's
+synthetic drift), as `planicp evaluate-log --odometry log` does, on the harness's scan sets and the
+swapped and reversed ones, with the masks and with the cast.
+
 `faults` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
 and with `PosteriorRefinement(fault_probability=0)` (no sweep for an odometry fault), and gives the
 ATE and the share of scans more than 0.3 m off.
@@ -69,6 +81,7 @@ import os
 import sys
 import tempfile
 import time
+import warnings
 from typing import Any
 
 import numpy as np
@@ -95,19 +108,26 @@ SEARCH_SETTINGS = {
 
 
 def load(
-    harness: Any, name: str, out: str, seed: int = 7, scan_set: str = "harness"
+    harness: Any,
+    name: str,
+    out: str,
+    seed: int = 7,
+    scan_set: str = "harness",
+    resolution: float = 0.05,
+    min_hits: int = 2,
 ) -> tuple[Any, list[np.ndarray], np.ndarray, np.ndarray]:
     """(plan image, tracked scans, their reference poses, their odometry poses), as the harness
-    makes them (its odometry drawn with `seed`; the harness's own is 7), or on another `scan_set`
-    (see the module: "swapped", "reversed")."""
+    makes them (its odometry drawn with `seed`; the harness's own is 7; its plan's cells of
+    `resolution` metres occupied where `min_hits` end points fall), or on another `scan_set` (see
+    the module: "swapped", "reversed")."""
     path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
     log = harness.read_carmen_log(path)
     mapped, tracked = np.arange(0, len(log.scans), 2), np.arange(1, len(log.scans), 2)
     if scan_set == "swapped":
         mapped, tracked = tracked, mapped
     ends = np.vstack([harness.transform(log.scans[i], log.poses[i]) for i in mapped])
-    plan = harness.render_endpoint_plan(ends, 0.05, 2)
-    harness.save_ros_map(plan, out, f"{name}-plan")
+    plan = harness.render_endpoint_plan(ends, resolution, min_hits)
+    harness.save_ros_map(plan, out, f"{name}-plan-{resolution:g}-{min_hits}")
     times, _ = harness.scan_times(log.times, 0.2)
     stamps = times[tracked]
     if scan_set == "reversed":
@@ -188,16 +208,69 @@ def track(
     return harness.error_metrics(np.array(est), ref, 0.3), spent
 
 
-def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int], search: str | None = None) -> None:
     print("| log | " + " | ".join(f"seed {s}" for s in seeds) + " | mean lost |")
     print("|---|" + "---|" * (len(seeds) + 1))
+    config = None if search is None else IcpConfig.for_tracking(correspondence_search=search)
     for name in logs:
         cells, lost = [], []
         for seed in seeds:
-            m, _ = track(harness, *load(harness, name, out, seed))
+            m, _ = track(harness, *load(harness, name, out, seed), config)
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
+
+
+def slam_visibility_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+    print("| log | plan cells | search | ATE (mean) | lost (mean) | lost (worst draw) |")
+    print("|---|---|---|---|---|---|")
+    maps = (("5 cm, 2 hits (the harness's)", 0.05, 2), ("5 cm, 1 hit", 0.05, 1), ("10 cm, 2 hits", 0.1, 2))
+    searches = (("masks (default)", None), ("cast", IcpConfig.for_tracking(correspondence_search="kd_tree")))
+    for name in logs:
+        for label, resolution, min_hits in maps:
+            for search, config in searches:
+                ates, lost = [], []
+                for seed in seeds:
+                    case = load(harness, name, out, seed, resolution=resolution, min_hits=min_hits)
+                    m, _ = track(harness, *case, config)
+                    ates.append(100 * m["ate_rmse_m"])
+                    lost.append(100 * m["lost_frac"])
+                print(
+                    f"| {name} | {label} | {search} | {np.mean(ates):.1f} cm | {np.mean(lost):.1f} % | "
+                    f"{np.max(lost):.1f} % |",
+                    flush=True,
+                )
+
+
+def log_odometry_study(harness: Any, logs: list[str]) -> None:
+    from planicp.evaluation.log_evaluation import plan_from_scans
+    from planicp.io import open_log
+
+    print("| log | scan set | search | ATE | worst | lost (> 0.3 m) |")
+    print("|---|---|---|---|---|---|")
+    searches = (("masks (default)", None), ("cast", IcpConfig.for_tracking(correspondence_search="kd_tree")))
+    for name in logs:
+        path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the logs' repaired timestamps
+            usable = [f for f in open_log(path) if f.reference is not None and f.odometry is not None]
+        for scan_set in ("harness", "swapped", "reversed"):
+            mapped, tracked_frames = usable[0::2], usable[1::2]
+            if scan_set == "swapped":
+                mapped, tracked_frames = tracked_frames, mapped
+            elif scan_set == "reversed":
+                tracked_frames = tracked_frames[::-1]
+            plan = plan_from_scans(mapped, 0.05, 2)
+            ref = np.array([f.reference for f in tracked_frames])
+            for search, config in searches:
+                loc = Localizer(plan, tuple(map(float, ref[0])), config)
+                est = np.array([loc.update(f.points(), f.odometry).pose for f in tracked_frames])
+                err = np.hypot(*(est[:, :2] - ref[:, :2]).T)
+                print(
+                    f"| {name} | {scan_set} | {search} | {100 * np.sqrt(np.mean(err**2)):.1f} cm | "
+                    f"{err.max():.2f} m | {100 * np.mean(err > 0.3):.1f} % |",
+                    flush=True,
+                )
 
 
 def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
@@ -411,12 +484,20 @@ def main() -> None:
             "scan-sets",
             "junk",
             "faults",
+            "slam-visibility",
+            "log-odometry",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
         "--seeds", nargs="+", type=int, default=[1, 2, 3, 4, 5, 6, 7], help="odometry seeds of the seeds study"
+    )
+    parser.add_argument(
+        "--search",
+        choices=("kd_tree", "wall_index"),
+        default=None,
+        help="seeds study: track with IcpConfig.for_tracking(correspondence_search=...) (default: the Localizer's)",
     )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
@@ -427,7 +508,11 @@ def main() -> None:
     print(f"planicp {planicp.__version__}")
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
-            seeds_study(harness, args.logs, out, args.seeds)
+            seeds_study(harness, args.logs, out, args.seeds, args.search)
+        elif args.study == "slam-visibility":
+            slam_visibility_study(harness, args.logs, out, args.seeds)
+        elif args.study == "log-odometry":
+            log_odometry_study(harness, args.logs)
         elif args.study == "scan-sets":
             scan_sets_study(harness, args.logs, out)
         elif args.study == "junk":

@@ -120,7 +120,7 @@ class IcpConfig(Settings):
           and hides the walls behind: on freiburg-campus ICP from the reference pose through the
           cast drifted to places the scan's likelihood rejects, and stayed at the reference
           through the masks, which also take a fraction of the cast's time
-          (docs/benchmarks.md, "Visibility on real logs")."""
+          (docs/benchmarks.md, "Visibility of a SLAM map: the cast or the masks")."""
         cells = plan is not None and plan.edge_detector == "centres"
         search = "wall_index" if cells else "kd_tree"
         return cls(**{"auto_trim": True, "covariance_scale": 4.0, "correspondence_search": search, **changes})
