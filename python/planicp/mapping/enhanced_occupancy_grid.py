@@ -83,7 +83,14 @@ def _span(plan: PlanMap) -> NDArray[np.float64]:
     return span
 
 
-def finest_resolution(plan: PlanMap, margin: float = 1.0, max_cells: int = 1 << 24) -> float:
+DEFAULT_MARGIN = 1.0
+"""Metres an `EnhancedOccupancyGrid` extends beyond its plan by default."""
+
+DEFAULT_MAX_CELLS = 1 << 24
+"""Most cells an `EnhancedOccupancyGrid` may have by default."""
+
+
+def finest_resolution(plan: PlanMap, margin: float = DEFAULT_MARGIN, max_cells: int = DEFAULT_MAX_CELLS) -> float:
     """Metres: the finest cell size at which an `EnhancedOccupancyGrid` over `plan` (with `margin`)
     fits in `max_cells` cells, rounded up to two significant digits."""
     w, h = (float(v) for v in _span(plan) + 2.0 * margin)
@@ -113,12 +120,12 @@ class EnhancedOccupancyGrid:
         plan: PlanMap,
         resolution: float = 0.05,
         *,
-        margin: float = 1.0,
+        margin: float = DEFAULT_MARGIN,
         model: OccupancyModel | None = None,
         max_range: float = 30.0,
         no_return_range: float = 0.0,
         wall_tolerance_cells: int = 1,
-        max_cells: int = 1 << 24,
+        max_cells: int = DEFAULT_MAX_CELLS,
     ) -> None:
         if not isinstance(plan, PlanMap):
             raise TypeError(f"plan must be a PlanMap, got {type(plan).__name__}")

@@ -25,10 +25,16 @@ pub const CUT_SIGMAS: f64 = 3.0;
 /// Most times `sigma` [`LikelihoodGrid::within_budget`] coarsens a field's sampling to.
 pub const MAX_COARSENING: f64 = 1e3;
 
+/// Metres a field sampled every `resolution` metres extends beyond its points: the Gaussian's cut
+/// (`CUT_SIGMAS * sigma`) and two cells.
+fn field_margin(resolution: f64, sigma: f64) -> f64 {
+    CUT_SIGMAS * sigma + 2.0 * resolution
+}
+
 /// [cols, rows] (as floats: they may not fit a usize) of a field over the box `lo`-`hi` sampled
-/// every `resolution` metres, with its margin of `CUT_SIGMAS * sigma` and two cells.
+/// every `resolution` metres, with its [`field_margin`].
 fn raster_shape(lo: [f64; 2], hi: [f64; 2], resolution: f64, sigma: f64) -> [f64; 2] {
-    let margin = CUT_SIGMAS * sigma + 2.0 * resolution;
+    let margin = field_margin(resolution, sigma);
     [
         ((hi[0] - lo[0] + 2.0 * margin) / resolution).ceil() + 1.0,
         ((hi[1] - lo[1] + 2.0 * margin) / resolution).ceil() + 1.0,
@@ -60,7 +66,7 @@ impl LikelihoodGrid {
         }
         let reach = CUT_SIGMAS * sigma;
         let (lo, hi) = bounding_box(points);
-        let margin = reach + 2.0 * resolution;
+        let margin = field_margin(resolution, sigma);
         let origin = [lo[0] - margin, lo[1] - margin];
         let [cols_f, rows_f] = raster_shape(lo, hi, resolution, sigma);
         let cells_f = cols_f * rows_f;
