@@ -119,6 +119,54 @@ def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained
     assert not score.poor and score.continues is None and score.reason == ""
 
 
+def test_on_a_slam_map_the_score_does_not_count_returns_beyond_a_cell_the_beams_passed(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray], tmp_path: Any
+) -> None:
+    # A post the map's scans saw, 0.45 m ahead of the robot, that this scan's beams pass (it was
+    # seen from elsewhere, or has gone): a SLAM map marks it as the walls, cells where returns ended.
+    truth = path[0]
+    clear = stages.fit_from_prediction(scans[0], prediction_at(truth), rules(plan), False)
+    assert clear.beyond is not None and np.count_nonzero(clear.beyond) < 5  # without the post
+    offsets = np.stack(np.meshgrid(np.arange(3) * 0.05, np.arange(3) * 0.05), axis=-1).reshape(-1, 2)
+    local = offsets + np.array([0.4, -0.05])
+    c, s_ = math.cos(truth[2]), math.sin(truth[2])
+    post = local @ np.array([[c, s_], [-s_, c]]) + np.array(truth[:2])
+    points = np.vstack([plan.points, post])
+    drawn = PlanMap.from_points(points)
+    slam = PlanMap.from_ros_map(drawn.to_ros_map(tmp_path / "slam.yaml", resolution=0.05), cache=False)
+    assert slam.cells_mark_returns and not drawn.cells_mark_returns
+    scores = {}
+    for name, map_ in (("drawn", drawn), ("slam", slam)):
+        the_rules = rules(map_)
+        fit = stages.fit_from_prediction(scans[0], prediction_at(truth), the_rules, False)
+        assert fit.passed and fit.beyond is not None and fit.result is not None
+        assert error(truth, fit.result.pose)[0] < 0.05  # the SLAM map is the plan in 5 cm cells
+        # The cast stops at the post (21 degrees of the scan) and hides the wall behind it.
+        assert 40 <= np.count_nonzero(fit.beyond) < 200
+        search = stages.search_near_prediction(
+            scans[0],
+            prediction_at(truth),
+            fit,
+            PendingDecision(None, None),
+            the_rules,
+            False,
+            SearchBudget(None),
+            CostHistory(),
+        )
+        score = stages.judge_score(scans[0], prediction_at(truth), fit, search, the_rules, False, None)
+        inliers = np.zeros(len(scans[0]), dtype=bool)
+        if fit.kept is None:
+            inliers[:] = fit.result.inlier_mask
+        else:
+            inliers[fit.kept] = fit.result.inlier_mask
+        beyond = fit.beyond if name == "drawn" else np.zeros(len(scans[0]), dtype=bool)
+        assert score.score == np.count_nonzero(inliers & ~beyond) / len(scans[0])
+        scores[name] = score.score
+    # A drawn post stops every beam: returns behind it are evidence against the pose. The SLAM
+    # map's cell is not: the score is the fit's own.
+    assert scores["drawn"] < scores["slam"] - 0.01
+
+
 def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

@@ -366,6 +366,17 @@ class PlanMap:
         return self._points
 
     @property
+    def cells_mark_returns(self) -> bool:
+        """Whether the points are an occupancy grid's occupied cell centres (`edge_detector`
+        "centres": a map_server map made by SLAM, as `from_ros_map` reads one). Such cells mark
+        where range returns ended, seen from every pose the map was made from: trees, posts and
+        parked cars are specks that beams from other poses pass, so a ray cast through the map
+        does not say what a beam from one pose sees. Walls drawn as material (a drawing, an image,
+        vector walls, points) stop every beam. The `Localizer`'s defaults follow this
+        (`IcpConfig.for_tracking`, its posterior refinement and its score)."""
+        return self.edge_detector == "centres"
+
+    @property
     def normals(self) -> NDArray[np.float64]:
         """(N, 2) unit wall normals fitted to each point's neighbours ((0, 0) where none fits)."""
         return self._native.normals

@@ -112,8 +112,8 @@ class IcpConfig(Settings):
           the walls the ray cast from the prediction shows (`"kd_tree"`, through the plan's index,
           so at about the index's speed). A drawn wall stops every beam, and its far face, a
           wall's thickness behind the near one, must stay hidden however far the robot is.
-        - an occupancy grid's occupied cell centres (`plan.edge_detector == "centres"`: a
-          map_server map made by SLAM): the nearest-wall index's masks (`"wall_index"`), where a
+        - an occupancy grid's occupied cell centres (`plan.cells_mark_returns`: a map_server map
+          made by SLAM): the nearest-wall index's masks (`"wall_index"`), where a
           wall point is hidden only by another wall within 0.6 m of it. A SLAM map marks where
           returns ended, from every pose the map was made from: trees, posts and parked cars are
           specks that beams from other poses pass, and a cast from the prediction stops at them
@@ -121,8 +121,7 @@ class IcpConfig(Settings):
           cast drifted to places the scan's likelihood rejects, and stayed at the reference
           through the masks, which also take a fraction of the cast's time
           (docs/benchmarks.md, "Visibility of a SLAM map: the cast or the masks")."""
-        cells = plan is not None and plan.edge_detector == "centres"
-        search = "wall_index" if cells else "kd_tree"
+        search = "wall_index" if plan is not None and plan.cells_mark_returns else "kd_tree"
         return cls(**{"auto_trim": True, "covariance_scale": 4.0, "correspondence_search": search, **changes})
 
     @property

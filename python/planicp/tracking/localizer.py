@@ -210,7 +210,7 @@ class Localizer:
                 flagged a correct map 2.6 % off); `ScaleRule(enabled=False)` turns it off).
             refinement: how a corrected pose is refined to the pose of highest posterior in the
                 plan's likelihood field (None: `PosteriorRefinement()` where the plan's points are
-                an occupancy grid's cell centres (`PlanMap.edge_detector == "centres"`: a
+                an occupancy grid's cell centres (`PlanMap.cells_mark_returns`: a
                 map_server map made by SLAM, whose cells are where returns ended), none on walls
                 drawn as material, which ICP places more finely than the field;
                 `PosteriorRefinement(enabled=False)` keeps the fusion's pose).
@@ -243,9 +243,7 @@ class Localizer:
         # (docs/design.md, "The pose of highest posterior"). Walls drawn as material (a drawing,
         # a map that says so) are exact: ICP places them to the millimetre, the field (sampled
         # every point spacing) to half a centimetre.
-        self.refinement = (
-            refinement if refinement is not None else PosteriorRefinement(enabled=plan.edge_detector == "centres")
-        )
+        self.refinement = refinement if refinement is not None else PosteriorRefinement(enabled=plan.cells_mark_returns)
         self._detector = LostDetector(lost_rule if lost_rule is not None else LostRule())
         if scale is not None and not isinstance(scale, ScaleRule):
             raise TypeError(f"scale must be a planicp.ScaleRule or None, got {type(scale).__name__}")

@@ -18,8 +18,9 @@ class LostRule(Settings):
 
     The match score of a scan is the share of its points within `max_correspondence_distance` of
     the plan after alignment, over the whole scan (0 for a scan too small to align): returns the
-    `OcclusionRule` left out and returns beyond the walls seen from the prediction count as
-    unexplained. The localizer is
+    `OcclusionRule` left out and, on a plan whose walls stop every beam (not a SLAM map's
+    cells, `PlanMap.cells_mark_returns`), returns beyond the walls seen from the prediction count
+    as unexplained. The localizer is
     lost when the mean score over the last `window` scans falls below `min_score`, or when
     `max_rejections` scans in a row were rejected by the acceptance gate.
 
