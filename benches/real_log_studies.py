@@ -13,6 +13,8 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py faults       # the Localizer with and without the odometry-fault sweep
     python benches/real_log_studies.py slam-visibility  # a SLAM map's visibility: the index's masks or a cast
     python benches/real_log_studies.py log-odometry     # the logs' own odometry: the masks or a cast
+    python benches/real_log_studies.py reference        # the scans off the reference: whose error is it
+    python benches/real_log_studies.py beyond           # returns a cast from the reference puts beyond the walls
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -67,6 +69,25 @@ the corrupted scans: what the scan itself did), the largest distance between a c
 estimates and the clean run's, over all scans and over the valid scans only (at a corrupted scan
 the odometry is all there is, and its step may be off by more than the bar), and the share of the
 corrupted run's scans more than 0.3 m off.
+
+`reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
+the reference pose (from the harness's odometry, seed 7), whether the reference itself is sound
+there (`--filter-out`, a harness output folder, adds how far MRPT's particle filter was off there). The reference poses are a SLAM solution, not ground
+truth: the scan is registered (small_gicp's point-to-point ICP, 1 m pairs, from the reference
+pose; a registration independent of planicp) against the map scans within 10 m of it at their
+reference poses, apart: those of the same pass (within 30 scans of it in the log) and those of
+other passes. Where its own pass places it far from its reference, the reference is off there
+(the tracked scan and its neighbours, taken a fraction of a second apart, disagree with it); where
+both agree with the reference, the tracker is off. It also gives where the plan's likelihood field
+puts the scan: the cost (`w sum (1 - g)^2`, no prior) of the field's mode climbed to from the
+reference pose and from planicp's estimate; a lower cost at planicp's estimate is the plan
+preferring that place.
+
+`beyond` classifies the returns of every third tracked scan from its reference pose as the
+occlusion rule does (`OcclusionFilter.classify`: a ray cast through the plan from the pose, a
+return more than the rule's margin short of the wall in its direction is in front of it, more than
+the margin past it beyond it), and gives the median and 90th percentile share of each: at the
+true pose a wall that stops every beam has neither but for clutter in front.
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -469,6 +490,100 @@ def views_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
+def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | None) -> None:
+    """See the module: at the scans off the reference, where the map scans place them."""
+    import small_gicp  # the harness's ICP peer: a registration independent of planicp
+
+    def matrix(pose: np.ndarray) -> np.ndarray:
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        return np.array([[c, -s, 0.0, pose[0]], [s, c, 0.0, pose[1]], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+    def lift(xy: np.ndarray) -> np.ndarray:
+        return np.column_stack([xy, np.zeros(len(xy))])
+
+    print(
+        "| log | scan | planicp off | filter off | its own pass: from the reference | other passes: "
+        "from the reference | field cost at the mode near the reference / near planicp's |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for name in logs:
+        path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
+        log = harness.read_carmen_log(path)
+        plan, scans, ref, odom = load(harness, name, out)
+        est = tracked(plan, scans, ref, odom)[0]
+        off = np.hypot(*(est[:, :2] - ref[:, :2]).T)
+        filter_off = np.zeros(len(ref))
+        if filter_out is not None:
+            text = open(os.path.join(filter_out, f"{name}-plan-mrpt", "pf.out")).read()
+            pf = np.array(
+                [float(v) for m in harness.MrptPfLocalization.estimate_line.finditer(text) for v in m.groups()]
+            ).reshape(-1, 3)
+            n = min(len(pf), len(ref))
+            filter_off[:n] = np.hypot(*(pf[:n, :2] - ref[:n, :2]).T)
+        field = PlanMap.from_ros_map(plan.yaml_path).likelihood_field()
+        weight = PosteriorRefinement().return_weight
+        no_prior = (np.eye(3) * 1e6).tolist()
+        world = {}
+        for k in np.flatnonzero(off > 0.3):
+            raw = 2 * int(k) + 1  # the harness tracks the odd-numbered scans
+            near = [j for j in range(0, len(log.scans), 2) if math.dist(log.poses[j][:2], log.poses[raw][:2]) < 10.0]
+            cells = []
+            for own in (True, False):
+                group = [j for j in near if (abs(j - raw) <= 30) == own]
+                if not group:
+                    cells.append("none")
+                    continue
+                for j in group:
+                    if j not in world:
+                        world[j] = lift(log.scans[j]) @ matrix(log.poses[j])[:3, :3].T + matrix(log.poses[j])[:3, 3]
+                target = small_gicp.PointCloud(np.vstack([world[j] for j in group]))
+                result = small_gicp.align(
+                    target,
+                    small_gicp.PointCloud(lift(log.scans[raw])),
+                    small_gicp.KdTree(target),
+                    init_T_target_source=matrix(log.poses[raw]),
+                    registration_type="ICP",
+                    max_correspondence_distance=1.0,
+                    max_iterations=50,
+                )
+                placed = result.T_target_source[:2, 3]
+                cells.append(f"{math.dist(placed, log.poses[raw][:2]):.2f} m ({len(group)} scans)")
+            points = np.ascontiguousarray(scans[k])
+            costs = [
+                field.refine(points, tuple(map(float, start)), tuple(map(float, start)), no_prior, weight, 30)[1]
+                for start in (ref[k], est[k])
+            ]
+            print(
+                f"| {name} | {k} | {off[k]:.2f} m | "
+                + (f"{filter_off[k]:.2f} m" if filter_out is not None else "")
+                + f" | {cells[0]} | {cells[1]} | {costs[0]:.1f} / {costs[1]:.1f} |",
+                flush=True,
+            )
+
+
+def beyond_study(harness: Any, logs: list[str], out: str) -> None:
+    """See the module: the occlusion rule's classification at the reference poses."""
+    from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
+
+    print("| log | in front: median, 90th percentile | beyond: median, 90th percentile |")
+    print("|---|---|---|")
+    for name in logs:
+        plan, scans, ref, _ = load(harness, name, out)
+        occlusion = OcclusionFilter(PlanMap.from_ros_map(plan.yaml_path), OcclusionRule())
+        shares = np.array(
+            [
+                [
+                    np.mean(side)
+                    for side in occlusion.classify(np.ascontiguousarray(scans[k]), tuple(map(float, ref[k])))
+                ]
+                for k in range(0, len(scans), 3)
+            ]
+        )
+        front, beyond = (np.percentile(shares[:, i], [50, 90]) for i in (0, 1))
+        cells = [f"{100 * share[0]:.0f} %, {100 * share[1]:.0f} %" for share in (front, beyond)]
+        print(f"| {name} | {cells[0]} | {cells[1]} |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
@@ -486,6 +601,8 @@ def main() -> None:
             "faults",
             "slam-visibility",
             "log-odometry",
+            "reference",
+            "beyond",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
@@ -498,6 +615,11 @@ def main() -> None:
         choices=("kd_tree", "wall_index"),
         default=None,
         help="seeds study: track with IcpConfig.for_tracking(correspondence_search=...) (default: the Localizer's)",
+    )
+    parser.add_argument(
+        "--filter-out",
+        default=None,
+        help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
     )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
@@ -513,6 +635,10 @@ def main() -> None:
             slam_visibility_study(harness, args.logs, out, args.seeds)
         elif args.study == "log-odometry":
             log_odometry_study(harness, args.logs)
+        elif args.study == "beyond":
+            beyond_study(harness, args.logs, out)
+        elif args.study == "reference":
+            reference_study(harness, args.logs, out, args.filter_out)
         elif args.study == "scan-sets":
             scan_sets_study(harness, args.logs, out)
         elif args.study == "junk":
