@@ -71,7 +71,7 @@ the odometry is all there is, and its step may be off by more than the bar), and
 corrupted run's scans more than 0.3 m off.
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
-the reference pose (from the harness's odometry, seed 7), whether the reference itself is sound
+the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference itself is sound
 there (`--filter-out`, a harness output folder, adds how far MRPT's particle filter was off there). The reference poses are a SLAM solution, not ground
 truth: the scan is registered (small_gicp's point-to-point ICP, 1 m pairs, from the reference
 pose; a registration independent of planicp) against the map scans within 10 m of it at their
@@ -490,7 +490,7 @@ def views_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
-def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | None) -> None:
+def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | None, seed: int) -> None:
     """See the module: at the scans off the reference, where the map scans place them."""
     import small_gicp  # the harness's ICP peer: a registration independent of planicp
 
@@ -509,7 +509,7 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
     for name in logs:
         path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
         log = harness.read_carmen_log(path)
-        plan, scans, ref, odom = load(harness, name, out)
+        plan, scans, ref, odom = load(harness, name, out, seed)
         est = tracked(plan, scans, ref, odom)[0]
         off = np.hypot(*(est[:, :2] - ref[:, :2]).T)
         filter_off = np.zeros(len(ref))
@@ -616,6 +616,7 @@ def main() -> None:
         default=None,
         help="seeds study: track with IcpConfig.for_tracking(correspondence_search=...) (default: the Localizer's)",
     )
+    parser.add_argument("--seed", type=int, default=7, help="reference study: the odometry seed (the harness's is 7)")
     parser.add_argument(
         "--filter-out",
         default=None,
@@ -638,7 +639,7 @@ def main() -> None:
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
         elif args.study == "reference":
-            reference_study(harness, args.logs, out, args.filter_out)
+            reference_study(harness, args.logs, out, args.filter_out, args.seed)
         elif args.study == "scan-sets":
             scan_sets_study(harness, args.logs, out)
         elif args.study == "junk":
