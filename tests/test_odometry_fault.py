@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from planicp import Localizer, PlanMap, PosteriorRefinement, se2
+from planicp.tracking.decisions import LeftPlaceDecision
 from planicp.tracking.odometry_fault import CostHistory, fault_cost
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
@@ -47,6 +48,13 @@ def test_a_35_degree_odometry_fault_is_taken_when_the_next_scan_confirms_it(
     for k in range(FAULT_AT + 1, len(path)):
         distance, turn = error(path[k], estimates[k].pose)
         assert distance < 0.03 and turn < 1 * DEG, (k, distance, turn)
+    # The place the fault left behind, where the odometry alone puts the robot, is followed and
+    # ruled out by the next scan; it is never taken back.
+    left = estimates[FAULT_AT + 2].decisions[6]
+    assert isinstance(left, LeftPlaceDecision) and left.place is not None
+    assert left.kept is None and left.returned is None and error(path[FAULT_AT + 2], left.place)[1] > 10 * DEG
+    assert all(e.decisions[6].returned is None for e in estimates)
+    assert all(e.decisions[6].place is None and e.decisions[6].kept is None for e in estimates[FAULT_AT + 3 :])
     # Without the fault component the track stays in the wrong basin.
     stuck = drive(plan, path, scans, odom, fault_probability=0.0)
     assert all(e.decisions[3].fault is None for e in stuck)

@@ -26,6 +26,7 @@ from planicp.tracking.decisions import (
     Bookkeeping,
     Correction,
     FitDecision,
+    LeftPlaceDecision,
     LostDecision,
     PendingDecision,
     Prediction,
@@ -35,7 +36,7 @@ from planicp.tracking.decisions import (
 )
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
-from planicp.tracking.odometry_fault import CostHistory, FaultSweep, scan_cost
+from planicp.tracking.odometry_fault import CostHistory, FaultSweep, fault_cost, scan_cost
 from planicp.tracking.recovery import Recovery, SearchBudget
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
@@ -305,11 +306,12 @@ def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
         SearchDecision,
         ScoreDecision,
         Correction,
+        LeftPlaceDecision,
         LostDecision,
         RecoveryDecision,
         Bookkeeping,
     ]
-    prediction, fit, pending, search, score, correction, lost, recovery, records = est.decisions
+    prediction, fit, pending, search, score, correction, left, lost, recovery, records = est.decisions
     assert isinstance(prediction, Prediction) and prediction.pose == est.predicted_pose and not prediction.first
     assert isinstance(fit, FitDecision) and fit.passed and fit.result is est.result
     assert isinstance(pending, PendingDecision) and pending.place is None
@@ -317,6 +319,7 @@ def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
     assert isinstance(score, ScoreDecision) and 0.7 < score.score < 1.0 and not score.poor
     assert isinstance(correction, Correction) and correction.kind == "fused" and correction.pose == est.pose
     np.testing.assert_array_equal(correction.covariance, est.covariance)
+    assert left == LeftPlaceDecision(None)  # no jump was taken
     assert isinstance(lost, LostDecision) and not lost.lost and lost.rejections == 0 and lost.counted_accepted
     assert lost.window_score == est.score  # the mean over both scans
     assert isinstance(recovery, RecoveryDecision) and recovery.action == "clear" and recovery.adopted is None
@@ -404,6 +407,47 @@ def test_a_searched_place_must_be_more_probable_than_the_fit_it_would_replace(
     # A prediction 0.9 m along and certain of it outweighs the scan's preference for the truth.
     certain = np.diag([0.05**2, 0.05**2, (1 * DEG) ** 2])
     assert _more_probable(points, along, truth, along, certain, the_rules)
+
+
+def test_the_place_left_behind_is_taken_back_kept_or_forgotten_by_the_fault_cost(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    the_rules = rules(plan, refinement=PosteriorRefinement(enabled=True))
+    k = 20
+    truth, points = path[k], scans[k]
+    before = (1.0, 2.0, 0.3)  # the odometry pose the place was left at, one scan earlier
+    odom = se2.compose(before, se2.between(path[k - 1], path[k]))
+    elsewhere = se2.compose(truth, (1.5, 0.5, 90 * DEG))  # a place the scan rules out
+
+    def corrected(pose: Pose) -> Correction:
+        return Correction(pose, SMALL, True, None, "fused")
+
+    # The track took the wrong place; the place it left, followed with the odometry, is the truth.
+    back = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), the_rules, False)
+    assert back.place is not None and back.returned is not None and back.kept is None
+    assert error(truth, back.place)[0] < 0.03 and error(truth, back.returned.pose)[0] < 0.03
+    assert back.cost + fault_cost(the_rules.refinement.fault_probability) < back.current_cost
+    assert back.why.startswith("this scan prefers the place left behind")
+    # The track is right and the place left behind is not: forgotten.
+    gone = stages.weigh_left_place(points, (elsewhere, odom), odom, corrected(truth), the_rules, False)
+    assert gone.place is not None and gone.returned is None and gone.kept is None
+    assert gone.current_cost + fault_cost(the_rules.refinement.fault_probability) < gone.cost
+    assert gone.why.startswith("this scan rules out the place left behind")
+    # Within the fault cost of each other (here the same place): still followed, from its mode.
+    kept = stages.weigh_left_place(points, (truth, odom), odom, corrected(truth), the_rules, False)
+    assert kept.returned is None and kept.kept is not None and kept.kept[1] == odom
+    assert error(truth, kept.kept[0])[0] < 0.03 and abs(kept.cost - kept.current_cost) < 1.0
+    # An update without an accepted fit does not judge it; while lost it is dropped.
+    refused = Correction(elsewhere, SMALL, False, None, "prediction")
+    waiting = stages.weigh_left_place(points, (path[k - 1], before), odom, refused, the_rules, False)
+    assert waiting.place is None and waiting.kept is not None and error(truth, waiting.kept[0])[0] < 1e-9
+    assert waiting.why == "the place left behind is followed; this update cannot judge it"
+    lost = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), the_rules, True)
+    assert lost.place is None and lost.kept is None and lost.returned is None
+    # Without the fault component (or the field: a drawn plan's default) nothing is followed.
+    for off in (rules(plan), rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))):
+        decision = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), off, False)
+        assert decision == LeftPlaceDecision(None) and decision.why == "no place left behind is followed"
 
 
 def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fault(

@@ -12,10 +12,11 @@ frozen records, and `Estimate.decisions` lists them in that order:
    continues the last well explained scan.
 6. `Correction`: the pose and covariance the fit leads to (fusion, weak axis, fit alone), or the
    prediction's.
-7. `LostDecision`: what the lost rule concluded.
-8. `RecoveryDecision`: what the recovery did (searched, coasted, cleared) and the place it
+7. `LeftPlaceDecision`: whether this scan prefers the place an adopted jump left behind.
+8. `LostDecision`: what the lost rule concluded.
+9. `RecoveryDecision`: what the recovery did (searched, coasted, cleared) and the place it
    adopted, if any.
-9. `Bookkeeping`: what the update remembers for the next ones.
+10. `Bookkeeping`: what the update remembers for the next ones.
 
 Each record has a `why` property: one sentence for a person reading a log.
 """
@@ -300,8 +301,51 @@ class Correction:
 
 
 @dataclass(frozen=True)
+class LeftPlaceDecision:
+    """Stage 7: the place an adopted jump left behind, weighed against this scan.
+
+    A place that a pending jump or an odometry fault led to, once the next scan confirms it, is
+    taken; the place the track would have been at instead (that update's fit from the
+    prediction, or the prediction) is then followed with the odometry, climbed to the mode of each
+    scan's likelihood in the plan's field, for as long as the scans cannot rule it out by the
+    fault cost (`planicp.tracking.odometry_fault`): a fault and a map whose passes disagree look
+    alike on two scans.
+
+    Attributes:
+        place: the place left behind, followed to this scan and climbed (T_map_base); None when
+            none is followed, or this update cannot judge it (no accepted fit, or lost).
+        cost: the scan's cost at `place` (no prior); NaN when `place` is None.
+        current_cost: the scan's cost at the corrected pose; NaN when `place` is None.
+        returned: ICP from `place` when this scan prefers it to the corrected pose by the fault
+            cost: the update takes `place`, and follows the pose it leaves instead. None otherwise.
+        kept: the place and this scan's odometry pose, still followed; None when the scan
+            prefers the corrected pose by the fault cost (ruled out), or none was followed.
+    """
+
+    place: Pose | None
+    cost: float = math.nan
+    current_cost: float = math.nan
+    returned: IcpResult | None = None
+    kept: tuple[Pose, Pose] | None = None
+
+    @property
+    def why(self) -> str:
+        """One sentence on this decision."""
+        if self.place is None:
+            if self.kept is not None:
+                return "the place left behind is followed; this update cannot judge it"
+            return "no place left behind is followed"
+        costs = f"cost {self.cost:.1f} there against {self.current_cost:.1f} here"
+        if self.returned is not None:
+            return f"this scan prefers the place left behind ({costs}): taken back"
+        if self.kept is None:
+            return f"this scan rules out the place left behind ({costs}): forgotten"
+        return f"the place left behind is still followed ({costs})"
+
+
+@dataclass(frozen=True)
 class LostDecision:
-    """Stage 7: the lost rule's verdict on this update.
+    """Stage 8: the lost rule's verdict on this update.
 
     Attributes:
         lost: the lost rule says the plan no longer explains the scans.
@@ -330,7 +374,7 @@ class LostDecision:
 
 @dataclass(frozen=True)
 class RecoveryDecision:
-    """Stage 8: what the recovery did with this update.
+    """Stage 9: what the recovery did with this update.
 
     Attributes:
         action: see `RecoveryAction`.
@@ -375,7 +419,7 @@ class RecoveryDecision:
 
 @dataclass(frozen=True)
 class Bookkeeping:
-    """Stage 9: what this update leaves for the next ones (besides pose, covariance, odometry and
+    """Stage 10: what this update leaves for the next ones (besides pose, covariance, odometry and
     the pending place of `SearchDecision.pending`).
 
     Attributes:
@@ -409,6 +453,7 @@ Decision = (
     | SearchDecision
     | ScoreDecision
     | Correction
+    | LeftPlaceDecision
     | LostDecision
     | RecoveryDecision
     | Bookkeeping

@@ -42,6 +42,7 @@ from .stages import (
     predict,
     recover,
     search_near_prediction,
+    weigh_left_place,
 )
 
 
@@ -71,7 +72,8 @@ class Estimate:
             left out the returns in front of the plan's walls (people, furniture); None when every
             point was aligned. `result.inlier_mask` is over the kept points.
         relocalized: this update adopted a pose found by a search of the plan (`pose` is it): by
-            the recovery while lost, or around a prediction the acceptance gate cannot vouch for.
+            the recovery while lost, or around a prediction the acceptance gate cannot vouch for;
+            or took back the place an adopted jump left behind (`LeftPlaceDecision`).
         hypotheses: places the recovery is following while lost (more than one: the building is
             symmetric there and the localizer does not pretend to know which), or, while `pose`
             is `provisional`, the places that rival it.
@@ -284,6 +286,7 @@ class Localizer:
         # with the odometry pose of that scan: taken only when the next scan confirms it (see
         # `update`).
         self._pending: tuple[Pose, Pose] | None = None
+        self._left: tuple[Pose, Pose] | None = None
         # The scan's cost in the likelihood field at the last accepted poses: how well this
         # track's scans are explained, against which a suspected odometry fault is judged.
         self._costs = CostHistory()
@@ -315,6 +318,7 @@ class Localizer:
             self._last_odom = None
             self._anchor = None
             self._pending = None
+            self._left = None
             self._costs.clear()
             self._detector.reset()
             self._recovery.clear()
@@ -333,6 +337,7 @@ class Localizer:
             found = relocalize(points, self.plan, config=config.search, max_candidates=config.max_hypotheses)
             best = found.best
             self._recovery.clear()
+            self._left = None
             if best is not None and not found.ambiguous and best.inlier_ratio >= config.min_inlier_ratio:
                 self._pose = best.pose
                 self._covariance = finite_or(best.result.covariance, self._covariance)
@@ -376,21 +381,41 @@ class Localizer:
             # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
             correction = correct(points, prediction, search, score, rules)
-            # 7. Lost or not. 8. While lost, the recovery, which may adopt a place.
+            # 7. The place an adopted jump left behind, taken back if this scan prefers it.
+            left = weigh_left_place(points, self._left, odom, correction, rules, was_lost)
+            # 8. Lost or not. 9. While lost, the recovery, which may adopt a place.
             lost = judge_lost(self._detector, score, correction, search, was_lost, rules)
             recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
             adopted = recovery.adopted
             if lost.lost:
                 self._pending = None  # the recovery looks for the robot now
-            if adopted is None:
-                pose, covariance, result = correction.pose, correction.covariance, search.result
-                reason = score.reason or correction.refused
-                accepted, now_lost = correction.accepted, lost.lost
-            else:
+            returned = left.returned is not None and adopted is None and not lost.lost
+            result: IcpResult | None
+            if adopted is not None:
                 assert recovery.covariance is not None  # given with every adopted place
                 pose, covariance, result, reason = adopted.pose, recovery.covariance, adopted.result, ""
                 accepted, now_lost = True, False
-            relocalized = search.searched or adopted is not None
+            elif returned:
+                assert left.place is not None and left.returned is not None
+                pose, result, reason = left.place, left.returned, ""
+                covariance = finite_or(left.returned.covariance, correction.covariance)
+                accepted, now_lost = True, False
+            else:
+                pose, covariance, result = correction.pose, correction.covariance, search.result
+                reason = score.reason or correction.refused
+                accepted, now_lost = correction.accepted, lost.lost
+            # The place this update leaves, followed while the scans cannot rule it out: the
+            # track's own when a pending place is taken, the corrected pose when it is taken back.
+            if now_lost or adopted is not None:
+                self._left = None
+            elif returned:
+                self._left = (correction.pose, odom)
+            elif confirmation.confirmed is not None:
+                own = fit.result.pose if fit.passed and fit.result is not None else prediction.pose
+                self._left = (own, odom)
+            else:
+                self._left = left.kept
+            relocalized = search.searched or adopted is not None or returned
             # 9. What the next updates need.
             records = keep_records(self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost)
             self._pose = pose
@@ -430,7 +455,7 @@ class Localizer:
                 recovery.hypotheses,
                 kept,
                 recovery.on_trial,
-                decisions=(prediction, fit, confirmation, search, score, correction, lost, recovery, records),
+                decisions=(prediction, fit, confirmation, search, score, correction, left, lost, recovery, records),
                 scale=scale,
             )
 

@@ -9,12 +9,13 @@ Each stage is a function that takes the scan, the decisions of the stages before
 4. `search_near_prediction` -> `SearchDecision` (`search`)
 5. `judge_score` -> `ScoreDecision` (`score`)
 6. `correct` -> `Correction` (`correction`)
-7. `judge_lost` -> `LostDecision` (`lost`)
-8. `recover` -> `RecoveryDecision` (`recovery_step`)
-9. `keep_records` -> `Bookkeeping` (`bookkeeping`)
+7. `weigh_left_place` -> `LeftPlaceDecision` (`left_place`)
+8. `judge_lost` -> `LostDecision` (`lost`)
+9. `recover` -> `RecoveryDecision` (`recovery_step`)
+10. `keep_records` -> `Bookkeeping` (`bookkeeping`)
 
 The stages change no state of the `Localizer` itself (pose, covariance, last odometry, anchor,
-pending place: `update` writes those from the decisions); the lost stage updates the
+pending place, place left behind: `update` writes those from the decisions); the lost stage updates the
 `LostDetector` and the recovery and bookkeeping stages the `Recovery` they are given, which
 hold the running state of their rules. The `Localizer` documentation explains the rules; the
 helpers here say what each step does.
@@ -25,6 +26,7 @@ from __future__ import annotations
 from .bookkeeping import keep_records
 from .correction import correct, finite_or
 from .fit import fit_from_prediction, occupied_cells, poor_fit
+from .left_place import weigh_left_place
 from .lost import judge_lost
 from .pending import confirm_pending
 from .prediction import predict
@@ -49,4 +51,5 @@ __all__ = [
     "scan_score",
     "search_cause",
     "search_near_prediction",
+    "weigh_left_place",
 ]

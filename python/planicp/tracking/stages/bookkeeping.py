@@ -1,4 +1,4 @@
-"""Stage 9 of `Localizer.update`: what the next updates need from this scan (`keep_records`)."""
+"""Stage 10 of `Localizer.update`: what the next updates need from this scan (`keep_records`)."""
 
 from __future__ import annotations
 

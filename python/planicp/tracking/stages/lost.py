@@ -1,4 +1,4 @@
-"""Stage 7 of `Localizer.update`: the lost rule's verdict (`judge_lost`)."""
+"""Stage 8 of `Localizer.update`: the lost rule's verdict (`judge_lost`)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Stage 8 of `Localizer.update`: while lost, one step of the recovery (`recover`)."""
+"""Stage 9 of `Localizer.update`: while lost, one step of the recovery (`recover`)."""
 
 from __future__ import annotations
 
