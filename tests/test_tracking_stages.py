@@ -55,6 +55,23 @@ def prediction_at(pose: Pose, covariance: np.ndarray = SMALL) -> Prediction:
     return Prediction((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), pose, covariance, True)
 
 
+def search_stage(
+    points: np.ndarray, prediction: Prediction, fit: FitDecision, the_rules: stages.Rules, history: Any = None
+) -> SearchDecision:
+    """The search stage with no place pending, not lost, an unbounded budget and `history`
+    (None: an empty `CostHistory`)."""
+    return stages.search_near_prediction(
+        points,
+        prediction,
+        fit,
+        PendingDecision(None, None),
+        the_rules,
+        False,
+        SearchBudget(None),
+        CostHistory() if history is None else history,
+    )
+
+
 def test_the_prediction_composes_the_odometry_motion_and_grows_the_covariance() -> None:
     a, b = 0.01, 0.002
     covariance = np.diag([a, a, b])
@@ -100,16 +117,7 @@ def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained
     fit = stages.fit_from_prediction(points, prediction_at(truth), the_rules, False)
     assert fit.passed and fit.kept is not None and fit.beyond is not None and fit.result is not None
     assert not fit.kept[-100:].any()  # the person is left out
-    search = stages.search_near_prediction(
-        points,
-        prediction_at(truth),
-        fit,
-        PendingDecision(None, None),
-        the_rules,
-        False,
-        SearchBudget(None),
-        CostHistory(),
-    )
+    search = search_stage(points, prediction_at(truth), fit, the_rules)
     assert search.cause is None and search.result is fit.result and not search.searched
     score = stages.judge_score(points, prediction_at(truth), fit, search, the_rules, False, None)
     inliers = np.zeros(len(points), dtype=bool)
@@ -144,16 +152,7 @@ def test_on_a_slam_map_the_score_does_not_count_returns_beyond_a_cell_the_beams_
         assert error(truth, fit.result.pose)[0] < 0.05  # the SLAM map is the plan in 5 cm cells
         # The cast stops at the post (21 degrees of the scan) and hides the wall behind it.
         assert 40 <= np.count_nonzero(fit.beyond) < 200
-        search = stages.search_near_prediction(
-            scans[0],
-            prediction_at(truth),
-            fit,
-            PendingDecision(None, None),
-            the_rules,
-            False,
-            SearchBudget(None),
-            CostHistory(),
-        )
+        search = search_stage(scans[0], prediction_at(truth), fit, the_rules)
         score = stages.judge_score(scans[0], prediction_at(truth), fit, search, the_rules, False, None)
         inliers = np.zeros(len(scans[0]), dtype=bool)
         if fit.kept is None:
@@ -175,9 +174,7 @@ def test_the_correction_fuses_the_fit_and_shrinks_the_covariance(
     wide = np.diag([0.05**2, 0.05**2, (2 * DEG) ** 2])
     prediction = prediction_at(se2.compose(path[2], (0.04, -0.03, 1 * DEG)), wide)
     fit = stages.fit_from_prediction(scans[2], prediction, the_rules, False)
-    search = stages.search_near_prediction(
-        scans[2], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
-    )
+    search = search_stage(scans[2], prediction, fit, the_rules)
     score = stages.judge_score(scans[2], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(scans[2], prediction, search, score, the_rules)
     assert correction.accepted and correction.kind == "fused" and correction.degeneracy is None
@@ -228,9 +225,7 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
     detector = LostDetector(the_rules.lost)
     prediction = prediction_at(se2.compose(path[1], (0.25, 0.0, 0.0)))
     fit = stages.fit_from_prediction(scans[1], prediction, the_rules, False)
-    search = stages.search_near_prediction(
-        scans[1], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
-    )
+    search = search_stage(scans[1], prediction, fit, the_rules)
     score = stages.judge_score(scans[1], prediction, fit, search, the_rules, False, None)
     correction = stages.correct(scans[1], prediction, search, score, the_rules)
     assert not correction.accepted and search.cause == "jump" and search.pending is not None
@@ -466,9 +461,7 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     assert typical is not None
     fit = stages.fit_from_prediction(scans[20], prediction, the_rules, False)
     assert fit.result is not None and error(truth, fit.result.pose)[1] > 5 * DEG  # ICP: the wrong basin
-    search = stages.search_near_prediction(
-        scans[20], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), history
-    )
+    search = search_stage(scans[20], prediction, fit, the_rules, history)
     assert search.cause == "fault" and search.fault is not None and search.pending is not None
     assert search.fault.current_cost > typical + search.fault.threshold
     assert search.fault.cost + search.fault.threshold < search.fault.current_cost
@@ -483,21 +476,15 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     assert stages.correct(scans[20], prediction, search, score, the_rules).pose == prediction.pose
     assert search.why.startswith("odometry fault suspected")
     # No sweep before the track has a typical cost, nor without the fault component.
-    unknown = stages.search_near_prediction(
-        scans[20], prediction, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), CostHistory()
-    )
+    unknown = search_stage(scans[20], prediction, fit, the_rules)
     assert unknown.cause is None and unknown.fault is None and unknown.pending is None
     off = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))
-    never = stages.search_near_prediction(
-        scans[20], prediction, fit, PendingDecision(None, None), off, False, SearchBudget(None), history
-    )
+    never = search_stage(scans[20], prediction, fit, off, history)
     assert never.cause is None and never.fault is None
     # A scan the prediction explains as well as the track's: no sweep.
     good = prediction_at(truth)
     fit = stages.fit_from_prediction(scans[20], good, the_rules, False)
-    calm = stages.search_near_prediction(
-        scans[20], good, fit, PendingDecision(None, None), the_rules, False, SearchBudget(None), history
-    )
+    calm = search_stage(scans[20], good, fit, the_rules, history)
     assert calm.cause is None and calm.fault is None and calm.why == "no search"
 
 
