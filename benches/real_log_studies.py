@@ -71,10 +71,11 @@ the odometry is all there is, and its step may be off by more than the bar), and
 corrupted run's scans more than 0.3 m off.
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
-the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference itself is sound
-there (`--filter-out`, a harness output folder, adds how far MRPT's particle filter was off there). The reference poses are a SLAM solution, not ground
-truth: the scan is registered (small_gicp's point-to-point ICP, 1 m pairs, from the reference
-pose; a registration independent of planicp) against the map scans within 10 m of it at their
+the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
+itself is sound there (`--filter-out`, a harness output folder, adds how far MRPT's particle
+filter was off there). The reference poses are a SLAM solution, not ground truth: the scan
+is registered (small_gicp's point-to-point ICP, 1 m pairs, from the reference pose; a
+registration independent of planicp) against the map scans within 10 m of it at their
 reference poses, apart: those of the same pass (within 30 scans of it in the log) and those of
 other passes. Where its own pass places it far from its reference, the reference is off there
 (the tracked scan and its neighbours, taken a fraction of a second apart, disagree with it); where

@@ -159,10 +159,13 @@ class Localizer:
     explained than the track's recent ones may mean the odometry strayed beyond its noise (a
     heading fault ICP cannot climb out of): the plan's likelihood field is swept for such a fault
     (`planicp.tracking.odometry_fault`), and a place found is taken the same way, when the next
-    scan confirms it.
+    scan confirms it. The place such a jump left behind is followed with the odometry and taken
+    back when a scan prefers it by as much as a fault's place must be preferred, since two scans
+    cannot tell a fault from a map whose passes disagree (`LeftPlaceDecision`).
 
     `update` runs these steps as an ordered pipeline of stages (`planicp.tracking.stages`: predict,
-    fit, confirm a pending place, search, score, correct, judge lost, recover, keep records), and
+    fit, confirm a pending place, search, score, correct, weigh the place left behind, judge lost,
+    recover, keep records), and
     `Estimate.decisions` holds what each stage decided and why.
 
     Thread-safe: updates are serialised by a lock.
@@ -410,13 +413,13 @@ class Localizer:
                 self._left = None
             elif returned:
                 self._left = (correction.pose, odom)
-            elif confirmation.confirmed is not None:
+            elif confirmation.confirmed is not None and correction.accepted:
                 own = fit.result.pose if fit.passed and fit.result is not None else prediction.pose
                 self._left = (own, odom)
             else:
                 self._left = left.kept
             relocalized = search.searched or adopted is not None or returned
-            # 9. What the next updates need.
+            # 10. What the next updates need.
             records = keep_records(self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost)
             self._pose = pose
             self._covariance = covariance.copy()  # the decisions hold `covariance`: a caller may change them
