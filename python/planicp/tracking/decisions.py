@@ -419,8 +419,8 @@ class RecoveryDecision:
 
 @dataclass(frozen=True)
 class Bookkeeping:
-    """Stage 10: what this update leaves for the next ones (besides pose, covariance, odometry and
-    the pending place of `SearchDecision.pending`).
+    """Stage 10: what this update leaves for the next ones (besides pose, covariance, odometry, the
+    pending place of `SearchDecision.pending` and the place left behind of `LeftPlaceDecision`).
 
     Attributes:
         anchored: the scan becomes the one later scans are checked against for continuity (an

@@ -96,6 +96,16 @@ def scan_cost(points: NDArray[np.float64], pose: Pose, plan: PlanMap, rule: Post
     return float(plan.likelihood_field().cost(points, p, p, _NO_PRIOR, rule.return_weight))
 
 
+def climb(points: NDArray[np.float64], start: Pose, plan: PlanMap, rule: PosteriorRefinement) -> tuple[Pose, float]:
+    """The mode of the scan's likelihood in the plan's field (no prior) that a climb from `start`
+    reaches (`rule.max_iterations` Levenberg-Marquardt steps), and the scan's cost there."""
+    s = (float(start[0]), float(start[1]), float(start[2]))
+    end, cost, _, _, _ = plan.likelihood_field().refine(
+        points, s, s, _NO_PRIOR, rule.return_weight, rule.max_iterations
+    )
+    return (float(end[0]), float(end[1]), wrap_angle(float(end[2]))), float(cost)
+
+
 @dataclass(frozen=True)
 class FaultSweep:
     """What the sweep found (see the module).
@@ -165,6 +175,5 @@ def sweep_for_fault(
         if best is None or cost < best[0]:
             best = (cost, end)
     assert best is not None  # turns >= 0: at least the prediction's own heading
-    end, cost, _, _, _ = field.refine(points, best[1], best[1], _NO_PRIOR, rule.return_weight, rule.max_iterations)
-    pose: Pose = (float(end[0]), float(end[1]), wrap_angle(float(end[2])))
-    return FaultSweep(pose, float(cost), current_cost, typical, threshold)
+    pose, cost = climb(points, best[1], plan, rule)
+    return FaultSweep(pose, cost, current_cost, typical, threshold)

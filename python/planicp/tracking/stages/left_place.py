@@ -6,8 +6,8 @@ scan confirms it (stage 3). Two scans that prefer a place tell an odometry fault
 else that looks like one: where a SLAM map's passes disagree by half a metre, a scan fits the
 other pass's copy of the walls as well, and on freiburg-campus (odometry seed 8) two scans in a
 row preferred it by the fault cost; from the sixth scan after, the scans preferred the place the
-track had left by 5-17 cost units, and nothing looked there (docs/limitations.md, "The place left
-behind"). So the place left behind stays a hypothesis: followed with the odometry and climbed to
+track had left by 5-17 cost units, and nothing looked there (docs/limitations.md, "Two scans'
+word"). So the place left behind stays a hypothesis: followed with the odometry and climbed to
 the mode of each scan's likelihood in the plan's field, it is taken back when a scan prefers it to
 the track by the fault cost, and forgotten when a scan prefers the track to it by as much (the
 max-mixture's own threshold, `planicp.tracking.odometry_fault`). A true fault's left place, where
@@ -16,20 +16,15 @@ the odometry alone would have put the robot, is ruled out at once.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
 from ..._validation import Pose
 from ...se2 import between, compose
 from ..decisions import Correction, LeftPlaceDecision
-from ..odometry_fault import fault_cost, scan_cost
-from ..posterior_refinement import NO_PRIOR_VARIANCE
+from ..odometry_fault import climb, fault_cost, scan_cost
 from .fit import aligned_from
 from .rules import Rules
-
-_NO_PRIOR = (np.eye(3) * NO_PRIOR_VARIANCE).tolist()
 
 
 def weigh_left_place(
@@ -49,17 +44,11 @@ def weigh_left_place(
     if left is None or lost or not rules.refinement.weighs_faults:
         return LeftPlaceDecision(None)
     there = compose(left[0], between(left[1], odom))
-    if not correction.accepted or len(points) == 0:
+    if not correction.accepted:
         return LeftPlaceDecision(None, kept=(there, odom))
-    refinement = rules.refinement
-    climbed, cost, _, _, _ = rules.plan.likelihood_field().refine(
-        points, there, there, _NO_PRIOR, refinement.return_weight, refinement.max_iterations
-    )
-    place: Pose = (float(climbed[0]), float(climbed[1]), float(climbed[2]))
-    current = scan_cost(points, correction.pose, rules.plan, refinement)
-    threshold = fault_cost(refinement.fault_probability)
-    if not (math.isfinite(cost) and math.isfinite(current)):
-        return LeftPlaceDecision(place, cost, current, kept=(place, odom))
+    place, cost = climb(points, there, rules.plan, rules.refinement)
+    current = scan_cost(points, correction.pose, rules.plan, rules.refinement)
+    threshold = fault_cost(rules.refinement.fault_probability)
     if cost + threshold < current:
         return LeftPlaceDecision(place, cost, current, returned=aligned_from(points, place, rules))
     if current + threshold < cost:
