@@ -495,13 +495,6 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
     """See the module: at the scans off the reference, where the map scans place them."""
     import small_gicp  # the harness's ICP peer: a registration independent of planicp
 
-    def matrix(pose: np.ndarray) -> np.ndarray:
-        c, s = math.cos(pose[2]), math.sin(pose[2])
-        return np.array([[c, -s, 0.0, pose[0]], [s, c, 0.0, pose[1]], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
-
-    def lift(xy: np.ndarray) -> np.ndarray:
-        return np.column_stack([xy, np.zeros(len(xy))])
-
     print(
         "| log | scan | planicp off | filter off | its own pass: from the reference | other passes: "
         "from the reference | field cost at the mode near the reference / near planicp's |"
@@ -536,13 +529,13 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
                     continue
                 for j in group:
                     if j not in world:
-                        world[j] = lift(log.scans[j]) @ matrix(log.poses[j])[:3, :3].T + matrix(log.poses[j])[:3, 3]
-                target = small_gicp.PointCloud(np.vstack([world[j] for j in group]))
+                        world[j] = harness.transform(log.scans[j], log.poses[j])
+                target = small_gicp.PointCloud(harness.lift3(np.vstack([world[j] for j in group])))
                 result = small_gicp.align(
                     target,
-                    small_gicp.PointCloud(lift(log.scans[raw])),
+                    small_gicp.PointCloud(harness.lift3(log.scans[raw])),
                     small_gicp.KdTree(target),
-                    init_T_target_source=matrix(log.poses[raw]),
+                    init_T_target_source=harness.pose_to_matrix4(log.poses[raw]),
                     registration_type="ICP",
                     max_correspondence_distance=1.0,
                     max_iterations=50,
