@@ -119,6 +119,7 @@ from planicp import (
     localize,
     relocalize,
 )
+from planicp.tracking.odometry_fault import climb
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
@@ -127,6 +128,11 @@ SEARCH_SETTINGS = {
     "0.2 m, heading step from the scan, 100 points": RelocalizationConfig(angular_step=None),
     "0.2 m, 2 degrees, 100 points (the defaults)": RelocalizationConfig(),
 }
+
+
+def log_path(harness: Any, name: str) -> str:
+    """The path of the harness's CARMEN log `name`."""
+    return harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
 
 
 def load(
@@ -142,8 +148,7 @@ def load(
     makes them (its odometry drawn with `seed`; the harness's own is 7; its plan's cells of
     `resolution` metres occupied where `min_hits` end points fall), or on another `scan_set` (see
     the module: "swapped", "reversed")."""
-    path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
-    log = harness.read_carmen_log(path)
+    log = harness.read_carmen_log(log_path(harness, name))
     mapped, tracked = np.arange(0, len(log.scans), 2), np.arange(1, len(log.scans), 2)
     if scan_set == "swapped":
         mapped, tracked = tracked, mapped
@@ -272,7 +277,7 @@ def log_odometry_study(harness: Any, logs: list[str]) -> None:
     print("|---|---|---|---|---|---|")
     searches = (("masks (default)", None), ("cast", IcpConfig.for_tracking(correspondence_search="kd_tree")))
     for name in logs:
-        path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
+        path = log_path(harness, name)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the logs' repaired timestamps
             usable = [f for f in open_log(path) if f.reference is not None and f.odometry is not None]
@@ -501,8 +506,7 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
     )
     print("|---|---|---|---|---|---|---|")
     for name in logs:
-        path = harness.INTEL_LOG if name == "intel" else os.path.join(harness.LOGS_DIR, f"{name}-corrected.log.gz")
-        log = harness.read_carmen_log(path)
+        log = harness.read_carmen_log(log_path(harness, name))
         plan, scans, ref, odom = load(harness, name, out, seed)
         est = tracked(plan, scans, ref, odom)[0]
         off = np.hypot(*(est[:, :2] - ref[:, :2]).T)
@@ -514,9 +518,7 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
             ).reshape(-1, 3)
             n = min(len(pf), len(ref))
             filter_off[:n] = np.hypot(*(pf[:n, :2] - ref[:n, :2]).T)
-        field = PlanMap.from_ros_map(plan.yaml_path).likelihood_field()
-        weight = PosteriorRefinement().return_weight
-        no_prior = (np.eye(3) * 1e6).tolist()
+        pm = PlanMap.from_ros_map(plan.yaml_path)
         world = {}
         for k in np.flatnonzero(off > 0.3):
             raw = 2 * int(k) + 1  # the harness tracks the odd-numbered scans
@@ -544,8 +546,7 @@ def reference_study(harness: Any, logs: list[str], out: str, filter_out: str | N
                 cells.append(f"{math.dist(placed, log.poses[raw][:2]):.2f} m ({len(group)} scans)")
             points = np.ascontiguousarray(scans[k])
             costs = [
-                field.refine(points, tuple(map(float, start)), tuple(map(float, start)), no_prior, weight, 30)[1]
-                for start in (ref[k], est[k])
+                climb(points, tuple(map(float, start)), pm, PosteriorRefinement())[1] for start in (ref[k], est[k])
             ]
             print(
                 f"| {name} | {k} | {off[k]:.2f} m | "
