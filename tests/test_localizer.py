@@ -245,8 +245,10 @@ def test_gate_rejects_non_convergence_only_when_required(
     assert not est.accepted and "did not converge in 1 iterations" in est.reason
     # The default gate does not require it.
     est = Localizer(plan, off, cfg, initial_covariance=start).update(scans[0], (0.0, 0.0, 0.0))
-    assert est.accepted and math.dist(est.pose[:2], est.result.pose[:2]) < 0.001  # type: ignore[union-attr]
-    # without fusion (a wide start prior pulls the fit by a fraction of a millimetre) it is the fit
+    # The start prior pulls the fit by millimetres: a fit cut short after one iteration leaves
+    # residuals that share its error along each wall, and its covariance says so.
+    assert est.accepted and math.dist(est.pose[:2], est.result.pose[:2]) < 0.01  # type: ignore[union-attr]
+    # without fusion it is the fit
     est = Localizer(plan, off, cfg, fusion=FusionRule(max_innovation=0.0), initial_covariance=start).update(
         scans[0], (0.0, 0.0, 0.0)
     )

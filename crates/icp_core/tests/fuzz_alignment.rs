@@ -15,7 +15,7 @@ use icp_core::error::{IcpError, MAX_COORDINATE};
 use icp_core::icp::acceleration::{extrapolation, truncated_cost, Update};
 use icp_core::icp::candidate_cache::CandidateCache;
 use icp_core::icp::correspondence::{find_pairs, trim, TargetSet};
-use icp_core::icp::covariance::pose_covariance;
+use icp_core::icp::covariance::{pose_covariance, InlierPair};
 use icp_core::icp::rigid_solver::{solve_rigid, MIN_PAIRS};
 use icp_core::maps::pair::Pair;
 use icp_core::maps::wall_normals::estimate_normals;
@@ -350,11 +350,13 @@ fn fuzz_covariance_and_normals() {
             Pose2 { x: c.f64_or_special(-5.0, 5.0, 0.1), y: c.uniform(-5.0, 5.0), yaw: c.uniform(-PI, PI) };
         let n = c.below(300);
         let noise = c.pick(&[0.0, 1e-300, 1e-3, 0.1, 1e6]);
-        let pairs: Vec<([f64; 2], u32)> = (0..n)
+        // Beams in any order, some repeated: the covariance sorts them.
+        let pairs: Vec<InlierPair> = (0..n)
             .map(|_| {
                 let i = c.below(map.len());
                 let p = map.points()[i];
-                ([p[0] + c.uniform(-noise, noise), p[1] + c.uniform(-noise, noise)], i as u32)
+                let point = [p[0] + c.uniform(-noise, noise), p[1] + c.uniform(-noise, noise)];
+                InlierPair { beam: c.below(2 * n + 1) as u32, point, target: i as u32 }
             })
             .collect();
         c.note(|| format!("pose {pose:?} pairs {pairs:?}"));

@@ -51,15 +51,15 @@ class IcpConfig(Settings):
             worse is undone at the next iteration.
         visibility_range: range of that ray casting; None: the scan's farthest point plus the
             largest stage distance.
-        covariance_scale: factor applied to the point-to-wall covariance `sigma^2 H^-1`, which
-            treats every residual as independent. Neighbouring beams see the same stretch of wall
-            and the plan is sampled on a lattice, so the raw covariance is optimistic. For single
-            alignments the default 3 brought the mean normalised estimation error squared (NEES)
-            from 9.1 to 3.1 on four simulated floors; tracking (`for_tracking()`, whose trimming and
-            the `Localizer`'s occlusion rule leave cleaner residuals) uses 4: over 7,198 accepted
-            tracking estimates (`benches/covariance_calibration.py --seeds 3`) the raw mean was
-            10.2 and the scaled one 2.6 (2.1 to 3.0 per floor), with 94.8 % inside the chi-square
-            95 % bound.
+        covariance_scale: factor applied to the point-to-wall covariance (the sandwich
+            `H^-1 S H^-1`, `S` the Newey-West estimate over neighbouring beams, which counts the
+            error a stretch of wall gives all the returns on it once, not once per return; see
+            docs/design.md, "Covariance that means something"). What it leaves out is the plan's
+            own lattice and the pairing's choices. Single alignments use 3; tracking
+            (`for_tracking()`, whose trimming and the `Localizer`'s occlusion rule leave cleaner
+            residuals) uses 4, which leaves the simulated floors' mean normalised estimation error
+            squared a little under the chi-square's (docs/benchmarks.md, "Covariance calibration
+            (NEES)").
         correspondence_search: how the nearest wall point of a scan point is found.
             "wall_index" (the default for single alignments): the plan's precomputed nearest-wall
             index, a raster whose every cell lists the one or two wall points that can be nearest

@@ -17,7 +17,7 @@ use crate::icp::candidate_cache::CandidateCache;
 use crate::icp::correspondence::{
     find_pairs, trim, trim_auto, TargetSet, AUTO_TRIM_COARSE_SHARE, AUTO_TRIM_MIN_SHARE,
 };
-use crate::icp::covariance::pose_covariance;
+use crate::icp::covariance::{pose_covariance, InlierPair};
 use crate::icp::rigid_solver::{RigidAccumulator, MIN_PAIRS};
 use crate::icp::termination::{pair_fingerprint, stage_end};
 use crate::icp::visible_through_index::VisibleThroughIndex;
@@ -286,7 +286,7 @@ fn score(
     for p in &pairs {
         inlier_mask[p.source as usize] = true;
         sum_sq += p.sq_dist;
-        inlier_pairs.push((moved[p.source as usize], p.target));
+        inlier_pairs.push(InlierPair { beam: p.source, point: moved[p.source as usize], target: p.target });
     }
     let num_inliers = pairs.len();
     let rmse = if num_inliers > 0 { (sum_sq / num_inliers as f64).sqrt() } else { f64::NAN };
