@@ -161,8 +161,8 @@ def test_kidnapped_robot_is_found_again() -> None:
 
 def test_a_kidnap_is_found_again_with_each_search_within_one_update() -> None:
     """`search_nodes=None`: every search runs to its end in the update that starts it, so the
-    place is confirmed on the next scans. Measured: back after 4 scans in 7 of 10 runs, 7 in one, 13
-    in one, not within 25 in one (the default, searches spread over updates: 6-13 in 9 of 10)."""
+    place is confirmed on the next scans, sooner than with the default's searches spread over
+    updates (docs/benchmarks.md, "Kidnapped robot")."""
     outcomes = [_kidnap(seed, recovery=RecoveryConfig(search_nodes=None)) for seed in range(5)]
     good = [lost is not None and lost < 5 and back is not None and back < 8 for lost, back in outcomes]
     assert sum(good) >= 4, outcomes

@@ -27,8 +27,10 @@ class IcpResult:
         inlier_ratio: `num_inliers` over all scan points.
         rmse: root mean square distance of the inliers to the plan, metres (NaN without inliers).
         covariance: 3x3 over (x, y, yaw) in the map frame (m^2, m rad, rad^2), from the
-            point-to-wall residuals times `IcpConfig.covariance_scale`; `inf` on the diagonal
-            when the scan does not fix the pose.
+            point-to-wall residuals (the Newey-West sandwich over neighbouring beams, which
+            counts the error a stretch of wall gives all its returns once) times
+            `IcpConfig.covariance_scale`; `inf` on the diagonal when the scan does not fix the
+            pose.
         constraint: 3x3 `H = sum J J^T` over the inliers with a wall normal, `J = (n_x, n_y,
             n . perp(p - t))`: how many inliers' worth of wall normal constrain each direction
             (x, y unitless, yaw terms in metres). `translation_constraint()` reads it.
