@@ -102,12 +102,18 @@ pub fn pose_covariance(
 
 /// `S = sum_ij w(|b_i - b_j|) g_i g_j^T` over scores `(beam b, score g)` sorted by beam, with
 /// Bartlett's weight `w(lag) = 1 - lag / (bandwidth + 1)` (0 beyond `bandwidth`): a missing beam
-/// (no inlier) is a zero score, so `S` stays positive semi-definite.
+/// (no inlier) is a zero score, so `S` stays positive semi-definite. Only the positive part of the
+/// cross terms (`i != j`) is kept: correlation between neighbouring returns may widen the
+/// covariance, never narrow it below the independent returns' `sum g_i g_i^T`. Walls do not give
+/// neighbouring beams opposite errors; where residuals alternate in sign (two interleaved lasers
+/// slightly out of calibration, a zigzag of the plan's lattice), that is no evidence that the
+/// returns together fix the pose better than each alone says.
 fn long_run_covariance(scores: &[(u32, Vector3<f64>)], bandwidth: usize) -> Matrix3<f64> {
-    let mut s = Matrix3::<f64>::zeros();
+    let mut own = Matrix3::<f64>::zeros();
+    let mut cross = Matrix3::<f64>::zeros();
     let span = bandwidth as u64;
     for (i, (bi, gi)) in scores.iter().enumerate() {
-        s += gi * gi.transpose();
+        own += gi * gi.transpose();
         for (bj, gj) in &scores[i + 1..] {
             let lag = u64::from(*bj - *bi);
             if lag > span {
@@ -115,10 +121,17 @@ fn long_run_covariance(scores: &[(u32, Vector3<f64>)], bandwidth: usize) -> Matr
             }
             let w = 1.0 - lag as f64 / (span + 1) as f64;
             let c = gi * gj.transpose();
-            s += (c + c.transpose()) * w;
+            cross += (c + c.transpose()) * w;
         }
     }
-    s
+    own + positive_part(&cross)
+}
+
+/// The symmetric `m` with its negative eigenvalues set to 0.
+fn positive_part(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let eigen = nalgebra::SymmetricEigen::new((m + m.transpose()) * 0.5);
+    let kept = Matrix3::from_diagonal(&eigen.eigenvalues.map(|l| l.max(0.0)));
+    eigen.eigenvectors * kept * eigen.eigenvectors.transpose()
 }
 
 /// Newey and West's (1994) automatic bandwidth for Bartlett's kernel: from the autocovariances
@@ -371,5 +384,22 @@ mod tests {
         assert!(u.bandwidth >= 10, "a 50-beam stretch chose a lag of {} beams", u.bandwidth);
         let ratio = u.covariance[(1, 1)] / plain[(1, 1)];
         assert!(ratio > 10.0, "y variance only {ratio} times sigma^2 H^-1");
+    }
+
+    #[test]
+    fn residuals_alternating_in_sign_do_not_narrow_the_covariance() {
+        // Two beams 1 cm in front of the wall, the next two 1 cm behind, and so on: the scores of
+        // beams two apart cancel, which a plain Newey-West sum would read as the returns fixing
+        // the pose better together than alone.
+        let (map, pts) = swept_room();
+        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
+        let pose = Pose2::new(2.5, 2.5, 0.0);
+        let pairs = observed(&pts, |i| if i % 4 < 2 { 0.01 } else { -0.01 });
+        let u = pose_covariance(&map, &normals, &pose, &pairs);
+        let plain = independent(&map, &normals, &pose, &pairs);
+        for k in 0..3 {
+            let ratio = u.covariance[(k, k)] / plain[(k, k)];
+            assert!(ratio > 0.95, "axis {k}: {ratio} times sigma^2 H^-1");
+        }
     }
 }
