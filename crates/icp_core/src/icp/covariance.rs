@@ -353,15 +353,20 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn independent_residuals_choose_a_short_lag_and_keep_sigma_squared_h_inverse() {
+    /// The swept room seen from its centre with each return displaced by `offset(beam)`: the
+    /// covariance and the `sigma^2 H^-1` independent residuals would give.
+    fn room_covariances(offset: impl Fn(usize) -> f64) -> (PoseUncertainty, Matrix3<f64>) {
         let (map, pts) = swept_room();
         let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
         let pose = Pose2::new(2.5, 2.5, 0.0);
-        let noise = white_noise(pts.len(), 0.01);
-        let pairs = observed(&pts, |i| noise[i]);
-        let u = pose_covariance(&map, &normals, &pose, &pairs);
-        let plain = independent(&map, &normals, &pose, &pairs);
+        let pairs = observed(&pts, offset);
+        (pose_covariance(&map, &normals, &pose, &pairs), independent(&map, &normals, &pose, &pairs))
+    }
+
+    #[test]
+    fn independent_residuals_choose_a_short_lag_and_keep_sigma_squared_h_inverse() {
+        let noise = white_noise(400, 0.01);
+        let (u, plain) = room_covariances(|i| noise[i]);
         assert!(u.bandwidth <= 4, "white noise chose a lag of {} beams", u.bandwidth);
         for k in 0..3 {
             let ratio = u.covariance[(k, k)] / plain[(k, k)];
@@ -374,13 +379,8 @@ mod tests {
         // The wall at y = 0 drawn 2 cm off along its first half, the rest of the room right: the
         // 50 returns on that stretch share one error, which sigma^2 H^-1 counts as 50
         // independent measurements.
-        let (map, pts) = swept_room();
-        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
-        let pose = Pose2::new(2.5, 2.5, 0.0);
-        let noise = white_noise(pts.len(), 0.002);
-        let pairs = observed(&pts, |i| noise[i] + if i < 50 { 0.02 } else { 0.0 });
-        let u = pose_covariance(&map, &normals, &pose, &pairs);
-        let plain = independent(&map, &normals, &pose, &pairs);
+        let noise = white_noise(400, 0.002);
+        let (u, plain) = room_covariances(|i| noise[i] + if i < 50 { 0.02 } else { 0.0 });
         assert!(u.bandwidth >= 10, "a 50-beam stretch chose a lag of {} beams", u.bandwidth);
         let ratio = u.covariance[(1, 1)] / plain[(1, 1)];
         assert!(ratio > 10.0, "y variance only {ratio} times sigma^2 H^-1");
@@ -391,12 +391,7 @@ mod tests {
         // Two beams 1 cm in front of the wall, the next two 1 cm behind, and so on: the scores of
         // beams two apart cancel, which a plain Newey-West sum would read as the returns fixing
         // the pose better together than alone.
-        let (map, pts) = swept_room();
-        let normals = estimate_normals(map.points(), map.tree(), cancel::NEVER).unwrap();
-        let pose = Pose2::new(2.5, 2.5, 0.0);
-        let pairs = observed(&pts, |i| if i % 4 < 2 { 0.01 } else { -0.01 });
-        let u = pose_covariance(&map, &normals, &pose, &pairs);
-        let plain = independent(&map, &normals, &pose, &pairs);
+        let (u, plain) = room_covariances(|i| if i % 4 < 2 { 0.01 } else { -0.01 });
         for k in 0..3 {
             let ratio = u.covariance[(k, k)] / plain[(k, k)];
             assert!(ratio > 0.95, "axis {k}: {ratio} times sigma^2 H^-1");
