@@ -9,12 +9,12 @@
 //! - `sigma^2 H^-1` (`sigma^2` the residual variance) holds when every residual is independent:
 //!   the noise of the beams. On a real building it is not: neighbouring beams see the same stretch
 //!   of wall, drawn or mapped a little off, and their residuals share that error, so that 180
-//!   returns are worth far fewer independent ones. On eight real logs' SLAM maps `sigma^2 H^-1`
-//!   was 3 to 26 times too small in variance.
+//!   returns are worth far fewer independent ones (docs/design.md, "Covariance that means
+//!   something").
 //! - The covariance returned is therefore the sandwich `H^-1 S H^-1`, `S` the Newey-West
 //!   (heteroscedasticity and autocorrelation consistent) estimate of the covariance of the summed
 //!   scores `J r`: their products over pairs up to `L` beams apart, weighted by Bartlett's
-//!   `1 - lag / (L + 1)` (positive semi-definite by construction). The bandwidth `L` is chosen from
+//!   `1 - lag / (L + 1)`, the cross terms' negative part dropped. The bandwidth `L` is chosen from
 //!   the scan's own residuals by Newey and West's automatic rule ("Automatic lag selection in
 //!   covariance matrix estimation", 1994): independent residuals give a short lag and
 //!   `S ~ sigma^2 H`, residuals that share a wall's error a lag as long as that wall.
@@ -137,9 +137,9 @@ fn positive_part(m: &Matrix3<f64>) -> Matrix3<f64> {
 /// Newey and West's (1994) automatic bandwidth for Bartlett's kernel: from the autocovariances
 /// `c_j` (j = 0..=n_pre beams apart) of the scores rescaled to unit information (`scale`) and
 /// summed over their three components, `s0 = c_0 + 2 sum c_j`, `s1 = 2 sum j c_j`, and
-/// `L = floor(1.1447 ((s1 / s0)^2 n)^(1/3))`, `n` the beams spanned; the pre-whitening lag is
-/// `n_pre = floor(4 (n / 100)^(2/9))`. Capped at `n - 1`; 0 when the scores show no positive
-/// long-run variance.
+/// `L = floor(1.1447 ((s1 / s0)^2 n)^(1/3))`, `n` the beams spanned; the preliminary estimate's
+/// lag is `n_pre = floor(4 (n / 100)^(2/9))`. Capped at `n - 1`; 0 when the scores show no
+/// positive long-run variance.
 fn automatic_bandwidth(scores: &[(u32, Vector3<f64>)], scale: &Vector3<f64>) -> usize {
     let (Some(first), Some(last)) = (scores.first(), scores.last()) else {
         return 0;
