@@ -99,7 +99,8 @@ def test_a_slam_map_is_matched_through_the_index_masks_and_a_drawn_plan_through_
     made from: the default `Localizer` pairs them through the nearest-wall index's masks (hidden
     only by walls within 0.6 m), not through a cast from the prediction that stops at every speck
     (`IcpConfig.for_tracking`). The same walls read as material are cast through. Both track the
-    excerpt equally well (measured: 4.36 and 4.33 cm mean ATE over the six draws)."""
+    excerpt within 3 mm of each other (measured: 4.33 cm mean ATE over the six draws through the
+    masks, 4.11 through the cast)."""
     yaml_path, scans, reference, odometries = killian
     slam = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
     drawn = planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False)
@@ -120,10 +121,11 @@ def test_an_occupancy_grid_is_read_as_surfaces_not_as_wall_material(
     """The default reading of a map_server map (every occupied cell's centre, and the pose refined
     in its likelihood field) tracks the same scans closer than the faces of the occupied cells,
     which put every surface half a cell to a cell in front of where the beams ended (and are
-    walls of material: not refined)."""
+    walls of material: not refined). That offset is in every scan's error, so it shows in the
+    median error over the six draws; a draw's RMS is decided by its few worst scans."""
     yaml_path, scans, reference, odometries = killian
     centres = planicp.PlanMap.from_ros_map(yaml_path, cache=False)
     faces = planicp.PlanMap.from_ros_map(yaml_path, edge_detector="boundary", cache=False)
-    by_default = np.mean([np.sqrt(np.mean(track(centres, scans, reference, o) ** 2)) for o in odometries])
-    by_faces = np.mean([np.sqrt(np.mean(track(faces, scans, reference, o) ** 2)) for o in odometries])
-    assert by_default < 0.95 * by_faces, (by_default, by_faces)  # measured: 4.3 and 5.25 cm
+    by_default = np.median(np.concatenate([track(centres, scans, reference, o) for o in odometries]))
+    by_faces = np.median(np.concatenate([track(faces, scans, reference, o) for o in odometries]))
+    assert by_default < 0.9 * by_faces, (by_default, by_faces)  # measured: 2.5 and 3.1 cm
