@@ -4,6 +4,7 @@ and reset."""
 from __future__ import annotations
 
 import math
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
@@ -530,6 +531,57 @@ def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked
     many = np.array(recovery.beyond_shares)
     assert len(many) == 50
     assert recovery.beyond_seen == pytest.approx(many.mean() + 3.161 * many.std(ddof=1) * math.sqrt(1.02), abs=1e-3)
+
+
+def test_a_scan_no_place_explains_is_passed_over_once(plan: PlanMap, path: list[Pose], scans: list[np.ndarray]) -> None:
+    """A corrupted scan, which no followed place explains, tells none of them from another: they
+    follow the odometry over it, their streaks unchanged; a second such scan in a row drops them.
+    A scan the tracked place explains (a place on trial) does weigh them: those it fails are
+    dropped at once."""
+    from planicp.tracking.recovery import Hypothesis
+
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    fit = localize(scans[20], plan, path[20], recovery.icp)
+    place = Hypothesis(path[20], fit, 2, 2 * fit.inlier_ratio, True)
+    junk = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[21].shape)
+    motion = se2.between(path[20], path[21])
+    recovery.hypotheses = [place]
+    assert not recovery._follow_all(junk, motion)
+    [coasted] = recovery.hypotheses
+    assert coasted.missed and coasted.streak == 2 and coasted.total == place.total
+    assert error(coasted.pose, path[21])[0] < 1e-9
+    # The next scan, sound, is explained there: the streak goes on.
+    assert recovery._follow_all(scans[22], se2.between(path[21], path[22]))
+    [followed] = recovery.hypotheses
+    assert not followed.missed and followed.streak == 3 and error(followed.pose, path[22])[0] < 0.03
+    # Two corrupted scans in a row: dropped at the second.
+    assert not recovery._follow_all(junk, se2.between(path[22], path[23]))
+    assert not recovery._follow_all(junk, se2.between(path[23], path[24]))
+    assert recovery.hypotheses == []
+    # Explained elsewhere: the scan weighs the places, and drops those it fails.
+    recovery.hypotheses = [place]
+    assert recovery._follow_all(junk, motion, explained_elsewhere=True)
+    assert recovery.hypotheses == []
+
+
+def test_a_place_nearby_must_explain_scans_as_sound_tracking_does(plan: PlanMap) -> None:
+    """`Recovery.explained_seen` is the lower bound of a prediction interval for the share of
+    its returns the next sound scan's fit explains (as `beyond_seen` is an upper one): scans
+    explained alike keep it high, scans explained unevenly (the parts of a building differ)
+    lower it."""
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    assert recovery.explained_seen == 0.0
+    alike = [0.95, 0.96, 0.94, 0.95, 0.97, 0.93] * 8
+    for share in alike:
+        recovery.observe_explained(share)
+    a = np.array(alike)
+    bound = a.mean() - student_t_quantile(NormalDist().cdf(3.0), len(a) - 1) * a.std(ddof=1) * math.sqrt(1 + 1 / len(a))
+    assert recovery.explained_seen == pytest.approx(bound, abs=1e-9)
+    assert 0.88 < recovery.explained_seen < 0.92
+    uneven = [0.98, 0.92, 0.96, 0.91, 0.64, 0.96, 0.94, 0.97, 0.80, 0.91, 0.96, 0.99, 0.84, 0.76, 0.89]
+    for share in uneven:
+        recovery.observe_explained(share)
+    assert 0.6 < recovery.explained_seen < 0.8
 
 
 def test_student_t_quantiles() -> None:
