@@ -29,6 +29,7 @@ from planicp.tracking.decisions import (
     LeftPlaceDecision,
     LostDecision,
     PendingDecision,
+    PendingPlace,
     Prediction,
     RecoveryDecision,
     ScoreDecision,
@@ -356,8 +357,9 @@ def test_a_scan_that_says_nothing_keeps_the_jump_pending_for_the_next(
     odom2 = se2.compose(claimed, se2.between(path[1], path[2]))
     est = loc.update(scans[2][:2], odom2)  # two returns: nothing to align
     pending = est.decisions[2]
-    assert isinstance(pending, PendingDecision) and pending.confirmed is None and pending.kept is not None
-    assert pending.kept[1] == odom2 and error(path[2], pending.kept[0])[0] < 0.05
+    assert isinstance(pending, PendingDecision) and pending.confirmed is None and len(pending.kept) == 1
+    assert pending.kept[0].odom == odom2 and error(path[2], pending.kept[0].pose)[0] < 0.05
+    assert pending.kept[0].silent == 1
     assert pending.why == "this scan says nothing of the pending place: still pending"
     assert not est.accepted and error(path[2], est.pose)[1] > 10 * DEG  # the faulted prediction meanwhile
     est = loc.update(scans[3], se2.compose(odom2, se2.between(path[2], path[3])))
@@ -373,14 +375,90 @@ def test_a_scan_the_pending_place_does_not_explain_better_forgets_it(
     loc = Localizer(plan, path[0])
     loc.update(scans[0], (0.0, 0.0, 0.0))
     truth1 = se2.between(path[0], path[1])
-    pending = (se2.compose(path[1], (0.0, 0.0, 15 * DEG)), truth1)  # a corrupted scan's place
+    pending = (PendingPlace(se2.compose(path[1], (0.0, 0.0, 15 * DEG)), truth1),)  # a corrupted scan's place
     odom2 = se2.compose(truth1, se2.between(path[1], path[2]))
     prediction = stages.predict(path[1], SMALL, truth1, odom2, MotionNoise())
     fit = stages.fit_from_prediction(scans[2], prediction, loc._rules(), False)
     assert fit.passed
     decision = stages.confirm_pending(scans[2], prediction, pending, fit, loc._rules())
-    assert decision.place is not None and decision.confirmed is None and decision.kept is None
+    assert decision.place is not None and decision.confirmed is None and decision.kept == ()
     assert decision.why == "this scan does not confirm the pending place: forgotten"
+
+
+def _history(cost: float) -> CostHistory:
+    """A track whose recent accepted scans all cost `cost` in the plan's likelihood field."""
+    history = CostHistory()
+    for _ in range(20):
+        history.record(cost)
+    return history
+
+
+def test_a_scan_the_plan_explains_nowhere_keeps_the_pending_place(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """Half of the scan's returns replaced by junk: the fits at the pending place and from the
+    prediction both pass the gate, and the one at the place explains no more; but the scan costs
+    far more than the track's scans at both, so it says nothing of the place, which stays pending
+    (the same scan from a track whose scans cost as much refutes it). The likelihood field is the
+    refinement's, on by default on a SLAM map's cells, turned on here."""
+    loc = Localizer(plan, path[0], refinement=PosteriorRefinement())
+    rules = loc._rules()
+    truth1 = se2.between(path[0], path[1])
+    pending = (PendingPlace(se2.compose(path[1], (0.0, 0.0, 15 * DEG)), truth1),)
+    odom2 = se2.compose(truth1, se2.between(path[1], path[2]))
+    prediction = stages.predict(path[1], SMALL, truth1, odom2, MotionNoise())
+    scan = scans[2].copy()
+    scan[::2] = np.random.default_rng(5).uniform(-8.0, 8.0, size=scan[::2].shape)
+    fit = stages.fit_from_prediction(scan, prediction, rules, False)
+    assert fit.passed and fit.result is not None
+    clean_cost = scan_cost(scans[2], path[2], plan, rules.refinement)
+    junk_cost = scan_cost(scan, fit.result.pose, plan, rules.refinement)
+    assert junk_cost > clean_cost + 2 * fault_cost(rules.refinement.fault_probability)
+    kept = stages.confirm_pending(scan, prediction, pending, fit, rules, _history(clean_cost))
+    assert kept.confirmed is None and len(kept.kept) == 1 and kept.kept[0].silent == 1
+    assert kept.kept[0].odom == odom2
+    assert kept.why == "this scan says nothing of the pending place: still pending"
+    refuted = stages.confirm_pending(scan, prediction, pending, fit, rules, _history(junk_cost))
+    assert refuted.confirmed is None and refuted.kept == ()
+
+
+def test_a_place_says_nothing_of_is_kept_over_as_many_scans_as_the_lost_rule_allows(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A scan too small to align keeps every pending place, one more silent scan each, but not
+    past the lost rule's `max_rejections`."""
+    loc = Localizer(plan, path[0])
+    rules = loc._rules()
+    truth1 = se2.between(path[0], path[1])
+    odom2 = se2.compose(truth1, se2.between(path[1], path[2]))
+    prediction = stages.predict(path[1], SMALL, truth1, odom2, MotionNoise())
+    fit = stages.fit_from_prediction(scans[2][:2], prediction, rules, False)
+    assert fit.result is None
+    limit = rules.lost.max_rejections
+    pending = (PendingPlace(path[1], truth1, limit - 1), PendingPlace(path[1], truth1, limit))
+    decision = stages.confirm_pending(scans[2][:2], prediction, pending, fit, rules)
+    assert [p.silent for p in decision.kept] == [limit] and decision.checked == 2
+    assert decision.why == "this scan refutes 1 of 2 pending places and says nothing of the rest"
+
+
+def test_of_two_pending_places_the_scan_confirms_the_one_it_fits(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """After the 15-degree odometry fault, two places are pending: a corrupted scan's, 1.5 m
+    off, and the fault's true one. The next scan confirms the true one and forgets the other."""
+    loc = Localizer(plan, path[0])
+    rules = loc._rules()
+    claimed = se2.compose(se2.between(path[0], path[1]), (0.0, 0.0, 15 * DEG))
+    wrong = PendingPlace(se2.compose(path[1], (1.5, 0.0, 0.0)), claimed)
+    pending = (wrong, PendingPlace(path[1], claimed))
+    odom2 = se2.compose(claimed, se2.between(path[1], path[2]))
+    predicted_from = se2.compose(path[1], (0.0, 0.0, -15 * DEG))  # the track followed the faulted odometry
+    prediction = stages.predict(predicted_from, SMALL, claimed, odom2, MotionNoise())
+    fit = stages.fit_from_prediction(scans[2], prediction, rules, False)
+    decision = stages.confirm_pending(scans[2], prediction, pending, fit, rules)
+    assert decision.confirmed is not None and decision.place is not None and decision.kept == ()
+    assert error(path[2], decision.confirmed.pose)[0] < 0.03 and error(path[2], decision.place)[0] < 0.01
+    assert decision.checked == 2 and decision.why == "this scan confirms one of 2 pending places: taken"
 
 
 def test_a_searched_place_must_be_more_probable_than_the_fit_it_would_replace(

@@ -6,7 +6,7 @@ frozen records, and `Estimate.decisions` lists them in that order:
 1. `Prediction`: the odometry motion applied to the last pose, and the grown covariance.
 2. `FitDecision`: the scan aligned from the prediction (occlusion rule, ICP, KD-tree retry) and
    the acceptance gate's verdict.
-3. `PendingDecision`: whether this scan confirms the place a rejected jump left pending.
+3. `PendingDecision`: whether this scan confirms a place a rejected jump left pending.
 4. `SearchDecision`: whether the plan was searched around the prediction, why, and what was found.
 5. `ScoreDecision`: how much of the whole scan the plan explains, and whether a poor fit
    continues the last well explained scan.
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,6 +38,23 @@ from .posterior_refinement import Refinement
 from .recovery import Hypothesis
 
 SearchCause = Literal["jump", "uncertain", "fault"]
+
+
+class PendingPlace(NamedTuple):
+    """A place a scan put the robot at that the localizer has not taken: left pending after a
+    rejected jump or a suspected odometry fault, until a scan confirms or refutes it.
+
+    Attributes:
+        pose: the place at the scan of `odom` (T_map_base).
+        odom: the odometry pose (T_odom_base) of that scan.
+        silent: scans since that said nothing of it (0 for a place this scan left pending).
+    """
+
+    pose: Pose
+    odom: Pose
+    silent: int = 0
+
+
 """Why the plan is searched around the prediction: "jump", a good fit rejected only for the size of
 its correction; "uncertain", a prediction whose 3-sigma position uncertainty exceeds the gate's
 translation limit; "fault", a scan the update's pose explains so much worse than the track's
@@ -134,33 +151,41 @@ class FitDecision:
 
 @dataclass(frozen=True)
 class PendingDecision:
-    """Stage 3: the place a rejected jump left pending, checked against this scan.
+    """Stage 3: the places rejected jumps left pending, checked against this scan.
 
     Attributes:
-        place: the pending place followed with the odometry to this scan (T_map_base); None when
-            no place was pending (or this scan could not be aligned, so it was not checked).
+        place: the pending place this scan confirms, followed with the odometry to it (T_map_base);
+            without one, the first pending place followed to it; None when no place was pending.
         confirmed: the fit at `place` when this scan confirms it (a sound fit there that explains
             the scan better than the prediction's fit by the recovery's `margin`, or the
-            prediction's was rejected); the update goes on with it. None otherwise.
-        kept: the place, with this scan's odometry pose, still pending for the next scan, when
-            this scan says nothing either way: neither the place nor the prediction explains it
-            (both fits rejected) or it could not be aligned. None otherwise.
+            prediction's was rejected, or that the scan's likelihood prefers by the fault cost);
+            the update goes on with it. None otherwise.
+        kept: the places, followed to this scan's odometry pose, still pending for the next scan
+            because this scan says nothing of them: it could not be aligned, or it explains
+            neither the place nor the prediction (the gate rejects both fits, or its cost in the
+            plan's likelihood field exceeds the track's typical cost by the fault cost at both).
+            Empty when a place was confirmed.
+        checked: how many places were pending.
     """
 
     place: Pose | None
     confirmed: IcpResult | None
-    kept: tuple[Pose, Pose] | None = None
+    kept: tuple[PendingPlace, ...] = ()
+    checked: int = 0
 
     @property
     def why(self) -> str:
         """One sentence on this decision."""
-        if self.kept is not None:
-            return "this scan says nothing of the pending place: still pending"
-        if self.place is None:
+        if self.checked == 0:
             return "no place pending"
-        if self.confirmed is None:
-            return "this scan does not confirm the pending place: forgotten"
-        return "this scan confirms the pending place: taken"
+        of = "the pending place" if self.checked == 1 else f"{self.checked} pending places"
+        if self.confirmed is not None:
+            return f"this scan confirms {of if self.checked == 1 else 'one of ' + of}: taken"
+        if len(self.kept) == self.checked:
+            return f"this scan says nothing of {of}: still pending"
+        if self.kept:
+            return f"this scan refutes {self.checked - len(self.kept)} of {of} and says nothing of the rest"
+        return f"this scan does not confirm {of}: forgotten"
 
 
 @dataclass(frozen=True)
@@ -178,8 +203,8 @@ class SearchDecision:
             the place the scan prefers to the fit is.
         searched: `result` is a search's or a confirmed place's fit, over the whole scan (not
             fused with the prediction; adopted as `Estimate.relocalized`).
-        pending: the place the next scan is to confirm (T_map_base) with this scan's odometry
-            pose, after a rejected jump or a suspected odometry fault; None otherwise.
+        pending: the place the next scan is to confirm, after a rejected jump or a suspected
+            odometry fault; None otherwise.
         fault: the heading sweep for an odometry fault, when it ran (`cause` is "fault" when
             it found a place of higher posterior that ICP fits soundly); None otherwise.
     """
@@ -189,7 +214,7 @@ class SearchDecision:
     result: IcpResult | None
     reason: str
     searched: bool
-    pending: tuple[Pose, Pose] | None = None
+    pending: PendingPlace | None = None
     fault: FaultSweep | None = None
 
     @property

@@ -17,7 +17,7 @@ from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule
-from .decisions import Decision
+from .decisions import Decision, PendingPlace
 from .degeneracy_rule import Degeneracy, DegeneracyRule
 from .fusion_rule import FusionRule
 from .icp_config import IcpConfig
@@ -285,10 +285,10 @@ class Localizer:
         self._last_odom: Pose | None = None
         # The last scan the plan explained, with its odometry pose.
         self._anchor: tuple[NDArray[np.float64], Pose] | None = None
-        # The place a scan put the robot at after a rejected jump (a search's, or the sound fit's),
-        # with the odometry pose of that scan: taken only when the next scan confirms it (see
-        # `update`).
-        self._pending: tuple[Pose, Pose] | None = None
+        # The places scans put the robot at after rejected jumps (a search's, or the sound fit's),
+        # with the odometry poses of those scans: one is taken only when a later scan confirms it
+        # (see `update` and `confirm_pending`).
+        self._pending: tuple[PendingPlace, ...] = ()
         self._left: tuple[Pose, Pose] | None = None
         # The scan's cost in the likelihood field at the last accepted poses: how well this
         # track's scans are explained, against which a suspected odometry fault is judged.
@@ -320,7 +320,7 @@ class Localizer:
             self._covariance = new_covariance
             self._last_odom = None
             self._anchor = None
-            self._pending = None
+            self._pending = ()
             self._left = None
             self._costs.clear()
             self._detector.reset()
@@ -374,13 +374,13 @@ class Localizer:
             # 1. Odometry predicts. 2. ICP from the prediction, judged by the gate.
             prediction = predict(self._pose, self._covariance, self._last_odom, odom, rules.motion_noise)
             fit = fit_from_prediction(points, prediction, rules, was_lost)
-            # 3. A place a rejected jump left pending is taken if this scan confirms it; 4. else the
+            # 3. A place rejected jumps left pending is taken if this scan confirms it; 4. else the
             # plan is searched around a prediction the gate cannot vouch for (which may leave a
             # place pending for the next scan).
-            pending, self._pending = self._pending, None
-            confirmation = confirm_pending(points, prediction, pending, fit, rules)
+            pending, self._pending = self._pending, ()
+            confirmation = confirm_pending(points, prediction, pending, fit, rules, self._costs)
             search = search_near_prediction(points, prediction, fit, confirmation, rules, was_lost, budget, self._costs)
-            self._pending = search.pending if search.pending is not None else confirmation.kept
+            self._pending = confirmation.kept + ((search.pending,) if search.pending is not None else ())
             # 5. How much of the scan the plan explains; clutter or not. 6. The corrected pose.
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
             correction = correct(points, prediction, search, score, rules)
@@ -391,7 +391,7 @@ class Localizer:
             recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
             adopted = recovery.adopted
             if lost.lost:
-                self._pending = None  # the recovery looks for the robot now
+                self._pending = ()  # the recovery looks for the robot now
             returned = left.returned is not None and adopted is None and not lost.lost
             result: IcpResult | None
             if adopted is not None:

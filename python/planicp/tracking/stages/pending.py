@@ -1,4 +1,4 @@
-"""Stage 3 of `Localizer.update`: a place a rejected jump left pending, confirmed or not by this
+"""Stage 3 of `Localizer.update`: the places rejected jumps left pending, confirmed or not by this
 scan (`confirm_pending`)."""
 
 from __future__ import annotations
@@ -8,8 +8,9 @@ from numpy.typing import NDArray
 
 from ..._validation import Pose
 from ...se2 import between, compose
-from ..decisions import FitDecision, PendingDecision, Prediction
-from ..odometry_fault import fault_cost, scan_cost
+from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction
+from ..icp_result import IcpResult
+from ..odometry_fault import CostHistory, fault_cost, scan_cost
 from .fit import aligned_from
 from .rules import Rules
 
@@ -17,33 +18,89 @@ from .rules import Rules
 def confirm_pending(
     points: NDArray[np.float64],
     prediction: Prediction,
-    pending: tuple[Pose, Pose] | None,
+    pending: tuple[PendingPlace, ...],
     fit: FitDecision,
     rules: Rules,
+    history: CostHistory | None = None,
 ) -> PendingDecision:
-    """The place an earlier scan put the robot at after a rejected jump (`pending`: the place and
-    that scan's odometry pose), followed with the odometry, and the fit there when this scan
-    confirms it: a sound fit there that explains the scan better than the prediction's fit by the
-    recovery's `margin` (or the prediction's was rejected), or that the scan's likelihood prefers
-    to it by the fault cost (`_fault_confirmed`). A scan that says nothing either way
-    (it could not be aligned, or the gate rejects the fits at both places: a poor scan, such as the
-    one after an odometry fault on fhw, whose true place explained 12 % of it) keeps the place
-    pending for the next scan (`PendingDecision.kept`); the lost rule bounds how long."""
-    if pending is None:
+    """The places earlier scans put the robot at after rejected jumps (`pending`), each followed
+    with the odometry, and the fit at the one this scan confirms: a sound fit there that explains
+    the scan better than the prediction's fit by the recovery's `margin` (or the prediction's was
+    rejected), or that the scan's likelihood prefers to it by the fault cost (`_fault_confirmed`).
+    Of several confirmed, the one whose fit explains the most of the scan.
+
+    A scan that says nothing either way keeps a place pending for the next scan
+    (`PendingDecision.kept`): it could not be aligned, or it explains neither the place nor the
+    prediction: the gate rejects the fits at both (a poor scan, such as the one after an odometry
+    fault on fhw, whose true place explained 12 % of it), or its cost in the plan's likelihood
+    field (`history`: the track's typical cost) exceeds the typical one by the fault cost at both,
+    the measure by which the fault sweep finds that a place explains a scan as the track's scans
+    are (where the refinement's field is used with its fault component: a SLAM map's cells by
+    default). Such a scan is corrupted, or shows what the plan does not: it weighs the place
+    against the prediction no more than a scan too small to align. A place is kept over at most the lost
+    rule's `max_rejections` such scans, the span the rule gives a track without an accepted fit.
+    Several places may be pending at once: the place a search found on a scan that said nothing
+    of an earlier one joins it, since one scan's word does not choose between them (on
+    freiburg-campus a corrupted-looking scan's place replaced the right one, which the next scan
+    would have confirmed, and the localizer lost track)."""
+    if not pending:
         return PendingDecision(None, None)
-    there = compose(pending[0], between(pending[1], prediction.odom))
-    if fit.result is None:
-        return PendingDecision(None, None, kept=(there, prediction.odom))
-    follow = aligned_from(points, there, rules)
+    best: tuple[float, PendingDecision] | None = None
+    kept: list[PendingPlace] = []
+    first = None
+    for waiting in pending:
+        there = compose(waiting.pose, between(waiting.odom, prediction.odom))
+        first = there if first is None else first
+        later = PendingPlace(there, prediction.odom, waiting.silent + 1)
+        if fit.result is None:
+            kept.append(later)
+            continue
+        follow = aligned_from(points, there, rules)
+        verdict = _verdict(points, follow, there, fit, rules, history)
+        if verdict == "confirmed" and (best is None or follow.inlier_ratio > best[0]):
+            best = (follow.inlier_ratio, PendingDecision(there, follow, (), len(pending)))
+        elif verdict == "silent":
+            kept.append(later)
+    if best is not None:
+        return best[1]
+    keep = tuple(p for p in kept if p.silent <= rules.lost.max_rejections)
+    return PendingDecision(first, None, keep, len(pending))
+
+
+def _verdict(
+    points: NDArray[np.float64],
+    follow: IcpResult,
+    there: Pose,
+    fit: FitDecision,
+    rules: Rules,
+    history: CostHistory | None,
+) -> str:
+    """ "confirmed", "refuted" or "silent": what this scan says of the pending place `there`, whose
+    fit is `follow`, against the fit from the prediction (`fit`, aligned)."""
+    assert fit.result is not None
     if rules.gate.rejection(follow, there):
-        return PendingDecision(there, None, kept=(there, prediction.odom) if fit.reason != "" else None)
-    if (
-        fit.reason == ""
-        and follow.inlier_ratio <= fit.result.inlier_ratio + rules.recovery.margin
-        and not _fault_confirmed(points, follow.pose, fit.result.pose, rules)
-    ):
-        return PendingDecision(there, None)
-    return PendingDecision(there, follow)
+        neither = fit.reason != "" or _explains_neither(points, follow.pose, fit.result.pose, rules, history)
+        return "silent" if neither else "refuted"
+    if fit.reason != "" or follow.inlier_ratio > fit.result.inlier_ratio + rules.recovery.margin:
+        return "confirmed"
+    if _fault_confirmed(points, follow.pose, fit.result.pose, rules):
+        return "confirmed"
+    return "silent" if _explains_neither(points, follow.pose, fit.result.pose, rules, history) else "refuted"
+
+
+def _explains_neither(
+    points: NDArray[np.float64], place: Pose, fit: Pose, rules: Rules, history: CostHistory | None
+) -> bool:
+    """Whether the scan's cost in the plan's likelihood field exceeds the track's typical cost
+    (`history`) by the fault cost both at `place` and at `fit` (the prediction's fit): neither
+    explains it as the track's scans are explained. False without the refinement's field, its
+    fault component, or a typical cost yet."""
+    refinement = rules.refinement
+    typical = None if history is None else history.typical()
+    if typical is None or not refinement.weighs_faults:
+        return False
+    bound = typical + fault_cost(refinement.fault_probability)
+    return min(scan_cost(points, place, rules.plan, refinement), scan_cost(points, fit, rules.plan, refinement)) > bound
 
 
 def _fault_confirmed(points: NDArray[np.float64], place: Pose, fit: Pose, rules: Rules) -> bool:

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from ..._validation import Pose
 from ...se2 import wrap_angle
-from ..decisions import FitDecision, PendingDecision, Prediction, SearchCause, SearchDecision
+from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction, SearchCause, SearchDecision
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
 from ..motion_noise import largest_position_std
@@ -75,7 +75,7 @@ def search_near_prediction(
     reason = (
         f"{reason}; {source} a place {_distance(predicted, place.pose):.2f} m away, taken if the next scan confirms it"
     )
-    return SearchDecision(cause, found, result, reason, False, pending=(place.pose, prediction.odom))
+    return SearchDecision(cause, found, result, reason, False, pending=PendingPlace(place.pose, prediction.odom))
 
 
 def _fault_search(
@@ -115,7 +115,12 @@ def _fault_search(
         "or a corrupted scan, taken if the next scan confirms it"
     )
     return replace(
-        decision, cause="fault", found=place, reason=reason, pending=(place.pose, prediction.odom), fault=sweep
+        decision,
+        cause="fault",
+        found=place,
+        reason=reason,
+        pending=PendingPlace(place.pose, prediction.odom),
+        fault=sweep,
     )
 
 
