@@ -69,6 +69,9 @@ the corrupted scans: what the scan itself did), the largest distance between a c
 estimates and the clean run's, over all scans and over the valid scans only (at a corrupted scan
 the odometry is all there is, and its step may be off by more than the bar), and the share of the
 corrupted run's scans more than 0.3 m off.
+`junk-draws` gives that share for each odometry draw of `--seeds` (the junk drawn with the same
+seed), per kind of corruption that recurs (one scan in five), and its mean over the draws: where
+one draw's outcome turns on a few scans, the mean says more.
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
 the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
@@ -371,6 +374,22 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
+def junk_draws_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+    kinds = ("turned 30 degrees", "turned 90 degrees", "random clouds")
+    print("| log | corruption | " + " | ".join(f"seed {s}" for s in seeds) + " | mean |")
+    print("|---|---|" + "---|" * (len(seeds) + 1))
+    for name in logs:
+        lost: dict[str, list[float]] = {kind: [] for kind in kinds}
+        for seed in seeds:
+            plan, scans, ref, odom = load(harness, name, out, seed)
+            for kind in kinds:
+                est, _ = tracked(plan, corrupted(scans, kind, np.random.default_rng(seed)), ref, odom)
+                lost[kind].append(100 * harness.error_metrics(est, ref, 0.3)["lost_frac"])
+        for kind in kinds:
+            cells = " | ".join(f"{v:.1f} %" for v in lost[kind])
+            print(f"| {name} | {kind} | {cells} | {np.mean(lost[kind]):.1f} % |", flush=True)
+
+
 def refinement_study(
     harness: Any, logs: list[str], out: str, seeds: list[int], without: PosteriorRefinement | None = None
 ) -> None:
@@ -593,6 +612,7 @@ def main() -> None:
             "refinement",
             "scan-sets",
             "junk",
+            "junk-draws",
             "faults",
             "slam-visibility",
             "log-odometry",
@@ -603,7 +623,11 @@ def main() -> None:
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
     parser.add_argument("--logs", nargs="+", default=["fhw", "freiburg-campus", "intel"])
     parser.add_argument(
-        "--seeds", nargs="+", type=int, default=[1, 2, 3, 4, 5, 6, 7], help="odometry seeds of the seeds study"
+        "--seeds",
+        nargs="+",
+        type=int,
+        default=[1, 2, 3, 4, 5, 6, 7],
+        help="odometry seeds of the seeds and junk-draws studies",
     )
     parser.add_argument(
         "--search",
@@ -639,6 +663,8 @@ def main() -> None:
             scan_sets_study(harness, args.logs, out)
         elif args.study == "junk":
             junk_study(harness, args.logs, out)
+        elif args.study == "junk-draws":
+            junk_draws_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "faults":
