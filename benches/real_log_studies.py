@@ -24,8 +24,9 @@ tracks each log with the defaults from the harness's synthetic odometry drawn wi
 (`--seeds`; the harness uses 7): one draw of the drift and the faults decides much on a hard log.
 `nees` tracks each log with the defaults and, over the accepted estimates that are not relocalized
 nor lost, gives the normalised estimation error squared e^T P^-1 e of `Estimate.covariance` (and of
-the fit's own `IcpResult.covariance`) against the reference pose: a consistent estimator's median is
-the chi-square's, 2.366 (the reference poses' own error counts as the estimator's here).
+the fit's own `IcpResult.covariance`, and of the odometry prediction's, `Prediction.covariance`)
+against the reference pose: a consistent estimator's median is the chi-square's, 2.366 (the
+reference poses' own error counts as the estimator's here).
 `refinement` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
 (on these map_server maps: the pose refined in the plan's likelihood field) and with
 `PosteriorRefinement(enabled=False)`, and gives the ATE and the share of scans more than 0.3 m off.
@@ -122,6 +123,7 @@ from planicp import (
     localize,
     relocalize,
 )
+from planicp.tracking.decisions import Prediction
 from planicp.tracking.odometry_fault import climb
 
 SEARCH_SETTINGS = {
@@ -407,30 +409,37 @@ def refinement_study(
 
 
 def nees_study(harness: Any, logs: list[str], out: str) -> None:
-    print("| log | estimates | estimate NEES median | times the chi-square's | fit NEES median | times |")
-    print("|---|---|---|---|---|---|")
+    print(
+        "| log | estimates | estimate NEES median | times the chi-square's | fit NEES median | times "
+        "| prediction NEES median | times |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     for name in logs:
         plan, scans, ref, odom = load(harness, name, out)
         loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])))
         loc.update(scans[0], tuple(map(float, odom[0])))
         estimate_nees: list[float] = []
         fit_nees: list[float] = []
+        prediction_nees: list[float] = []
         for k in range(1, len(scans)):
             e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
             if not e.accepted or e.result is None or e.relocalized or e.lost:
                 continue
+            prediction = e.decisions[0]
+            assert isinstance(prediction, Prediction)
             for pose, cov, into in (
                 (e.pose, e.covariance, estimate_nees),
                 (e.result.pose, e.result.covariance, fit_nees),
+                (prediction.pose, prediction.covariance, prediction_nees),
             ):
                 d = np.array(pose) - ref[k]
                 d[2] = (d[2] + math.pi) % (2 * math.pi) - math.pi
                 if np.isfinite(cov).all():
                     into.append(float(d @ np.linalg.solve(cov, d)))
-        a, b = np.median(estimate_nees), np.median(fit_nees)
+        a, b, c = np.median(estimate_nees), np.median(fit_nees), np.median(prediction_nees)
         print(
             f"| {name} | {len(estimate_nees)} | {a:.1f} | {a / CHI2_3_MEDIAN:.1f} "
-            f"| {b:.1f} | {b / CHI2_3_MEDIAN:.1f} |",
+            f"| {b:.1f} | {b / CHI2_3_MEDIAN:.1f} | {c:.1f} | {c / CHI2_3_MEDIAN:.1f} |",
             flush=True,
         )
 
