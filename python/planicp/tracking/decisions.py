@@ -38,6 +38,11 @@ from .posterior_refinement import Refinement
 from .recovery import Hypothesis
 
 SearchCause = Literal["jump", "uncertain", "fault"]
+"""Why the plan is searched around the prediction: "jump", a good fit rejected only for the size of
+its correction; "uncertain", a prediction whose 3-sigma position uncertainty exceeds the gate's
+translation limit; "fault", a scan the update's pose explains so much worse than the track's
+recent scans that the odometry may have strayed far beyond its noise, and the heading sweep in the
+plan's likelihood field found a place of higher posterior (`planicp.tracking.odometry_fault`)."""
 
 
 class PendingPlace(NamedTuple):
@@ -54,12 +59,6 @@ class PendingPlace(NamedTuple):
     odom: Pose
     silent: int = 0
 
-
-"""Why the plan is searched around the prediction: "jump", a good fit rejected only for the size of
-its correction; "uncertain", a prediction whose 3-sigma position uncertainty exceeds the gate's
-translation limit; "fault", a scan the update's pose explains so much worse than the track's
-recent scans that the odometry may have strayed far beyond its noise, and the heading sweep in the
-plan's likelihood field found a place of higher posterior (`planicp.tracking.odometry_fault`)."""
 
 CorrectionKind = Literal["fused", "weak_axis", "fit", "prediction"]
 """How `Correction.pose` was made: "fused", the Kalman update of the prediction with the fit

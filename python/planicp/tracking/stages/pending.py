@@ -37,8 +37,9 @@ def confirm_pending(
     the measure by which the fault sweep finds that a place explains a scan as the track's scans
     are (where the refinement's field is used with its fault component: a SLAM map's cells by
     default). Such a scan is corrupted, or shows what the plan does not: it weighs the place
-    against the prediction no more than a scan too small to align. A place is kept over at most the lost
-    rule's `max_rejections` such scans, the span the rule gives a track without an accepted fit.
+    against the prediction no more than a scan too small to align. A place is kept over at most
+    the lost rule's `max_rejections` such scans, the span the rule gives a track without an
+    accepted fit.
     Several places may be pending at once: the place a search found on a scan that said nothing
     of an earlier one joins it, since one scan's word does not choose between them (on
     freiburg-campus a corrupted-looking scan's place replaced the right one, which the next scan
@@ -75,8 +76,8 @@ def _verdict(
     rules: Rules,
     history: CostHistory | None,
 ) -> str:
-    """ "confirmed", "refuted" or "silent": what this scan says of the pending place `there`, whose
-    fit is `follow`, against the fit from the prediction (`fit`, aligned)."""
+    """What this scan says of the pending place `there`, whose fit is `follow`, against the fit
+    from the prediction (`fit`, aligned): "confirmed", "refuted" or "silent"."""
     assert fit.result is not None
     if rules.gate.rejection(follow, there):
         neither = fit.reason != "" or _explains_neither(points, follow.pose, fit.result.pose, rules, history)
