@@ -4,6 +4,7 @@ and reset."""
 from __future__ import annotations
 
 import math
+import time
 from statistics import NormalDist
 from typing import Any
 
@@ -562,6 +563,30 @@ def test_a_scan_no_place_explains_is_passed_over_once(plan: PlanMap, path: list[
     recovery.hypotheses = [place]
     assert recovery._follow_all(junk, motion, explained_elsewhere=True)
     assert recovery.hypotheses == []
+
+
+def test_the_recovery_searches_on_in_the_update_s_spare_time(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """`search_spare_time`: past its `search_nodes`, the recovery's search goes on until that long
+    after the update began; with none it stops at the nodes and goes on in the next update. The
+    spare time never outlasts `search_time`."""
+    from planicp.tracking.recovery import SearchBudget
+
+    def first_update(config: RecoveryConfig) -> Recovery:
+        recovery = Recovery(plan, config, IcpConfig.for_tracking(), AcceptanceGate())
+        recovery.new_update()
+        recovery.step(scans[20], (0.0, 0.0, 0.0), path[20])
+        return recovery
+
+    spread = first_update(RecoveryConfig(search_nodes=1_000, search_spare_time=None))
+    assert spread.searching and not spread.hypotheses
+    spared = first_update(RecoveryConfig(search_nodes=1_000, search_spare_time=30.0))
+    assert not spared.searching  # the whole plan's search ended in the update that began it
+    assert min(error(h.pose, path[20])[0] for h in spared.hypotheses) < 0.05
+    now = time.perf_counter()
+    assert SearchBudget(1_000, until=now + 0.001, spare_until=now + 10.0).spare_seconds() <= 0.001
+    assert SearchBudget(1_000).spare_seconds() == 0.0
 
 
 def test_a_place_nearby_must_explain_scans_as_sound_tracking_does(plan: PlanMap) -> None:

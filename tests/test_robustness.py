@@ -172,7 +172,8 @@ def test_no_update_scores_more_search_nodes_than_its_budget(monkeypatch: pytest.
     """Every search of an update (around the prediction, the recovery's, the searches that find a
     stale search's places again) draws on one budget of `search_nodes`: over a kidnap and its
     recovery no update scores more (but for the three nodes an expansion may add to each search),
-    and the search of the whole plan is spread over updates."""
+    and the search of the whole plan is spread over updates. (Without the update's spare time,
+    `search_spare_time`, in which the recovery's searches go on past the nodes.)"""
     from planicp.tracking.recovery import Recovery, SearchBudget
 
     spent: list[int] = []
@@ -190,7 +191,7 @@ def test_no_update_scores_more_search_nodes_than_its_budget(monkeypatch: pytest.
 
     monkeypatch.setattr(SearchBudget, "spend", counting)
     monkeypatch.setattr(Recovery, "new_update", per_update)
-    lost, back = _kidnap(3, recovery=RecoveryConfig(search_nodes=10_000))
+    lost, back = _kidnap(3, recovery=RecoveryConfig(search_nodes=10_000, search_spare_time=None))
     assert lost is not None and back is not None, (lost, back)
     searching = [n for n in spent if n > 0]
     # A search may score three nodes past its share (an expansion scores four children), and an
@@ -214,9 +215,12 @@ def test_a_place_adopted_before_the_whole_plan_was_searched_stays_on_trial() -> 
         for j in range(1, len(after.times) - 30)
         if math.dist(after.truth[j, :2], before.truth[-1, :2]) > 5.0 and abs(after.truth[j, 1] - 10.3) > 1.5
     )
-    # 15,000 nodes an update: the whole plan's search ends three updates after the place nearby is
-    # adopted (at the default 20,000 the two searches end together and the right place is found).
-    localizer = Localizer(plan, tuple(before.truth[0]), recovery=RecoveryConfig(search_nodes=15_000))
+    # 15,000 nodes an update and no spare time: the whole plan's search ends three updates after the
+    # place nearby is adopted (at the default 20,000 the two searches end together and the right
+    # place is found).
+    localizer = Localizer(
+        plan, tuple(before.truth[0]), recovery=RecoveryConfig(search_nodes=15_000, search_spare_time=None)
+    )
     for scan, odom in zip(before.scans, before.odometry_in_odom):
         localizer.update(scan, tuple(odom))
     last, origin = tuple(before.odometry_in_odom[-1]), tuple(after.odometry_in_odom[start - 1])

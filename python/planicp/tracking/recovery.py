@@ -106,6 +106,17 @@ class RecoveryConfig(Settings):
             any machine. (0.008 s kept freiburg-campus's updates within 13 ms, and, with two
             runs sharing the machine, lost fhw for good on three of eight odometry draws and
             campus on one, their recoveries' searches spread over more updates.)
+        search_spare_time: seconds from the start of an update within which the recovery's
+            searches go on past `search_nodes` (None: never). They score their `search_nodes`
+            whatever the time, so a slow or loaded machine searches as with `search_nodes` alone;
+            where nodes are cheap (a smaller plan, a faster machine) the update's spare time
+            ends a search of the whole plan in fewer updates, before the odometry has carried its
+            places beyond finding again. The update then takes up to this long (plus the
+            alignments after the searches), and how soon the robot is found depends on the
+            machine; None keeps a run the same on any machine. Only the recovery's searches
+            (while lost, or while a place is on trial) use it, not the searches around a
+            prediction. (On fhw with one scan in five corrupted, 10 ms took the share of scans
+            lost from about two thirds to a sixth, docs/design.md.)
     """
 
     search: Annotated[RelocalizationConfig, instance_of(RelocalizationConfig)] = field(
@@ -119,6 +130,7 @@ class RecoveryConfig(Settings):
     max_beyond: Annotated[float, Real(gt=0.0, le=1.0)] = 0.15
     search_nodes: Annotated[int, Whole(ge=1)] | None = 20_000
     search_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = None
+    search_spare_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = 0.010
 
 
 @dataclass
@@ -135,6 +147,16 @@ class SearchBudget:
     """`time.perf_counter()` at which the update's searches stop where they are
     (`RecoveryConfig.search_time`; None: no time limit). The other searches may use half of
     what is left of it while nodes are reserved for the whole plan's."""
+    spare_until: float | None = None
+    """`time.perf_counter()` until which the recovery's searches go on past the nodes
+    (`RecoveryConfig.search_spare_time`; None: never), within `until`."""
+
+    def spare_seconds(self) -> float:
+        """Seconds of the update's spare time left for the recovery's searches (0.0: none)."""
+        if self.spare_until is None:
+            return 0.0
+        end = self.spare_until if self.until is None else min(self.spare_until, self.until)
+        return max(end - time.perf_counter(), 0.0)
 
     @property
     def free(self) -> int | None:
@@ -334,10 +356,12 @@ class Recovery:
 
     def new_update(self) -> SearchBudget:
         """A fresh `search_nodes` budget for the searches of the update that begins (returned)."""
-        nodes, seconds = self.config.search_nodes, self.config.search_time
+        nodes, seconds, spare = self.config.search_nodes, self.config.search_time, self.config.search_spare_time
         reserved = nodes // 2 if nodes is not None and self._whole is not None else 0
-        until = None if seconds is None else time.perf_counter() + seconds
-        self.budget = SearchBudget(nodes, reserved, until)
+        now = time.perf_counter()
+        until = None if seconds is None else now + seconds
+        spare_until = None if spare is None or nodes is None else now + spare
+        self.budget = SearchBudget(nodes, reserved, until, spare_until)
         return self.budget
 
     def coast(self, motion: Pose) -> None:
@@ -382,10 +406,31 @@ class Recovery:
         if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
             self._near = None
         if self._whole is not None and self._advance(self._whole, scan, self.budget.left, whole_plan=True):
-            self._whole = None
-            self._cycle, self._near = False, None
-            self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
-            self.hypotheses = self.hypotheses[: self.config.max_hypotheses]
+            self._end_cycle()
+        # The update's spare time (`RecoveryConfig.search_spare_time`): the search near the pose
+        # first, with half of it, then the whole plan's.
+        spare = self.budget.spare_seconds()
+        if (
+            self._near is not None
+            and spare > 0.0
+            and self._advance(self._near, scan, None, whole_plan=False, seconds=spare / 2)
+        ):
+            self._near = None
+        spare = self.budget.spare_seconds()
+        if (
+            self._whole is not None
+            and spare > 0.0
+            and self._advance(self._whole, scan, None, whole_plan=True, seconds=spare)
+        ):
+            self._end_cycle()
+
+    def _end_cycle(self) -> None:
+        """The whole plan's search has ended: so has the cycle; the best `max_hypotheses` places
+        are followed."""
+        self._whole = None
+        self._cycle, self._near = False, None
+        self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
+        self.hypotheses = self.hypotheses[: self.config.max_hypotheses]
 
     def _start(self, scan: NDArray[np.float64], region: SearchRegion | None) -> _Run:
         """A search of `region` (None: the whole plan) for `scan`, no node scored yet."""
@@ -396,12 +441,21 @@ class Recovery:
             )
         )
 
-    def _advance(self, run: _Run, scan: NDArray[np.float64], nodes: int | None, *, whole_plan: bool) -> bool:
+    def _advance(
+        self,
+        run: _Run,
+        scan: NDArray[np.float64],
+        nodes: int | None,
+        *,
+        whole_plan: bool,
+        seconds: float | None = None,
+    ) -> bool:
         """Scores up to `nodes` (None: no limit) of `run`, within the update's time for it
-        (`SearchBudget.seconds`), drawn from the update's budget; when the search ends, its
-        places, found again with the current `scan` (`_found_again`), join the hypotheses.
-        Returns whether it ended."""
-        seconds = self.budget.seconds(whole_plan=whole_plan)
+        (`SearchBudget.seconds`, or `seconds` of the update's spare time), drawn from the update's
+        budget; when the search ends, its places, found again with the current `scan`
+        (`_found_again`), join the hypotheses. Returns whether it ended."""
+        if seconds is None:
+            seconds = self.budget.seconds(whole_plan=whole_plan)
         if (nodes is not None and nodes <= 0) or seconds == 0.0:
             return False
         before = run.steps.nodes
