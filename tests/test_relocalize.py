@@ -339,6 +339,9 @@ def test_a_search_in_steps_out_of_time_stops_at_its_next_check_and_goes_on_from_
         SearchInSteps(scan, plan).advance(100, seconds=-1.0)
     with pytest.raises(ValueError, match="search_time"):
         planicp.RecoveryConfig(search_time=0.0)
+    with pytest.raises(ValueError, match="search_spare_time"):
+        planicp.RecoveryConfig(search_spare_time=-0.01)
+    assert planicp.RecoveryConfig(search_spare_time=None).search_spare_time is None
     # An update's budget out of time scores nothing more: its searches wait for the next update.
     from planicp.tracking.recovery import SearchBudget
 
