@@ -3,6 +3,8 @@ scan (`confirm_pending`)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -46,6 +48,7 @@ def confirm_pending(
     would have confirmed, and the localizer lost track)."""
     if not pending:
         return PendingDecision(None, None)
+    cost = _field_costs(points, rules)
     best: tuple[float, PendingDecision] | None = None
     kept: list[PendingPlace] = []
     first = None
@@ -57,7 +60,7 @@ def confirm_pending(
             kept.append(later)
             continue
         follow = aligned_from(points, there, rules)
-        verdict = _verdict(points, follow, there, fit, rules, history)
+        verdict = _verdict(follow, there, fit, rules, history, cost)
         if verdict == "confirmed" and (best is None or follow.inlier_ratio > best[0]):
             best = (follow.inlier_ratio, PendingDecision(there, follow, (), len(pending)))
         elif verdict == "silent":
@@ -68,40 +71,54 @@ def confirm_pending(
     return PendingDecision(first, None, keep, len(pending))
 
 
+def _field_costs(points: NDArray[np.float64], rules: Rules) -> Callable[[Pose], float]:
+    """The scan's cost in the plan's likelihood field (no prior) at a pose, each pose's computed
+    once (the fit from the prediction is weighed against every pending place)."""
+    costs: dict[Pose, float] = {}
+
+    def cost(pose: Pose) -> float:
+        if pose not in costs:
+            costs[pose] = scan_cost(points, pose, rules.plan, rules.refinement)
+        return costs[pose]
+
+    return cost
+
+
 def _verdict(
-    points: NDArray[np.float64],
     follow: IcpResult,
     there: Pose,
     fit: FitDecision,
     rules: Rules,
     history: CostHistory | None,
+    cost: Callable[[Pose], float],
 ) -> str:
     """What this scan says of the pending place `there`, whose fit is `follow`, against the fit
-    from the prediction (`fit`, aligned): "confirmed", "refuted" or "silent"."""
+    from the prediction (`fit`, aligned), `cost` the scan's cost in the likelihood field at a
+    pose: "confirmed", "refuted" or "silent"."""
     assert fit.result is not None
+    place, other = follow.pose, fit.result.pose
     if rules.gate.rejection(follow, there):
-        neither = fit.reason != "" or _explains_neither(points, follow.pose, fit.result.pose, rules, history)
+        neither = fit.reason != "" or _explains_neither(place, other, rules, history, cost)
         return "silent" if neither else "refuted"
     if fit.reason != "" or follow.inlier_ratio > fit.result.inlier_ratio + rules.recovery.margin:
         return "confirmed"
-    if _fault_confirmed(points, follow.pose, fit.result.pose, rules):
+    if _fault_confirmed_by(place, other, rules, cost):
         return "confirmed"
-    return "silent" if _explains_neither(points, follow.pose, fit.result.pose, rules, history) else "refuted"
+    return "silent" if _explains_neither(place, other, rules, history, cost) else "refuted"
 
 
 def _explains_neither(
-    points: NDArray[np.float64], place: Pose, fit: Pose, rules: Rules, history: CostHistory | None
+    place: Pose, fit: Pose, rules: Rules, history: CostHistory | None, cost: Callable[[Pose], float]
 ) -> bool:
-    """Whether the scan's cost in the plan's likelihood field exceeds the track's typical cost
-    (`history`) by the fault cost both at `place` and at `fit` (the prediction's fit): neither
-    explains it as the track's scans are explained. False without the refinement's field, its
-    fault component, or a typical cost yet."""
+    """Whether the scan's cost in the plan's likelihood field (`cost`) exceeds the track's typical
+    cost (`history`) by the fault cost both at `place` and at `fit` (the prediction's fit):
+    neither explains it as the track's scans are explained. False without the refinement's
+    field, its fault component, or a typical cost yet."""
     refinement = rules.refinement
     typical = None if history is None else history.typical()
     if typical is None or not refinement.weighs_faults:
         return False
-    bound = typical + fault_cost(refinement.fault_probability)
-    return min(scan_cost(points, place, rules.plan, refinement), scan_cost(points, fit, rules.plan, refinement)) > bound
+    return min(cost(place), cost(fit)) > typical + fault_cost(refinement.fault_probability)
 
 
 def _fault_confirmed(points: NDArray[np.float64], place: Pose, fit: Pose, rules: Rules) -> bool:
@@ -111,8 +128,12 @@ def _fault_confirmed(points: NDArray[np.float64], place: Pose, fit: Pose, rules:
     from the fit (on fhw, after a 15-degree fault, the fit 20 cm and 13 degrees off explained 48 %
     of the aligned returns) is then taken on the scan's likelihood, as it was found. Only where
     the refinement's field is used and the fault component is on."""
+    return _fault_confirmed_by(place, fit, rules, _field_costs(points, rules))
+
+
+def _fault_confirmed_by(place: Pose, fit: Pose, rules: Rules, cost: Callable[[Pose], float]) -> bool:
+    """`_fault_confirmed` with the scan's costs from `cost`."""
     refinement = rules.refinement
     if not refinement.weighs_faults:
         return False
-    threshold = fault_cost(refinement.fault_probability)
-    return scan_cost(points, place, rules.plan, refinement) + threshold < scan_cost(points, fit, rules.plan, refinement)
+    return cost(place) + fault_cost(refinement.fault_probability) < cost(fit)
