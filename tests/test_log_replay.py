@@ -146,14 +146,14 @@ def test_evaluate_log_command(carmen_log: Path, tmp_path: Path, capsys: pytest.C
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["protocol"]["plan_scans"] == 20 and metrics["protocol"]["odometry"] == "synthetic"
     # The room's walls lie exactly on pixel boundaries of the drawn plan, so end points fall on both
-    # sides and the drawn walls are two pixels thick: the plan itself is off by up to 2.5 cm.
-    assert metrics["planicp"]["ate_rms_m"] < 0.05 and metrics["planicp"]["position_max_m"] < 0.1
+    # sides and the drawn walls are two pixels thick. The plan's likelihood field peaks on such a
+    # band's middle, the wall (`PlanMap.likelihood_field`): 0.9 cm; a field flat on top across the
+    # band (the nearest-point field) left the pose wherever the prior put it in the band: 4.5 cm.
+    assert metrics["planicp"]["ate_rms_m"] < 0.02 and metrics["planicp"]["position_max_m"] < 0.04
     assert (out / "plan.yaml").is_file() and (out / "trajectory.tum").is_file()
     assert cli_main(["evaluate-log", str(carmen_log), "--odometry", "log", "--out", str(tmp_path / "o")]) == 0
-    # A drawn wall two pixels thick is flat on top in the plan's likelihood field: within it the
-    # prediction (here the log's odometry) places the refined pose (docs/limitations.md): 5.5 cm,
-    # against 3.6 cm with the fusion's pose alone.
-    assert json.loads((tmp_path / "o" / "metrics.json").read_text())["planicp"]["ate_rms_m"] < 0.06
+    # With the log's odometry: 4.7 cm (5.5 cm in the nearest-point field).
+    assert json.loads((tmp_path / "o" / "metrics.json").read_text())["planicp"]["ate_rms_m"] < 0.052
 
 
 def test_evaluate_log_on_a_simulated_run(recording: Recording) -> None:

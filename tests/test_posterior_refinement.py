@@ -4,11 +4,13 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from planicp import Localizer, PlanMap, PosteriorRefinement, _core
+from planicp.plans.ros_map import write_ros_map
 from planicp.tracking.posterior_refinement import refine_pose
 
 
@@ -63,6 +65,40 @@ def test_the_field_peaks_on_the_walls_and_falls_as_a_gaussian_of_the_plan_spacin
     assert one_sigma < on
     assert slope[1] < 0.0  # uphill towards the wall
     assert field.value_and_gradient(3.0, 1.0)[0] == 0.0  # beyond three sigmas of every wall
+
+
+def test_a_slam_map_wall_drawn_as_a_band_of_cells_peaks_in_its_middle(tmp_path: Path) -> None:
+    """A map_server map made by SLAM draws a wall as a band of cells where beams ended, here four
+    cells (20 cm at 5 cm). Its field is the cells' summed Gaussians over the largest sum near
+    them: it peaks on the band's middle, where the surface most likely is, so a scan cannot slide
+    across the band at no cost, as it can in the nearest-point field, flat over the whole band.
+    Walls drawn as surfaces keep the nearest-point field: both faces of a 10 cm wall stay peaks."""
+    occupancy = np.zeros((40, 60), np.int8)  # image order (row 0 at the top), 5 cm cells
+    occupancy[18:22, 5:55] = 100  # rows 18-21: y from 0.925 to 1.075 m, middle 1.0 m
+    slam = PlanMap.from_ros_map(write_ros_map(tmp_path / "slam.yaml", occupancy, 0.05, (0.0, 0.0, 0.0)), cache=False)
+    assert slam.cells_mark_returns and slam.spacing == pytest.approx(0.05)
+    field = slam.likelihood_field()
+    nearest = _core.LikelihoodGrid.within_budget(slam.points, slam.spacing, slam.spacing, "nearest")
+    middle, shifted = field.value_and_gradient(1.5, 1.0)[0], field.value_and_gradient(1.5, 1.05)[0]
+    assert middle > 0.97
+    assert middle - shifted > 0.05  # a cell across the band costs
+    assert field.value_and_gradient(1.5, 1.04)[1][1] < 0.0 < field.value_and_gradient(1.5, 0.96)[1][1]
+    assert nearest.value_and_gradient(1.5, 1.0)[0] == pytest.approx(nearest.value_and_gradient(1.5, 1.05)[0], abs=0.01)
+    # Outside the band it falls from its middle's ridge, below the nearest field, to 0 beyond the cut.
+    assert 0.0 < field.value_and_gradient(1.5, 1.15)[0] < nearest.value_and_gradient(1.5, 1.15)[0]
+    assert field.value_and_gradient(1.5, 1.3)[0] == 0.0
+
+    wall = np.array([((0, 0.0), (3, 0.0)), ((0, 0.1), (3, 0.1))], dtype=float)  # two faces 10 cm apart
+    drawn = PlanMap.from_segments(wall, spacing=0.02)
+    assert not drawn.cells_mark_returns
+    faces = drawn.likelihood_field()
+    assert min(faces.value_and_gradient(1.5, 0.0)[0], faces.value_and_gradient(1.5, 0.1)[0]) > 0.75
+    assert faces.value_and_gradient(1.5, 0.05)[0] < 0.1  # between the faces: no wall
+
+
+def test_a_field_profile_must_be_named() -> None:
+    with pytest.raises(_core.PlanicpError, match=r'profile must be "nearest" .* or "density" .*, got "flat"'):
+        _core.LikelihoodGrid(np.zeros((3, 2)), 0.05, 0.05, "flat")  # type: ignore[arg-type]
 
 
 def test_a_pose_a_few_centimetres_off_is_brought_back_without_a_prior() -> None:

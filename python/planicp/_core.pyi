@@ -178,12 +178,26 @@ class OccupancyGrid:
 
 @final
 class LikelihoodGrid:
-    """The plan's likelihood field: exp(-d^2 / (2 sigma^2)) of the distance d to the nearest of the
-    points (metres, map frame) at cell centres `resolution` metres apart, bilinear between them."""
+    """The plan's likelihood field at cell centres `resolution` metres apart, bilinear between
+    them: exp(-d^2 / (2 sigma^2)) of the distance d to the nearest of the points (metres, map
+    frame) (`profile="nearest"`: wall surfaces), or the points' summed Gaussians over the largest
+    sum within 3 sigma, at least 1 (`profile="density"`: an occupancy grid's occupied cells, a
+    wall drawn as a band of cells peaking in its middle)."""
 
-    def __new__(cls, points: NDArray[np.float64], resolution: float, sigma: float) -> LikelihoodGrid: ...
+    def __new__(
+        cls,
+        points: NDArray[np.float64],
+        resolution: float,
+        sigma: float,
+        profile: Literal["nearest", "density"] = "nearest",
+    ) -> LikelihoodGrid: ...
     @staticmethod
-    def within_budget(points: NDArray[np.float64], resolution: float, sigma: float) -> LikelihoodGrid: ...
+    def within_budget(
+        points: NDArray[np.float64],
+        resolution: float,
+        sigma: float,
+        profile: Literal["nearest", "density"] = "nearest",
+    ) -> LikelihoodGrid: ...
     @property
     def resolution(self) -> float: ...
     @property

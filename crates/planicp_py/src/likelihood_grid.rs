@@ -3,15 +3,17 @@
 
 use crate::conversions::points_from;
 use crate::errors::{guarded, PlanicpError};
-use icp_core::grids::likelihood_grid::LikelihoodGrid as CoreGrid;
+use icp_core::grids::likelihood_grid::{FieldProfile, LikelihoodGrid as CoreGrid};
 use icp_core::icp::posterior_refinement::{cost, refine, Prior};
 use icp_core::Pose2;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use std::sync::Arc;
 
-/// The plan's likelihood field: `exp(-d^2 / (2 sigma^2))` of the distance `d` to the nearest of
-/// `points` (metres, map frame) at cell centres `resolution` metres apart, bilinear between them.
+/// The plan's likelihood field at cell centres `resolution` metres apart, bilinear between them:
+/// `exp(-d^2 / (2 sigma^2))` of the distance `d` to the nearest of `points` (metres, map frame)
+/// (`profile="nearest"`, wall surfaces), or the points' summed Gaussians over the largest sum
+/// within `3 sigma` (`profile="density"`, an occupancy grid's occupied cells).
 #[pyclass(frozen, module = "planicp._core")]
 pub(crate) struct LikelihoodGrid {
     inner: Arc<CoreGrid>,
@@ -27,29 +29,52 @@ fn prior_of(pose: (f64, f64, f64), covariance: [[f64; 3]; 3]) -> PyResult<Prior>
     })
 }
 
+/// The profile named `name`, or a clear error.
+fn profile_of(name: &str) -> PyResult<FieldProfile> {
+    match name {
+        "nearest" => Ok(FieldProfile::Nearest),
+        "density" => Ok(FieldProfile::Density),
+        _ => Err(PlanicpError::new_err(format!(
+            "profile must be \"nearest\" (wall surfaces) or \"density\" (an occupancy grid's occupied \
+             cells), got {name:?}"
+        ))),
+    }
+}
+
 /// The pose refined: (x, y, yaw), cost, cost at the start, the 3x3 information, accepted steps.
 type Refined = ((f64, f64, f64), f64, f64, [[f64; 3]; 3], usize);
 
 #[pymethods]
 impl LikelihoodGrid {
     #[new]
-    fn new(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, resolution: f64, sigma: f64) -> PyResult<Self> {
+    #[pyo3(signature = (points, resolution, sigma, profile="nearest"))]
+    fn new(
+        py: Python<'_>,
+        points: PyReadonlyArray2<'_, f64>,
+        resolution: f64,
+        sigma: f64,
+        profile: &str,
+    ) -> PyResult<Self> {
+        let profile = profile_of(profile)?;
         let pts = points_from("plan points", &points)?;
-        let grid = py.detach(|| guarded(|| CoreGrid::new(&pts, resolution, sigma)))?;
+        let grid = py.detach(|| guarded(|| CoreGrid::new(&pts, resolution, sigma, profile)))?;
         Ok(Self { inner: Arc::new(grid) })
     }
 
     /// The field sampled every `resolution` metres, or coarser by steps of a quarter where that
     /// would exceed the native limit of cells (see `icp_core`'s `LikelihoodGrid::within_budget`).
     #[staticmethod]
+    #[pyo3(signature = (points, resolution, sigma, profile="nearest"))]
     fn within_budget(
         py: Python<'_>,
         points: PyReadonlyArray2<'_, f64>,
         resolution: f64,
         sigma: f64,
+        profile: &str,
     ) -> PyResult<Self> {
+        let profile = profile_of(profile)?;
         let pts = points_from("plan points", &points)?;
-        let grid = py.detach(|| guarded(|| CoreGrid::within_budget(&pts, resolution, sigma)))?;
+        let grid = py.detach(|| guarded(|| CoreGrid::within_budget(&pts, resolution, sigma, profile)))?;
         Ok(Self { inner: Arc::new(grid) })
     }
 

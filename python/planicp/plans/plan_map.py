@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -393,18 +393,26 @@ class PlanMap:
         return self._native.spacing
 
     def likelihood_field(self) -> _core.LikelihoodGrid:
-        """The plan as a likelihood field (built on first use, then kept): at each point of the
-        plane `exp(-d^2 / (2 sigma^2))` of the distance `d` to the nearest wall point, with `sigma`
-        the plan's `spacing` (a plan places a wall no more finely than it samples it: a map_server
-        map's cell, a drawing's pixel or sampling step), sampled every `sigma` and interpolated
-        bilinearly. One byte per cell: 37 MB for a 305 x 305 m SLAM map at 5 cm. A plan whose
-        field would need more cells than the native limit (256 Mi: a square of 800 m at 5 cm) is
-        sampled coarser, by steps of a quarter, until it fits: the Gaussian keeps its `sigma`, the
-        interpolation between samples is coarser (a `PlanicpError` when that would take samples
-        over a thousand `sigma`s apart: points 10^8 m apart). What `planicp.tracking.posterior_refinement`
-        climbs, and what a searched place is weighed by (`tracking.stages.search`)."""
+        """The plan as a likelihood field (built on first use, then kept): how likely a range
+        return is at each point of the plane, in [0, 1], with `sigma` the plan's `spacing` (a plan
+        places a wall no more finely than it samples it: a map_server map's cell, a drawing's pixel
+        or sampling step), sampled every `sigma` and interpolated bilinearly. Wall surfaces (a
+        drawing, vector walls, points) give `exp(-d^2 / (2 sigma^2))` of the distance `d` to the
+        nearest wall point: both faces of a thin wall stay peaks of their own. An occupancy grid's
+        occupied cells (`cells_mark_returns`: a map made by SLAM, whose walls are bands two or
+        three cells thick where beams scattered) give the cells' summed Gaussians over the largest
+        sum within `3 sigma` (at least 1): a band peaks in its middle, where its surface most
+        likely is, instead of being flat on top across it, and its ridge is 1 however thick it is
+        drawn (`icp_core`'s `grids::likelihood_grid`). One byte per cell: 37 MB for a 305 x 305 m
+        SLAM map at 5 cm. A plan whose field would need more cells than the native limit (256 Mi:
+        a square of 800 m at 5 cm) is sampled coarser, by steps of a quarter, until it fits: the
+        Gaussian keeps its `sigma`, the interpolation between samples is coarser (a
+        `PlanicpError` when that would take samples over a thousand `sigma`s apart: points 10^8 m
+        apart). What `planicp.tracking.posterior_refinement` climbs, and what a searched place is
+        weighed by (`tracking.stages.search`)."""
         if self._likelihood is None:
-            self._likelihood = _core.LikelihoodGrid.within_budget(self._points, self.spacing, self.spacing)
+            profile: Literal["nearest", "density"] = "density" if self.cells_mark_returns else "nearest"
+            self._likelihood = _core.LikelihoodGrid.within_budget(self._points, self.spacing, self.spacing, profile)
         return self._likelihood
 
     @property

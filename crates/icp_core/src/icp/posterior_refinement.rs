@@ -157,6 +157,7 @@ pub fn refine(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grids::likelihood_grid::FieldProfile;
 
     /// Two walls of a corner, 4 m long, points every 2 cm; a scan of them from (1, 1).
     fn corner() -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
@@ -177,7 +178,7 @@ mod tests {
     #[test]
     fn climbs_to_the_true_pose_from_a_few_centimetres() {
         let (plan, scan) = corner();
-        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05).unwrap();
+        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05, FieldProfile::Nearest).unwrap();
         let truth = Pose2::new(1.0, 1.0, 0.0);
         let start = Pose2::new(1.04, 0.97, 0.02);
         let found = refine(&grid, &scan, start, &weak_prior(start), 0.05, 50);
@@ -193,7 +194,7 @@ mod tests {
         // A single wall along x: the scan fixes y and yaw, the prior x.
         let plan: Vec<[f64; 2]> = (0..400).map(|i| [i as f64 * 0.02, 0.0]).collect();
         let scan: Vec<[f64; 2]> = (50..350).map(|i| [i as f64 * 0.02 - 4.0, -1.0]).collect();
-        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05).unwrap();
+        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05, FieldProfile::Nearest).unwrap();
         let prior = Prior {
             pose: Pose2::new(4.2, 1.0, 0.0),
             information: Matrix3::from_diagonal(&Vector3::new(100.0, 100.0, 1000.0)),
@@ -209,7 +210,7 @@ mod tests {
     #[test]
     fn cost_is_the_weighted_residuals_and_the_prior() {
         let (plan, scan) = corner();
-        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05).unwrap();
+        let grid = LikelihoodGrid::new(&plan, 0.02, 0.05, FieldProfile::Nearest).unwrap();
         let at = Pose2::new(1.0, 1.0, 0.0);
         let prior = Prior { pose: Pose2::new(1.1, 1.0, 0.0), information: Matrix3::identity() * 100.0 };
         // On the walls every residual is ~0: the cost is the prior's 100 * 0.1^2.
