@@ -11,7 +11,7 @@ import pytest
 
 from planicp import Localizer, PlanMap, PosteriorRefinement, se2
 from planicp.tracking.decisions import LeftPlaceDecision
-from planicp.tracking.odometry_fault import CostHistory, fault_cost
+from planicp.tracking.odometry_fault import CostHistory, fault_cost, scan_cost, sweep_for_fault
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
 from test_localizer import DEG, DRIFT, drifting_odometry, error, office, path, plan, scans  # noqa: F401
@@ -73,6 +73,34 @@ def test_one_scan_turned_35_degrees_never_moves_the_estimate(
     for k in range(len(path)):  # ...which the next scan does not confirm
         assert not junk[k].relocalized
         assert error(clean[k].pose, junk[k].pose)[0] < 0.01, k
+
+
+def test_the_sweep_finds_no_place_turned_beyond_its_window() -> None:
+    """The fault component covers headings within `fault_heading_window` of the prediction: in a
+    6 x 4 m room, with the prediction turned 40 degrees from the truth, a window of 44 degrees
+    finds the truth; one of 30 degrees finds nothing, though its climbs (from 10 to 70 degrees)
+    end at the truth or at the room turned by 180 degrees: places the model gives no weight."""
+    segments = [((0, 0), (6, 0)), ((6, 0), (6, 4)), ((6, 4), (0, 4)), ((0, 4), (0, 0))]
+    room = PlanMap.from_segments(np.array(segments, dtype=float), spacing=0.05)
+    truth = (3.0, 2.0, 0.0)
+    angles = np.linspace(-math.pi, math.pi, 360, endpoint=False)
+    ranges = [
+        min(d for d in (3.0 / abs(math.cos(a)) if math.cos(a) else 9.0, 2.0 / abs(math.sin(a)) if math.sin(a) else 9.0))
+        for a in angles
+    ]
+    scan = np.ascontiguousarray(np.column_stack([np.cos(angles), np.sin(angles)]) * np.array(ranges)[:, None])
+    predicted = (3.0, 2.0, 40 * DEG)
+    history = CostHistory()
+    for _ in range(5):
+        history.record(scan_cost(scan, truth, room, PosteriorRefinement()))
+    wide = sweep_for_fault(scan, predicted, predicted, room, PosteriorRefinement(), history)
+    assert wide is not None and wide.more_probable
+    assert error(truth, wide.pose)[0] < 0.02 and error(truth, wide.pose)[1] < 1 * DEG
+    narrow = sweep_for_fault(
+        scan, predicted, predicted, room, PosteriorRefinement(fault_heading_window=30 * DEG), history
+    )
+    assert narrow is not None and not narrow.more_probable
+    assert abs(se2.wrap_angle(narrow.pose[2] - predicted[2])) <= 30 * DEG
 
 
 def test_the_cost_history_and_the_fault_cost() -> None:

@@ -24,7 +24,11 @@ bad than the fit is no evidence of where the robot is.
 The sweep climbs the likelihood field (no prior) from the prediction's position turned by every
 `FAULT_HEADING_STEP` within `fault_heading_window` either way, and then once more, fully, from the
 best end. The window stays below 45 degrees, half of the 90-degree turn that maps most buildings'
-rooms onto one another, so it cannot settle in a rotated copy of the room. What it finds is not
+rooms onto one another, so it cannot settle in a rotated copy of the room; a climb's end turned
+beyond it is not a place the sweep finds (a climb with no prior can slide along a corridor and
+turn with it: on orebro one from 24 degrees off the prediction ended 5 m along the corridor,
+turned by 180 degrees, where the corridor fits the scan reversed), and when the full climb
+turns out of it, the best end of the sweep's climbs is the place. What it finds is not
 taken on this scan's word: the search stage leaves it pending, for the next scan to confirm, as a
 place a rejected jump leads to (a corrupted scan, turned or shifted, fits some place too).
 """
@@ -172,8 +176,17 @@ def sweep_for_fault(
     for k in range(-turns, turns + 1):
         start = (float(predicted[0]), float(predicted[1]), float(predicted[2]) + k * FAULT_HEADING_STEP)
         end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
-        if best is None or cost < best[0]:
+        if _within_window(end, predicted, rule) and (best is None or cost < best[0]):
             best = (cost, end)
-    assert best is not None  # turns >= 0: at least the prediction's own heading
+    if best is None:  # every climb turned out of the window: no fault the model allows
+        return FaultSweep(current, current_cost, current_cost, typical, threshold)
     pose, cost = climb(points, best[1], plan, rule)
+    if not _within_window(pose, predicted, rule):
+        pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
+        cost = scan_cost(points, pose, plan, rule)
     return FaultSweep(pose, cost, current_cost, typical, threshold)
+
+
+def _within_window(pose: Pose, predicted: Pose, rule: PosteriorRefinement) -> bool:
+    """Whether `pose`'s heading is within `rule.fault_heading_window` of `predicted`'s."""
+    return abs(wrap_angle(float(pose[2]) - float(predicted[2]))) <= rule.fault_heading_window

@@ -63,8 +63,8 @@ class PosteriorRefinement(Settings):
             own pose by `-2 ln(fault_probability)` (13.8 at 1e-3) is searched for and left
             pending for the next scan to confirm. 0 turns the search off.
         fault_heading_window: how far either way of the predicted heading that search starts
-            its climbs, radians (below 45 degrees: a building's rooms map onto one another by
-            90-degree turns).
+            its climbs and the place it finds may lie, radians (below 45 degrees: a building's
+            rooms map onto one another by 90-degree turns).
     """
 
     enabled: Flag = True
