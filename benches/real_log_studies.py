@@ -8,6 +8,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py alignments   # one alignment: ray-cast view against the index's masks
     python benches/real_log_studies.py views        # tracking's view cast, to the scan's range or per direction
     python benches/real_log_studies.py refinement   # the Localizer with and without the posterior refinement
+    python benches/real_log_studies.py field        # a SLAM map's likelihood field: density or nearest cell
     python benches/real_log_studies.py scan-sets    # other scan sets of the same logs: swapped, reversed
     python benches/real_log_studies.py junk         # corrupted scans: how far they move the estimates
     python benches/real_log_studies.py faults       # the Localizer with and without the odometry-fault sweep
@@ -30,6 +31,12 @@ reference poses' own error counts as the estimator's here).
 `refinement` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
 (on these map_server maps: the pose refined in the plan's likelihood field) and with
 `PosteriorRefinement(enabled=False)`, and gives the ATE and the share of scans more than 0.3 m off.
+`field` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s defaults
+(on these map_server maps the plan's likelihood field is a density of the occupied cells, peaked
+on the middle of a band of cells) and with the plan's field replaced by the nearest-cell field
+(`exp(-d^2 / 2 sigma^2)` of the distance to the nearest occupied cell, what walls drawn as
+surfaces get), and gives the range of the ATE over the draws and the mean share of scans more than
+0.3 m off.
 `alignments` aligns 60 evenly spaced tracked scans of each log from guesses off the reference pose
 by a normal error (0.15 m per axis, 2.3 degrees; the size of a search candidate's or a followed
 place's error) with the `Localizer`'s settings, once through the view ray cast from the guess (the
@@ -121,6 +128,7 @@ from planicp import (
     PosteriorRefinement,
     RelocalizationConfig,
     SearchInSteps,
+    _core,
     localize,
     relocalize,
 )
@@ -228,10 +236,13 @@ def track(
     odom: np.ndarray,
     config: IcpConfig | None = None,
     refinement: PosteriorRefinement | None = None,
+    plan_map: PlanMap | None = None,
 ) -> tuple[dict[str, float], list[float]]:
     """The harness's error metrics (0.3 m for lost) of a `Localizer` started at the first reference
-    pose, and the seconds each update took."""
-    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), config, refinement=refinement)
+    pose (on `plan_map`, default the plan image read as a user reads it), and the seconds each
+    update took."""
+    pm = plan_map or PlanMap.from_ros_map(plan.yaml_path)
+    loc = Localizer(pm, tuple(map(float, ref[0])), config, refinement=refinement)
     loc.update(scans[0], tuple(map(float, odom[0])))
     est, spent = [ref[0]], []
     for k in range(1, len(scans)):
@@ -239,6 +250,28 @@ def track(
         est.append(np.array(loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k]))).pose))
         spent.append(time.perf_counter() - start)
     return harness.error_metrics(np.array(est), ref, 0.3), spent
+
+
+def field_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+    print(
+        "| log | nearest cell: ATE over the draws, mean lost | density (the default): ATE over the draws, mean lost |"
+    )
+    print("|---|---|---|")
+    for name in logs:
+        results: dict[str, list[dict[str, float]]] = {"nearest": [], "density": []}
+        for seed in seeds:
+            data = load(harness, name, out, seed)
+            for profile, runs in results.items():
+                pm = PlanMap.from_ros_map(data[0].yaml_path)
+                if profile == "nearest":  # the field a drawn plan gets, in place of the default
+                    pm._likelihood = _core.LikelihoodGrid.within_budget(pm.points, pm.spacing, pm.spacing, "nearest")
+                runs.append(track(harness, *data, plan_map=pm)[0])
+        cells = []
+        for runs in results.values():
+            ates = [100 * m["ate_rmse_m"] for m in runs]
+            lost = np.mean([100 * m["lost_frac"] for m in runs])
+            cells.append(f"{min(ates):.1f}-{max(ates):.1f} cm, {lost:.1f} %")
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
 def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int], search: str | None = None) -> None:
@@ -502,8 +535,6 @@ def alignments_study(harness: Any, logs: list[str], out: str) -> None:
 
 
 def views_study(harness: Any, logs: list[str], out: str) -> None:
-    from planicp import _core
-
     print("| log | cast | ms per view (median) | visible points (mean) | making the Localizer, s |")
     print("|---|---|---|---|---|")
     config = IcpConfig.for_tracking()
@@ -629,6 +660,7 @@ def main() -> None:
             "alignments",
             "views",
             "refinement",
+            "field",
             "scan-sets",
             "junk",
             "junk-draws",
@@ -684,6 +716,8 @@ def main() -> None:
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":
             junk_draws_study(harness, args.logs, out, args.seeds)
+        elif args.study == "field":
+            field_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "faults":
