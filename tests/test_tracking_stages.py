@@ -243,33 +243,6 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
     assert held.held and held.lost and held.rejections == 3 and len(detector.scores) == 3
 
 
-def test_while_lost_the_track_ends_the_lost_state_only_over_the_recoverys_confirmations(
-    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
-) -> None:
-    """The place the localizer lost track at is a place like those the recovery follows: sound
-    fits from it end the lost state after `RecoveryConfig.confirmations` scans in a row, as a
-    place the recovery adopts, not on one scan's word; a scan it does not explain so starts over."""
-    the_rules = rules(plan)
-    detector = LostDetector(the_rules.lost)
-    detector.declare_lost()
-    prediction = prediction_at(path[1])
-    fit = stages.fit_from_prediction(scans[1], prediction, the_rules, True)
-    search = search_stage(scans[1], prediction, fit, the_rules)
-    score = stages.judge_score(scans[1], prediction, fit, search, the_rules, True, None)
-    correction = stages.correct(scans[1], prediction, search, score, the_rules)
-    assert correction.accepted and not search.searched and score.score >= the_rules.recovery.min_inlier_ratio
-    assert the_rules.recovery.confirmations == 3
-    poor = replace(score, score=the_rules.recovery.min_inlier_ratio - 0.1)
-    verdicts = [
-        stages.judge_lost(detector, s, correction, search, True, the_rules) for s in (score, score, poor, score, score)
-    ]
-    assert all(v.lost and not v.counted_accepted for v in verdicts)
-    found = stages.judge_lost(detector, score, correction, search, True, the_rules)
-    assert not found.lost and found.counted_accepted and found.rejections == 0
-    # Once tracking, one accepted fit counts at once.
-    assert stages.judge_lost(detector, score, correction, search, False, the_rules).counted_accepted
-
-
 def idle_pose(prediction: Prediction) -> Correction:
     """The correction of an update without an accepted fit: the prediction's pose."""
     return Correction(prediction.pose, prediction.covariance, False, None, "prediction")

@@ -375,9 +375,8 @@ class LostDecision:
         lost: the lost rule says the plan no longer explains the scans.
         held: the scan tells nothing about being lost (clutter or a crowd): the state was kept
             and the scan not counted.
-        counted_accepted: the lost rule counted the scan as accepted (an accepted fit; while lost,
-            the last of the recovery's `confirmations` such fits in a row that each explain as
-            much of the scan as the recovery asks of a place it adopts).
+        counted_accepted: the lost rule counted the scan as accepted (an accepted fit that, while
+            lost, explains as much of the scan as the recovery asks of a place it adopts).
         window_score: the mean score over the lost rule's window after this scan.
         rejections: scans in a row the lost rule counts as rejected.
     """

@@ -48,9 +48,6 @@ class LostDetector:
     rule: LostRule = field(default_factory=LostRule)
     scores: deque[float] = field(default_factory=deque)
     rejections: int = 0
-    sound_streak: int = 0
-    """Scans in a row, while lost, whose fit from the prediction explained as much of the scan as
-    the recovery asks of a place it adopts (`judge_lost`)."""
 
     def hold(self) -> bool:
         """A scan that tells nothing about being lost (rejected in clutter, but continuing the
@@ -84,4 +81,3 @@ class LostDetector:
         """Forgets the history (after a relocalization or a pose given by the user)."""
         self.scores.clear()
         self.rejections = 0
-        self.sound_streak = 0
