@@ -43,6 +43,15 @@ def test_a_35_degree_odometry_fault_is_taken_when_the_next_scan_confirms_it(
     faulted = estimates[FAULT_AT]
     assert faulted.decisions[3].cause == "fault"
     assert not faulted.accepted and faulted.pose == faulted.decisions[0].pose  # the prediction, until confirmed
+    # The pose reported is the prediction's, 35 degrees off; its covariance is widened towards the
+    # place pending (the robot is there or on the track, as far as one scan can tell), so it
+    # covers the truth, where the track's own (the prediction's) puts it far beyond its reach.
+    e = np.array(faulted.pose) - np.array(path[FAULT_AT])
+    e[2] = se2.wrap_angle(e[2])
+    own = faulted.decisions[5].covariance
+    assert float(e @ np.linalg.solve(own, e)) > 100.0
+    assert float(e @ np.linalg.solve(faulted.covariance, e)) < 7.81  # chi-square 3, 95 %
+    assert np.allclose(estimates[FAULT_AT - 1].covariance, estimates[FAULT_AT - 1].decisions[5].covariance)
     confirmed = estimates[FAULT_AT + 1]
     assert confirmed.relocalized and confirmed.decisions[2].confirmed is not None
     for k in range(FAULT_AT + 1, len(path)):

@@ -42,6 +42,7 @@ from .stages import (
     predict,
     recover,
     search_near_prediction,
+    spread_over_pending,
     weigh_left_place,
 )
 
@@ -60,7 +61,9 @@ class Estimate:
         reason: why the result was not accepted ("" when it was).
         covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): the fusion of ICP's and
             the odometry prediction's when accepted (ICP's alone after an odometry fault), the
-            prediction's otherwise.
+            prediction's otherwise; while a place is pending for the next scan to confirm (a
+            suspected odometry fault, a rejected jump), widened towards it (see
+            `planicp.tracking.stages.pending.spread_over_pending`).
         degeneracy: the weak axis of an accepted fit that does not fix the position along it
             (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
             there allows: the fusion does so), or None.
@@ -446,6 +449,8 @@ class Localizer:
             kept = fit.kept
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan
+            # What the places still pending leave open of the pose (reported only).
+            reported = spread_over_pending(pose, covariance, self._pending)
             return Estimate(
                 pose,
                 accepted,
@@ -453,7 +458,7 @@ class Localizer:
                 prediction.pose,
                 odom,
                 reason,
-                covariance.copy(),
+                reported.copy(),
                 correction.degeneracy,
                 now_lost,
                 self._detector.score,

@@ -28,7 +28,7 @@ from .correction import correct, finite_or
 from .fit import fit_from_prediction, occupied_cells, poor_fit
 from .left_place import weigh_left_place
 from .lost import judge_lost
-from .pending import confirm_pending
+from .pending import confirm_pending, spread_over_pending
 from .prediction import predict
 from .recovery_step import recover
 from .rules import Rules
@@ -51,5 +51,6 @@ __all__ = [
     "scan_score",
     "search_cause",
     "search_near_prediction",
+    "spread_over_pending",
     "weigh_left_place",
 ]

@@ -1,5 +1,6 @@
 """Stage 3 of `Localizer.update`: the places rejected jumps left pending, confirmed or not by this
-scan (`confirm_pending`)."""
+scan (`confirm_pending`), and what they leave open of the pose an update reports
+(`spread_over_pending`)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._validation import Pose
-from ...se2 import between, compose
+from ...se2 import between, compose, wrap_angle
 from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction
 from ..icp_result import IcpResult
 from ..odometry_fault import CostHistory, fault_cost, scan_cost
@@ -137,3 +138,26 @@ def _fault_confirmed_by(place: Pose, fit: Pose, rules: Rules, cost: Callable[[Po
     if not refinement.weighs_faults:
         return False
     return cost(place) + fault_cost(refinement.fault_probability) < cost(fit)
+
+
+def spread_over_pending(
+    pose: Pose, covariance: NDArray[np.float64], places: tuple[PendingPlace, ...]
+) -> NDArray[np.float64]:
+    """The covariance an update reports about `pose` (T_map_base) while `places` are pending: the
+    track's own `covariance` (3x3 over x, y, yaw: m^2, m rad, rad^2) plus, for each place, its
+    offset from `pose` (x, y in metres, yaw wrapped, in radians) times its outer product,
+    weighted 1 / (number of places + 1). A pending place is one the scans have not ruled out (a
+    suspected odometry fault, or a corrupted scan's jump, until the next scan says which): the
+    robot is there or on the track, as far as the localizer can tell, and the second moment about
+    the reported pose of that mixture, each hypothesis weighed alike and spread as the track, is
+    this. On fhw the update holding the prediction after a 19-degree fault reported a 2 cm
+    deviation 33 cm from the robot. Only what is reported: the track goes on with its own
+    covariance, and the next scan confirms the place or refutes it."""
+    if not places:
+        return covariance
+    weight = 1.0 / (len(places) + 1)
+    spread = np.array(covariance, dtype=float, copy=True)
+    for place in places:
+        d = np.array([place.pose[0] - pose[0], place.pose[1] - pose[1], wrap_angle(place.pose[2] - pose[2])])
+        spread += weight * np.outer(d, d)
+    return spread
