@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""A drawn plan read as a SLAM map: what the reading of a map_server map's cells costs.
+
+The demo's drive through the shipped office plan (`run_experiment`, the demo's sensor, odometry
+and furnished world; the plan shows only the walls) is tracked by a `Localizer` with its defaults on the
+same map_server map read three ways: as its YAML says (`planicp_edge_detector: auto`: the faces of
+its thick walls, a drawing), as a map without that key is read (`edge_detector="centres"`: every
+occupied cell's centre, a SLAM map, whose likelihood field is the cells' density, peaked inside a
+wall's band), and as centres with the nearest-cell field in place of the density. Printed: the
+position error RMS and max of each (centimetres).
+
+    python benches/plan_reading.py [--duration 60] [--seed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from planicp import Localizer, PlanMap, _core
+from planicp.plans.default_plan import default_plan_path, load_default_plan
+from planicp.sim.experiment import ExperimentConfig, Recording, run_experiment
+
+
+def tracked(plan: PlanMap, recording: Recording) -> tuple[float, float]:
+    """(RMS, max) of the position error in metres of a default `Localizer` on `plan`."""
+    localizer = Localizer(plan, tuple(recording.truth[0]))
+    errors = []
+    for scan, odom, truth in zip(recording.scans, recording.odometry_in_odom, recording.truth):
+        pose = localizer.update(scan, tuple(odom)).pose
+        errors.append(math.hypot(pose[0] - truth[0], pose[1] - truth[1]))
+    e = np.array(errors)
+    return float(np.sqrt(np.mean(e**2))), float(e.max())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--duration", type=float, default=60.0, help="seconds of the drive")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    recording, _ = run_experiment(load_default_plan(), ExperimentConfig(duration_s=args.duration, seed=args.seed))
+    drawn = PlanMap.from_ros_map(default_plan_path(), cache=False)
+    centres = PlanMap.from_ros_map(default_plan_path(), edge_detector="centres", cache=False)
+    nearest = PlanMap.from_ros_map(default_plan_path(), edge_detector="centres", cache=False)
+    # The field a drawing gets, in place of the density a SLAM map's cells get (an ablation).
+    nearest._likelihood = _core.LikelihoodGrid.within_budget(nearest.points, nearest.spacing, nearest.spacing)
+    print(f"{len(recording.scans)} scans")
+    for label, plan in (
+        ("as the YAML says (auto: faces)", drawn),
+        ("centres, density field (a SLAM map)", centres),
+        ("centres, nearest-cell field", nearest),
+    ):
+        rms, worst = tracked(plan, recording)
+        print(f"{label:38s} RMS {100 * rms:5.2f} cm, max {100 * worst:5.1f} cm", flush=True)
+
+
+if __name__ == "__main__":
+    main()
