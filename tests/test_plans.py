@@ -122,6 +122,39 @@ def test_ros_map_and_image_of_it_agree(name: str) -> None:
     assert len(plan) == plan.raster.boundary_face_count()  # type: ignore[union-attr]
 
 
+def test_a_map_that_says_nothing_is_read_as_a_slam_map_or_a_drawing_by_its_cells(tmp_path: Path) -> None:
+    """Without `planicp_edge_detector` a map_server map is read by what its occupied cells are:
+    nav2's maps (SLAM output: nearly every occupied cell borders free or unknown space) as a SLAM
+    map's cells, the shipped office drawing (walls of material, most of their cells inside) as a
+    drawing; `MATERIAL_SHARE` lies between the two."""
+    from planicp.plans.default_plan import default_plan_path
+    from planicp.plans.ros_map import MATERIAL_SHARE, recognised_reading
+
+    for name in ("tb3_sandbox", "depot"):
+        plan = PlanMap.from_ros_map(DATA / f"{name}.yaml", cache=False)
+        assert read_ros_map(DATA / f"{name}.yaml").edge_detector is None
+        assert plan.edge_detector == "centres" and plan.cells_mark_returns
+    drawing = default_plan_path()
+    shutil.copy(drawing.with_suffix(".png"), tmp_path / "office_plan.png")
+    text = drawing.read_text()
+    assert "planicp_edge_detector: auto" in text
+    (tmp_path / "office.yaml").write_text(text.replace("planicp_edge_detector: auto\n", ""))
+    assert read_ros_map(tmp_path / "office.yaml").edge_detector is None
+    office = PlanMap.from_ros_map(tmp_path / "office.yaml", cache=False)
+    assert office.edge_detector == "auto" and not office.cells_mark_returns
+    np.testing.assert_array_equal(office.points, PlanMap.from_ros_map(drawing, cache=False).points)
+    # The rule itself: a band three cells thick has a third of its cells inside, one two cells thick none.
+    band = np.zeros((7, 40), dtype=bool)
+    band[2:4, 1:39] = True
+    assert recognised_reading(band) == "centres"
+    band[4, 1:39] = True
+    inside = 36 / (3 * 38)
+    assert inside < MATERIAL_SHARE and recognised_reading(band) == "centres"
+    band[5, 1:39] = True  # four cells thick: half inside
+    assert recognised_reading(band) == "auto"
+    assert recognised_reading(np.zeros((3, 3), dtype=bool)) == "centres"
+
+
 def test_willow_at_ten_centimetres() -> None:
     plan = PlanMap.from_image(DATA / "willow-full.pgm", 0.1, walls="all-dark")  # a SLAM map, not a drawing
     xmin, ymin, xmax, ymax = plan.extent

@@ -13,7 +13,7 @@ from .._validation import as_points, as_pose, positive, whole_number
 from .image_files import check_image_file, require_regular_file
 from .plan_cache import cache_key, cached, default_cache_dir
 from .plan_raster import PlanRaster, load_gray_and_chroma, wall_mask
-from .ros_map import read_ros_map, write_ros_map
+from .ros_map import read_ros_map, recognised_reading, write_ros_map
 from .vector_plan import as_segments, dxf_segments, house_expo_segments, sample_segments
 from .wall_extraction import WallExtraction, check_walls_option, extract_walls
 from .wall_index_stats import WallIndexStats
@@ -249,9 +249,12 @@ class PlanMap:
         so cells deep inside a thick wall and its far side stay hidden. A map that says otherwise
         (its YAML's `planicp_edge_detector`, which `to_ros_map` writes for a plan drawn as walls
         of material) is read as it says; an `edge_detector` given here overrides both (see
-        `PlanRaster.surface_points` for the readings)."""
+        `PlanRaster.surface_points` for the readings). A map that says nothing but whose occupied
+        cells lie mostly inside walls (`ros_map.recognised_reading`: a third or more with all four
+        neighbours occupied, where a SLAM map has under a fifth) is a drawing given as a
+        map_server map, and is read as one (`"auto"`)."""
         ros_map = read_ros_map(yaml_path)
-        reading = edge_detector or ros_map.edge_detector or "centres"
+        reading = edge_detector or ros_map.edge_detector or recognised_reading(ros_map.wall_raster().walls)
         params = {
             "resolution": ros_map.resolution,
             "origin": ros_map.origin,

@@ -69,6 +69,30 @@ class RosMap:
         return PlanRaster(walls, self.resolution, self.origin)
 
 
+MATERIAL_SHARE = 1.0 / 3.0
+"""Share of a map's occupied cells inside walls (all four neighbours occupied) from which
+`recognised_reading` takes the map for a drawing. A SLAM tool marks the cells where beams ended,
+surfaces two or three cells deep at most, so nearly every occupied cell borders free or unknown
+space: 1-6 % inside on nav2's maps, 1-10 % on the real logs' maps drawn from end points (up to 18 %
+drawn from every end point at 2.5-10 cm). A drawing's walls are material several pixels thick:
+55 % inside on the shipped office plan, 63-91 % on the real drawings at 2 cm per pixel
+(`docs/plans.md`)."""
+
+
+def recognised_reading(walls: NDArray[np.bool_]) -> str:
+    """How a map's occupied cells (`walls`, (H, W) bool) are read when nothing says: "centres"
+    (a SLAM map: every occupied cell is where a surface was seen) unless at least
+    `MATERIAL_SHARE` of them lie inside walls, all four neighbours occupied, which makes the map
+    a drawing of walls of material: "auto" (the centres of walls one or two cells thick, the
+    faces of thicker ones; `PlanRaster.surface_points`)."""
+    occupied = int(np.count_nonzero(walls))
+    if occupied == 0:
+        return "centres"
+    padded = np.pad(walls, 1)
+    inside = walls & padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
+    return "auto" if np.count_nonzero(inside) >= MATERIAL_SHARE * occupied else "centres"
+
+
 def _yaml() -> Any:
     try:
         import yaml
