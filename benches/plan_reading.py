@@ -10,7 +10,13 @@ cells (`edge_detector="centres"`: every occupied cell's centre, whose likelihood
 cells' density, peaked inside a wall's band); and as centres with the nearest-cell field in place
 of the density. Printed: the reading and the position error RMS and max of each (centimetres).
 
+`--shares` prints instead, for each map given (a map_server YAML, or an image read as a drawing
+with `PlanMap.from_image`'s defaults), the share of its occupied cells inside walls (all four
+neighbours occupied: `planicp.plans.ros_map.inside_share`) by which a map that says nothing is
+read as a SLAM map or a drawing.
+
     python benches/plan_reading.py [--duration 60] [--seed 1]
+    python benches/plan_reading.py --shares MAP.yaml DRAWING.png ...
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ import numpy as np
 
 from planicp import Localizer, PlanMap, _core
 from planicp.plans.default_plan import default_plan_path, load_default_plan
+from planicp.plans.ros_map import inside_share, read_ros_map
 from planicp.sim.experiment import ExperimentConfig, Recording, run_experiment
 
 
@@ -43,7 +50,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--duration", type=float, default=60.0, help="seconds of the drive")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--shares", nargs="+", metavar="MAP", help="print the maps' shares of cells inside walls")
     args = parser.parse_args()
+    if args.shares:
+        for name in args.shares:
+            if name.endswith((".yaml", ".yml")):
+                walls = read_ros_map(name).wall_raster().walls
+            else:
+                raster = PlanMap.from_image(name, resolution=0.02, cache=False).raster
+                assert raster is not None  # an image's plan keeps its raster
+                walls = raster.walls
+            print(f"{name}: {100 * inside_share(walls):.1f} % of {int(walls.sum())} occupied cells inside walls")
+        return
     recording, _ = run_experiment(load_default_plan(), ExperimentConfig(duration_s=args.duration, seed=args.seed))
     drawn = PlanMap.from_ros_map(default_plan_path(), cache=False)
     with tempfile.TemporaryDirectory() as folder:

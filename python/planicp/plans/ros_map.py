@@ -79,18 +79,24 @@ drawn from every end point at 2.5-10 cm). A drawing's walls are material several
 (`docs/plans.md`)."""
 
 
+def inside_share(walls: NDArray[np.bool_]) -> float:
+    """The share of the occupied cells of `walls` ((H, W) bool) whose four neighbours are occupied
+    too (0 for no occupied cell)."""
+    occupied = int(np.count_nonzero(walls))
+    if occupied == 0:
+        return 0.0
+    padded = np.pad(walls, 1)
+    inside = walls & padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
+    return int(np.count_nonzero(inside)) / occupied
+
+
 def recognised_reading(walls: NDArray[np.bool_]) -> str:
     """How a map's occupied cells (`walls`, (H, W) bool) are read when nothing says: "centres"
     (a SLAM map: every occupied cell is where a surface was seen) unless at least
-    `MATERIAL_SHARE` of them lie inside walls, all four neighbours occupied, which makes the map
-    a drawing of walls of material: "auto" (the centres of walls one or two cells thick, the
-    faces of thicker ones; `PlanRaster.surface_points`)."""
-    occupied = int(np.count_nonzero(walls))
-    if occupied == 0:
-        return "centres"
-    padded = np.pad(walls, 1)
-    inside = walls & padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:]
-    return "auto" if np.count_nonzero(inside) >= MATERIAL_SHARE * occupied else "centres"
+    `MATERIAL_SHARE` of them lie inside walls (`inside_share`), which makes the map a drawing of
+    walls of material: "auto" (the centres of walls one or two cells thick, the faces of thicker
+    ones; `PlanRaster.surface_points`)."""
+    return "auto" if inside_share(walls) >= MATERIAL_SHARE else "centres"
 
 
 def _yaml() -> Any:
