@@ -19,6 +19,7 @@ import yaml
 
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
+from planicp.plans.ros_map import read_ros_map
 from planicp.ros import NodeSettings, PlanicpNodeCore, plan_occupancy_grid, ros2_launch_path
 from planicp.ros.plan_grid import plan_from_occupancy_grid
 from planicp.ros.ros2_parameters import NAV2_DEFAULTS, settings_from_ros2
@@ -272,6 +273,15 @@ def test_plan_from_an_occupancy_grid_lies_on_the_plan(plan: PlanMap) -> None:
     a, b = np.asarray(plan.points), np.asarray(from_grid.points)
     nearest = np.array([np.sqrt(((a - p) ** 2).sum(axis=1)).min() for p in b[:: max(1, len(b) // 400)]])
     assert nearest.max() < 0.5 * grid.resolution + 1e-9  # the thick walls' faces, not their cells' centres
+    assert from_grid.edge_detector == "auto" and not from_grid.cells_mark_returns  # a drawing
+    # nav2's depot map, SLAM output, on the map topic: read as its YAML-less file is, a SLAM map's cells.
+    depot = read_ros_map(Path(__file__).parent / "data" / "depot.yaml")
+    rows, cols = depot.occupancy.shape
+    slam = plan_from_occupancy_grid(depot.occupancy[::-1].ravel().tolist(), cols, rows, depot.resolution, depot.origin)
+    assert slam.cells_mark_returns
+    np.testing.assert_array_equal(
+        slam.points, PlanMap.from_ros_map(Path(__file__).parent / "data" / "depot.yaml", cache=False).points
+    )
     with pytest.raises(ValueError, match="holds 3 values"):
         plan_from_occupancy_grid([0, 100, 0], 2, 2, 0.05, (0, 0, 0))
     with pytest.raises(ValueError, match="no cell >= 65"):

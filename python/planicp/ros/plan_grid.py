@@ -10,6 +10,7 @@ from .._validation import as_pose, positive
 from ..mapping.occupancy_grid_message import OccupancyGridMessage
 from ..plans.plan_map import PlanMap
 from ..plans.plan_raster import PlanRaster
+from ..plans.ros_map import recognised_reading
 
 
 def plan_occupancy_grid(plan: PlanMap, resolution: float = 0.05) -> OccupancyGridMessage:
@@ -38,9 +39,11 @@ def plan_from_occupancy_grid(
     data: Any, width: int, height: int, resolution: float, origin: Any, occupied: int = 65
 ) -> PlanMap:
     """The plan in a `nav_msgs/OccupancyGrid` (as map_server publishes a map): cells at or above
-    `occupied` (0..100) are walls. The grid is read as an occupancy grid whose source is not known
-    (`PlanRaster.surface_points`' "auto"): a wall one or two cells thick (a SLAM map) is its cells'
-    centres, a thicker one (a plan drawn as walls of material) its faces. On the office plan's grid,
+    `occupied` (0..100) are walls. The grid is read as `PlanMap.from_ros_map` reads a map whose
+    YAML says nothing (`planicp.plans.ros_map.recognised_reading`): a SLAM map, whose occupied
+    cells nearly all border free or unknown space, as its cells' centres (and refined in their
+    density field); a drawing, most of whose cells lie inside walls of material, as "auto" (the
+    centres of walls one or two cells thick, the faces of thicker ones). On the office plan's grid,
     reading every wall cell's centre instead leaves tracking 12 cm off after a global localization,
     as each room seems a cell wider than it is.
 
@@ -70,7 +73,7 @@ def plan_from_occupancy_grid(
     raster = PlanRaster(
         np.ascontiguousarray(walls), positive(resolution, "resolution", "metres"), as_pose(origin, "origin")
     )
-    plan = PlanMap.from_raster(raster, edge_detector="auto")
+    plan = PlanMap.from_raster(raster, edge_detector=recognised_reading(raster.walls))
     # An occupancy grid on a map topic is in metres, as map_server serves a map_server map.
     plan.metric = True
     return plan
