@@ -41,6 +41,20 @@ fn profile_of(name: &str) -> PyResult<FieldProfile> {
     }
 }
 
+/// The field `make` builds from `points` (checked first) in the profile named `profile`, without
+/// the GIL.
+fn built(
+    py: Python<'_>,
+    points: &PyReadonlyArray2<'_, f64>,
+    profile: &str,
+    make: impl FnOnce(&[[f64; 2]], FieldProfile) -> icp_core::Result<CoreGrid> + Send,
+) -> PyResult<LikelihoodGrid> {
+    let profile = profile_of(profile)?;
+    let pts = points_from("plan points", points)?;
+    let grid = py.detach(|| guarded(|| make(&pts, profile)))?;
+    Ok(LikelihoodGrid { inner: Arc::new(grid) })
+}
+
 /// The pose refined: (x, y, yaw), cost, cost at the start, the 3x3 information, accepted steps.
 type Refined = ((f64, f64, f64), f64, f64, [[f64; 3]; 3], usize);
 
@@ -55,10 +69,7 @@ impl LikelihoodGrid {
         sigma: f64,
         profile: &str,
     ) -> PyResult<Self> {
-        let profile = profile_of(profile)?;
-        let pts = points_from("plan points", &points)?;
-        let grid = py.detach(|| guarded(|| CoreGrid::new(&pts, resolution, sigma, profile)))?;
-        Ok(Self { inner: Arc::new(grid) })
+        built(py, &points, profile, |pts, profile| CoreGrid::new(pts, resolution, sigma, profile))
     }
 
     /// The field sampled every `resolution` metres, or coarser by steps of a quarter where that
@@ -72,10 +83,7 @@ impl LikelihoodGrid {
         sigma: f64,
         profile: &str,
     ) -> PyResult<Self> {
-        let profile = profile_of(profile)?;
-        let pts = points_from("plan points", &points)?;
-        let grid = py.detach(|| guarded(|| CoreGrid::within_budget(&pts, resolution, sigma, profile)))?;
-        Ok(Self { inner: Arc::new(grid) })
+        built(py, &points, profile, |pts, profile| CoreGrid::within_budget(pts, resolution, sigma, profile))
     }
 
     /// Metres between cell centres.
