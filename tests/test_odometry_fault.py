@@ -11,7 +11,7 @@ import pytest
 
 from planicp import Localizer, PlanMap, PosteriorRefinement, se2
 from planicp.tracking.decisions import LeftPlaceDecision
-from planicp.tracking.odometry_fault import CostHistory, fault_cost, scan_cost, sweep_for_fault
+from planicp.tracking.odometry_fault import CostHistory, fault_cost, scan_cost, sweep_for_fault, within_fault
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
 from test_localizer import DEG, DRIFT, drifting_odometry, error, office, path, plan, scans  # noqa: F401
@@ -110,6 +110,29 @@ def test_the_sweep_finds_no_place_turned_beyond_its_window() -> None:
     )
     assert narrow is not None and not narrow.more_probable
     assert abs(se2.wrap_angle(narrow.pose[2] - predicted[2])) <= 30 * DEG
+
+
+def test_a_fault_leaves_the_robot_where_a_turn_or_a_slip_of_the_step_can() -> None:
+    """The fault component covers the odometry turning more than the robot (within the heading
+    window) and its wheels slipping (the robot moving less than reported): from the last pose at
+    the origin, a 1 m step forward, the places within 0.5 m of the sector it sweeps (1 m, 44
+    degrees either way) with a heading within the window; not a place behind the last pose, where
+    a corridor's look-alike lies."""
+    rule, motion = PosteriorRefinement(), (1.0, 0.0, 0.0)
+    predicted = (1.0, 0.0, 0.0)
+
+    def covered(x: float, y: float, yaw: float = 0.0) -> bool:
+        return within_fault((x, y, yaw), predicted, motion, rule, 0.5)
+
+    assert covered(0.5, 0.0) and covered(0.0, 0.0)  # slipped half the step, or all of it
+    assert covered(math.cos(40 * DEG), math.sin(40 * DEG), 40 * DEG)  # turned 40 degrees more
+    assert covered(1.4, 0.0) and not covered(1.6, 0.0)  # 0.4 and 0.6 m beyond the step
+    assert covered(-0.45, 0.0) and not covered(-1.3, 0.0)  # behind the last pose
+    assert not covered(0.0, 1.2)  # beside it, 0.86 m from the sector's side at 44 degrees
+    assert not covered(0.5, 0.0, 50 * DEG)  # turned beyond the window
+    # A robot standing still (no motion): only the tolerance around the last pose.
+    assert within_fault((0.3, 0.3, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), rule, 0.5)
+    assert not within_fault((0.5, 0.3, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), rule, 0.5)
 
 
 def test_the_cost_history_and_the_fault_cost() -> None:

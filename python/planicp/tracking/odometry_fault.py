@@ -27,8 +27,10 @@ best end. The window stays below 45 degrees, half of the 90-degree turn that map
 rooms onto one another, so it cannot settle in a rotated copy of the room; a climb's end turned
 beyond it is not a place the sweep finds (a climb with no prior can slide along a corridor and
 turn with it: on orebro one from 24 degrees off the prediction ended 5 m along the corridor,
-turned by 180 degrees, where the corridor fits the scan reversed), and when the full climb
-turns out of it, the best end of the sweep's climbs is the place. What it finds is not
+turned by 180 degrees, where the corridor fits the scan reversed), nor one the step cannot have
+left the robot at by turning more than the robot or slipping (`within_fault`: beyond the sector
+the reported motion sweeps from the last pose), and when the full climb leaves them, the best
+end of the sweep's climbs is the place. What it finds is not
 taken on this scan's word: the search stage leaves it pending, for the next scan to confirm, as a
 place a rejected jump leads to (a corrupted scan, turned or shifted, fits some place too).
 """
@@ -45,7 +47,7 @@ from numpy.typing import NDArray
 
 from .._validation import Pose
 from ..plans.plan_map import PlanMap
-from ..se2 import wrap_angle
+from ..se2 import compose, inverse, wrap_angle
 from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement
 
 FAULT_HEADING_STEP = math.radians(6.0)
@@ -145,6 +147,8 @@ def sweep_for_fault(
     plan: PlanMap,
     rule: PosteriorRefinement,
     history: CostHistory,
+    motion: Pose | None = None,
+    tolerance: float = math.inf,
 ) -> FaultSweep | None:
     """The sweep around `predicted` when the scan's cost at `current` (the update's fit, or the
     prediction) exceeds the track's typical cost by the fault cost; None when it does not, when
@@ -158,6 +162,9 @@ def sweep_for_fault(
         rule: the refinement's settings (`return_weight`, `fault_probability`,
             `fault_heading_window`).
         history: the track's recent costs.
+        motion: the update's odometry motion (base frame at its start), which moved the last
+            pose to `predicted`; None: any place within the heading window is a fault's.
+        tolerance: metres a place may lie from the motion's sector (`within_fault`).
     """
     if not rule.weighs_faults:
         return None
@@ -176,17 +183,48 @@ def sweep_for_fault(
     for k in range(-turns, turns + 1):
         start = (float(predicted[0]), float(predicted[1]), float(predicted[2]) + k * FAULT_HEADING_STEP)
         end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
-        if _within_window(end, predicted, rule) and (best is None or cost < best[0]):
+        if _covered(end, predicted, motion, rule, tolerance) and (best is None or cost < best[0]):
             best = (cost, end)
-    if best is None:  # every climb turned out of the window: no fault the model allows
+    if best is None:  # every climb turned or slid out of reach: no fault the model allows
         return FaultSweep(current, current_cost, current_cost, typical, threshold)
     pose, cost = climb(points, best[1], plan, rule)
-    if not _within_window(pose, predicted, rule):
+    if not _covered(pose, predicted, motion, rule, tolerance):
         pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
         cost = scan_cost(points, pose, plan, rule)
     return FaultSweep(pose, cost, current_cost, typical, threshold)
 
 
-def _within_window(pose: Pose, predicted: Pose, rule: PosteriorRefinement) -> bool:
-    """Whether `pose`'s heading is within `rule.fault_heading_window` of `predicted`'s."""
-    return abs(wrap_angle(float(pose[2]) - float(predicted[2]))) <= rule.fault_heading_window
+def _covered(pose: Pose, predicted: Pose, motion: Pose | None, rule: PosteriorRefinement, tolerance: float) -> bool:
+    """`within_fault`, or only the heading window without a `motion`."""
+    if motion is None:
+        return abs(wrap_angle(float(pose[2]) - float(predicted[2]))) <= rule.fault_heading_window
+    return within_fault(pose, predicted, motion, rule, tolerance)
+
+
+def within_fault(pose: Pose, predicted: Pose, motion: Pose, rule: PosteriorRefinement, tolerance: float) -> bool:
+    """Whether `pose` (T_map_base) is a place the fault component covers, for the update whose
+    odometry `motion` (base frame at its start) moved the last pose to `predicted`: the odometry
+    turned more than the robot did (`rule.fault_heading_window` either way) or its wheels slipped
+    (the robot moved less than it reports, down to not at all). So the robot's heading is within
+    the window of `predicted`'s, and its position within `tolerance` metres (the acceptance gate's
+    correction limit: what a sound fit may correct without a search) of the sector the motion
+    sweeps from the last pose: up to the motion's length, in directions within the window of the
+    motion's. A place behind the last pose, or beyond the motion's reach, is a look-alike, not the
+    step's fault (on orebro, swapped scan sets, a climb slid 6.2 m back along a corridor, behind
+    the last pose, after a 5 m step, and the next scan confirmed it)."""
+    window = rule.fault_heading_window
+    if abs(wrap_angle(float(pose[2]) - float(predicted[2]))) > window:
+        return False
+    last = compose(predicted, inverse(motion))
+    length = math.hypot(float(motion[0]), float(motion[1]))
+    qx, qy = float(pose[0]) - last[0], float(pose[1]) - last[1]
+    r = math.hypot(qx, qy)
+    if length < 1e-9:
+        return r <= tolerance
+    heading = last[2] + math.atan2(float(motion[1]), float(motion[0]))
+    off = wrap_angle(math.atan2(qy, qx) - heading)
+    if abs(off) <= window:
+        return r - length <= tolerance
+    edge = heading + math.copysign(window, off)  # the sector's nearer side, a segment from `last`
+    along = min(max(qx * math.cos(edge) + qy * math.sin(edge), 0.0), length)
+    return math.hypot(qx - along * math.cos(edge), qy - along * math.sin(edge)) <= tolerance

@@ -15,7 +15,7 @@ from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction, 
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
 from ..motion_noise import largest_position_std
-from ..odometry_fault import CostHistory, sweep_for_fault
+from ..odometry_fault import CostHistory, sweep_for_fault, within_fault
 from ..recovery import SearchBudget
 from ..relocalize import SearchRegion
 from .fit import aligned_from
@@ -97,13 +97,16 @@ def _fault_search(
     if lost or decision.result is None:
         return decision
     current = decision.result.pose if decision.reason == "" else prediction.pose
-    sweep = sweep_for_fault(points, prediction.pose, current, rules.plan, rules.refinement, history)
+    motion, tolerance = prediction.motion, rules.gate.max_translation_jump
+    sweep = sweep_for_fault(points, prediction.pose, current, rules.plan, rules.refinement, history, motion, tolerance)
     if sweep is None:
         return decision
     if not sweep.more_probable:
         return replace(decision, fault=sweep)
     place = aligned_from(points, sweep.pose, rules)
-    if rules.gate.fit_rejection(place) != "":
+    if rules.gate.fit_rejection(place) != "" or not within_fault(
+        place.pose, prediction.pose, motion, rules.refinement, tolerance
+    ):
         return replace(decision, fault=sweep)
     # The scan prefers another place to the fit by the fault cost: either the odometry faulted
     # and the fit is wrong, or the scan is corrupted and neither is right. The fit is no
