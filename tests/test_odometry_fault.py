@@ -147,6 +147,11 @@ def test_the_cost_history_and_the_fault_cost() -> None:
     assert history.typical() == 7.0  # only the last twenty count
     history.clear()
     assert history.typical() is None
+    # The steps a fault may lie in: from the last accepted pose's odometry (the updates after it
+    # held their predictions), or this update's own motion before any.
+    assert history.motion_since((3.0, 1.0, 0.0), (0.5, 0.0, 0.0)) == (0.5, 0.0, 0.0)
+    history.record(4.0, (1.0, 1.0, math.pi / 2))
+    assert history.motion_since((1.0, 3.0, math.pi / 2), (0.5, 0.0, 0.0)) == pytest.approx((2.0, 0.0, 0.0))
     assert fault_cost(1e-3) == pytest.approx(13.8155, abs=1e-4)
     with pytest.raises(ValueError, match="fault_probability"):
         PosteriorRefinement(fault_probability=1.0)

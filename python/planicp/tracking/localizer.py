@@ -433,7 +433,7 @@ class Localizer:
                 # Stage 7 costed the corrected pose already when it weighed a followed place.
                 weighed = left.place is not None and pose is correction.pose
                 cost = left.current_cost if weighed else scan_cost(points, pose, self.plan, rules.refinement)
-                self._costs.record(cost)
+                self._costs.record(cost, odom)
             # The scale check observes the fit from the prediction when it stays where the
             # odometry says the robot is (a plan off in scale explains too little of the scans
             # for the gate long before its fits jump: it is rejected, but in the right place).

@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from .._validation import Pose
 from ..plans.plan_map import PlanMap
-from ..se2 import compose, inverse, wrap_angle
+from ..se2 import between, compose, inverse, wrap_angle
 from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement
 
 FAULT_HEADING_STEP = math.radians(6.0)
@@ -76,18 +76,28 @@ def fault_cost(fault_probability: float) -> float:
 
 
 class CostHistory:
-    """The scan's cost in the likelihood field (no prior) at the last `HISTORY` accepted poses."""
+    """The scan's cost in the likelihood field (no prior) at the last `HISTORY` accepted poses,
+    and the odometry pose (T_odom_base) of the last of them."""
 
     def __init__(self) -> None:
         self._costs: deque[float] = deque(maxlen=HISTORY)
+        self._odom: Pose | None = None
 
-    def record(self, cost: float) -> None:
-        """Adds the cost at an accepted pose."""
+    def record(self, cost: float, odom: Pose | None = None) -> None:
+        """Adds the cost at an accepted pose, whose update received the odometry pose `odom`."""
         self._costs.append(float(cost))
+        self._odom = odom
 
     def clear(self) -> None:
         """Forgets every cost (the robot was placed anew)."""
         self._costs.clear()
+        self._odom = None
+
+    def motion_since(self, odom: Pose, otherwise: Pose) -> Pose:
+        """The odometry motion from the last accepted pose's update to the odometry pose `odom`
+        (base frame at its start): the steps a fault may lie in, since the updates after it held
+        their predictions. `otherwise` when no accepted pose is recorded."""
+        return otherwise if self._odom is None else between(self._odom, odom)
 
     def typical(self) -> float | None:
         """Median of the recorded costs; None before `MIN_HISTORY` are recorded."""

@@ -97,7 +97,10 @@ def _fault_search(
     if lost or decision.result is None:
         return decision
     current = decision.result.pose if decision.reason == "" else prediction.pose
-    motion, tolerance = prediction.motion, rules.gate.max_translation_jump
+    # The steps since the last accepted pose: the updates after it held their predictions, so a
+    # fault in any of them is in the prediction (on fhw a 31-degree fault one update before).
+    motion = history.motion_since(prediction.odom, prediction.motion)
+    tolerance = rules.gate.max_translation_jump
     sweep = sweep_for_fault(points, prediction.pose, current, rules.plan, rules.refinement, history, motion, tolerance)
     if sweep is None:
         return decision
