@@ -99,14 +99,15 @@ def test_the_sweep_finds_no_place_turned_beyond_its_window() -> None:
     ]
     scan = np.ascontiguousarray(np.column_stack([np.cos(angles), np.sin(angles)]) * np.array(ranges)[:, None])
     predicted = (3.0, 2.0, 40 * DEG)
+    still = (0.0, 0.0, 0.0)  # the robot turned in place: no motion, and no bound on the position
     history = CostHistory()
     for _ in range(5):
         history.record(scan_cost(scan, truth, room, PosteriorRefinement()))
-    wide = sweep_for_fault(scan, predicted, predicted, room, PosteriorRefinement(), history)
+    wide = sweep_for_fault(scan, predicted, predicted, room, PosteriorRefinement(), history, still, math.inf)
     assert wide is not None and wide.more_probable
     assert error(truth, wide.pose)[0] < 0.02 and error(truth, wide.pose)[1] < 1 * DEG
     narrow = sweep_for_fault(
-        scan, predicted, predicted, room, PosteriorRefinement(fault_heading_window=30 * DEG), history
+        scan, predicted, predicted, room, PosteriorRefinement(fault_heading_window=30 * DEG), history, still, math.inf
     )
     assert narrow is not None and not narrow.more_probable
     assert abs(se2.wrap_angle(narrow.pose[2] - predicted[2])) <= 30 * DEG

@@ -254,7 +254,13 @@ class PlanMap:
         neighbours occupied, where a SLAM map has under a fifth) is a drawing given as a
         map_server map, and is read as one (`"auto"`)."""
         ros_map = read_ros_map(yaml_path)
-        reading = edge_detector or ros_map.edge_detector or recognised_reading(ros_map.wall_raster().walls)
+        said = edge_detector or ros_map.edge_detector
+        walls: PlanRaster | None = None
+        if said:
+            reading = said
+        else:  # the raster read once: to recognise the map, then to build its plan
+            walls = ros_map.wall_raster()
+            reading = recognised_reading(walls.walls)
         params = {
             "resolution": ros_map.resolution,
             "origin": ros_map.origin,
@@ -267,7 +273,7 @@ class PlanMap:
         contents = [ros_map.image_path.read_bytes()]
 
         def build() -> dict[str, NDArray[Any]]:
-            return cls._prepared(ros_map.wall_raster(), reading)
+            return cls._prepared(walls or ros_map.wall_raster(), reading)
 
         arrays, hit = cached(_cache_folder(cache), cache_key("ros_map", params, contents), build)
         plan = cls._from_cached(arrays, ros_map.resolution, ros_map.origin, hit, reading)

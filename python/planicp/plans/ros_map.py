@@ -73,10 +73,9 @@ MATERIAL_SHARE = 1.0 / 3.0
 """Share of a map's occupied cells inside walls (all four neighbours occupied) from which
 `recognised_reading` takes the map for a drawing. A SLAM tool marks the cells where beams ended,
 surfaces two or three cells deep at most, so nearly every occupied cell borders free or unknown
-space: 1-6 % inside on nav2's maps, 1-10 % on the real logs' maps drawn from end points (up to 18 %
-drawn from every end point at 2.5-10 cm). A drawing's walls are material several pixels thick:
-55 % inside on the shipped office plan, 63-91 % on the real drawings at 2 cm per pixel
-(`docs/plans.md`)."""
+space: 4-6 % inside on nav2's maps, 1-10 % on the real logs' maps drawn from end points. A
+drawing's walls are material several pixels thick: 55 % inside on the shipped office plan, 63-91 %
+on three real raster drawings (`docs/plans.md`, `benches/plan_reading.py --shares`)."""
 
 
 def inside_share(walls: NDArray[np.bool_]) -> float:

@@ -157,8 +157,8 @@ def sweep_for_fault(
     plan: PlanMap,
     rule: PosteriorRefinement,
     history: CostHistory,
-    motion: Pose | None = None,
-    tolerance: float = math.inf,
+    motion: Pose,
+    tolerance: float,
 ) -> FaultSweep | None:
     """The sweep around `predicted` when the scan's cost at `current` (the update's fit, or the
     prediction) exceeds the track's typical cost by the fault cost; None when it does not, when
@@ -172,8 +172,8 @@ def sweep_for_fault(
         rule: the refinement's settings (`return_weight`, `fault_probability`,
             `fault_heading_window`).
         history: the track's recent costs.
-        motion: the update's odometry motion (base frame at its start), which moved the last
-            pose to `predicted`; None: any place within the heading window is a fault's.
+        motion: the odometry motion (base frame at its start) that moved the last accepted pose
+            to `predicted` (`CostHistory.motion_since`).
         tolerance: metres a place may lie from the motion's sector (`within_fault`).
     """
     if not rule.weighs_faults:
@@ -193,22 +193,15 @@ def sweep_for_fault(
     for k in range(-turns, turns + 1):
         start = (float(predicted[0]), float(predicted[1]), float(predicted[2]) + k * FAULT_HEADING_STEP)
         end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
-        if _covered(end, predicted, motion, rule, tolerance) and (best is None or cost < best[0]):
+        if within_fault(end, predicted, motion, rule, tolerance) and (best is None or cost < best[0]):
             best = (cost, end)
     if best is None:  # every climb turned or slid out of reach: no fault the model allows
         return FaultSweep(current, current_cost, current_cost, typical, threshold)
     pose, cost = climb(points, best[1], plan, rule)
-    if not _covered(pose, predicted, motion, rule, tolerance):
+    if not within_fault(pose, predicted, motion, rule, tolerance):
         pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
         cost = scan_cost(points, pose, plan, rule)
     return FaultSweep(pose, cost, current_cost, typical, threshold)
-
-
-def _covered(pose: Pose, predicted: Pose, motion: Pose | None, rule: PosteriorRefinement, tolerance: float) -> bool:
-    """`within_fault`, or only the heading window without a `motion`."""
-    if motion is None:
-        return abs(wrap_angle(float(pose[2]) - float(predicted[2]))) <= rule.fault_heading_window
-    return within_fault(pose, predicted, motion, rule, tolerance)
 
 
 def within_fault(pose: Pose, predicted: Pose, motion: Pose, rule: PosteriorRefinement, tolerance: float) -> bool:
