@@ -26,6 +26,7 @@ from planicp.tracking.decisions import (
     Bookkeeping,
     Correction,
     FitDecision,
+    LeftPlace,
     LeftPlaceDecision,
     LostDecision,
     PendingDecision,
@@ -217,6 +218,44 @@ def test_a_fit_beyond_the_prediction_is_used_alone_unless_the_scan_is_far_worse_
     wide = prediction_at(prediction.pose, np.diag([0.2**2, 0.2**2, (2 * DEG) ** 2]))
     fused = stages.correct(scans[20], wide, replace(search, fault=sweep), score, the_rules)
     assert fused.accepted and fused.kind == "fused" and fused.refused == ""
+
+
+def test_a_fit_beyond_the_prediction_is_weighed_against_the_predictions_mode_by_the_fault_cost(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """With the likelihood field and its fault component (a SLAM map's default), a fit that
+    disagrees with the prediction beyond their covariances is taken alone only where the scan
+    prefers it to the prediction's surroundings by the fault cost (the max-mixture motion model);
+    otherwise the pose is the mode of the scan's likelihood times the prediction's Gaussian."""
+    the_rules = rules(plan, refinement=PosteriorRefinement(enabled=True))
+    threshold = fault_cost(the_rules.refinement.fault_probability)
+    truth = path[20]
+    # The odometry strayed 15 cm beyond a 2 cm deviation, and ICP finds the true pose: the scan
+    # explains it far better than anything near the prediction, and the fit is taken alone.
+    strayed = prediction_at(se2.compose(truth, (0.15, 0.0, 0.0)))
+    fit = stages.fit_from_prediction(scans[20], strayed, the_rules, False)
+    assert fit.result is not None and fit.reason == ""
+    search = SearchDecision(None, None, fit.result, "", False)
+    score = stages.judge_score(scans[20], strayed, fit, search, the_rules, False, None)
+    alone = stages.correct(scans[20], strayed, search, score, the_rules)
+    assert alone.accepted and alone.kind == "fit" and error(truth, alone.pose)[0] < 0.01
+    assert alone.refinement is not None and alone.refinement.prior == "none"
+    # A sound prediction and a fit 25 cm from it, as ICP leaves where a SLAM map drew a wall
+    # twice: the scan prefers the prediction's surroundings, and the pose stays there.
+    sound = prediction_at(truth)
+    off = replace(fit.result, pose=se2.compose(truth, (0.0, 0.25, 0.0)))
+    search = SearchDecision(None, None, off, "", False)
+    assert the_rules.fusion.fuse(off, sound.pose, sound.covariance) is None  # beyond their covariances
+    held = stages.correct(scans[20], sound, search, score, the_rules)
+    assert held.accepted and held.kind == "prediction_mode" and error(truth, held.pose)[0] < 0.01
+    assert held.refinement is not None and held.refinement.prior == "prediction"
+    assert held.covariance is sound.covariance
+    assert held.why.startswith("the fit disagrees with the prediction, but the scan does not prefer it")
+    climbed = scan_cost(scans[20], off.pose, plan, the_rules.refinement)
+    assert held.refinement.cost < climbed + threshold
+    # Without the fault component the fit is taken alone, as on a drawn plan.
+    plain = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))
+    assert stages.correct(scans[20], sound, search, score, plain).kind == "fit"
 
 
 def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
@@ -495,31 +534,60 @@ def test_the_place_left_behind_is_taken_back_kept_or_forgotten_by_the_fault_cost
     def corrected(pose: Pose) -> Correction:
         return Correction(pose, SMALL, True, None, "fused")
 
+    threshold = fault_cost(the_rules.refinement.fault_probability)
+    left = LeftPlace(path[k - 1], before)
     # The track took the wrong place; the place it left, followed with the odometry, is the truth.
-    back = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), the_rules, False)
+    back = stages.weigh_left_place(points, left, odom, corrected(elsewhere), the_rules, False)
     assert back.place is not None and back.returned is not None and back.kept is None
     assert error(truth, back.place)[0] < 0.03 and error(truth, back.returned.pose)[0] < 0.03
-    assert back.cost + fault_cost(the_rules.refinement.fault_probability) < back.current_cost
+    assert back.evidence == pytest.approx(back.current_cost - back.cost) and back.evidence > threshold
     assert back.why.startswith("this scan prefers the place left behind")
     # The track is right and the place left behind is not: forgotten.
-    gone = stages.weigh_left_place(points, (elsewhere, odom), odom, corrected(truth), the_rules, False)
+    gone = stages.weigh_left_place(points, LeftPlace(elsewhere, odom), odom, corrected(truth), the_rules, False)
     assert gone.place is not None and gone.returned is None and gone.kept is None
-    assert gone.current_cost + fault_cost(the_rules.refinement.fault_probability) < gone.cost
-    assert gone.why.startswith("this scan rules out the place left behind")
-    # Within the fault cost of each other (here the same place): still followed, from its mode.
-    kept = stages.weigh_left_place(points, (truth, odom), odom, corrected(truth), the_rules, False)
-    assert kept.returned is None and kept.kept is not None and kept.kept[1] == odom
-    assert error(truth, kept.kept[0])[0] < 0.03 and abs(kept.cost - kept.current_cost) < 1.0
-    # An update without an accepted fit does not judge it; while lost it is dropped.
+    assert gone.evidence < -threshold and gone.why.startswith("this scan rules out the place left behind")
+    # A place whose mode is the track's (within the corrected pose's covariance) is one
+    # hypothesis with it again: forgotten.
+    merged = stages.weigh_left_place(points, LeftPlace(truth, odom, 5.0), odom, corrected(truth), the_rules, False)
+    assert merged.merged and merged.kept is None and merged.returned is None
+    assert merged.why == "the place left behind has the track's own mode again: forgotten"
+    # Within the fault cost of each other (the track 1 cm off and sure of it, the place at the
+    # scan's mode): still followed, from its mode, with what this scan says added to what the
+    # earlier ones said; scans that each prefer it by less than the fault cost take it back together.
+    sure = Correction(se2.compose(truth, (0.01, 0.0, 0.0)), np.diag([1e-6, 1e-6, 1e-8]), True, None, "fused")
+    kept = stages.weigh_left_place(points, LeftPlace(truth, odom, 5.0), odom, sure, the_rules, False)
+    assert not kept.merged and kept.returned is None and kept.kept is not None and kept.kept.odom == odom
+    assert error(truth, kept.kept.pose)[0] < 0.01 and 0.0 < kept.current_cost - kept.cost < threshold - 5.0
+    assert kept.kept.evidence == pytest.approx(5.0 + kept.current_cost - kept.cost)
+    assert kept.why.startswith("the place left behind is still followed")
+    many = LeftPlace(truth, odom, threshold - 0.5 * (kept.current_cost - kept.cost))
+    assert stages.weigh_left_place(points, many, odom, sure, the_rules, False).returned is not None
+    # Where the update took a place the fault sweep found, that place needs a fault and the place
+    # left behind does not: a scan that explains the two alike takes the place back.
+    same = stages.weigh_left_place(points, LeftPlace(truth, odom), odom, sure, the_rules, False, True, SMALL)
+    assert same.returned is not None and same.evidence > threshold
+    # Not where the place's own mode lies beyond the motion's reach of where the odometry takes
+    # it (it needs a fault too: here ICP turns it 12 degrees, onto the track's place).
+    turned = LeftPlace(se2.compose(truth, (0.0, 0.0, 12 * DEG)), odom)
+    both = stages.weigh_left_place(points, turned, odom, sure, the_rules, False, True, SMALL)
+    assert both.place is not None and error(truth, both.place)[1] < 0.5 * DEG
+    assert both.returned is None and not both.merged and abs(both.evidence) < threshold
+    # (And with the place the sweep took there, it is that place: merged.)
+    assert stages.weigh_left_place(points, turned, odom, corrected(truth), the_rules, False, True, SMALL).merged
+    # An update without an accepted fit weighs the place against the prediction: taken back
+    # where ICP from it passes the gate, never ruled out (followed from where the odometry puts it).
     refused = Correction(elsewhere, SMALL, False, None, "prediction")
-    waiting = stages.weigh_left_place(points, (path[k - 1], before), odom, refused, the_rules, False)
-    assert waiting.place is None and waiting.kept is not None and error(truth, waiting.kept[0])[0] < 1e-9
-    assert waiting.why == "the place left behind is followed; this update cannot judge it"
-    lost = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), the_rules, True)
+    found = stages.weigh_left_place(points, left, odom, refused, the_rules, False)
+    assert found.returned is not None and error(truth, found.returned.pose)[0] < 0.03
+    unsure = Correction(truth, SMALL, False, None, "prediction")
+    waiting = stages.weigh_left_place(points, LeftPlace(elsewhere, odom), odom, unsure, the_rules, False)
+    assert waiting.evidence < -threshold and waiting.kept is not None and waiting.kept.pose == elsewhere
+    assert waiting.why.startswith("the place left behind is still followed")
+    lost = stages.weigh_left_place(points, left, odom, corrected(elsewhere), the_rules, True)
     assert lost.place is None and lost.kept is None and lost.returned is None
     # Without the fault component (or the field: a drawn plan's default) nothing is followed.
     for off in (rules(plan), rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))):
-        decision = stages.weigh_left_place(points, (path[k - 1], before), odom, corrected(elsewhere), off, False)
+        decision = stages.weigh_left_place(points, left, odom, corrected(elsewhere), off, False)
         assert decision == LeftPlaceDecision(None) and decision.why == "no place left behind is followed"
 
 
@@ -540,19 +608,25 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     fit = stages.fit_from_prediction(scans[20], prediction, the_rules, False)
     assert fit.result is not None and error(truth, fit.result.pose)[1] > 5 * DEG  # ICP: the wrong basin
     search = search_stage(scans[20], prediction, fit, the_rules, history)
-    assert search.cause == "fault" and search.fault is not None and search.pending is not None
+    assert search.cause == "fault" and search.fault is not None and search.pending is None
     assert search.fault.current_cost > typical + search.fault.threshold
     assert search.fault.cost + search.fault.threshold < search.fault.current_cost
-    distance, turn = error(truth, search.pending[0])
+    assert search.found is not None and search.result is search.found
+    distance, turn = error(truth, search.result.pose)
     assert distance < 0.03 and turn < 0.5 * DEG, (distance, turn)
-    # Not taken on this scan's word, and the fit, which the scan explains worse by the fault cost,
-    # is no evidence either: the update keeps the prediction.
-    assert not search.searched and search.result is fit.result
-    assert search.reason.startswith("the scan fits a place 0.1"), search.reason
+    # The place, within the fault model, is the posterior's mode: taken at once (not fused with
+    # the prediction, which says nothing after a fault); the fit from the prediction is left
+    # behind for the next scans to weigh.
+    assert search.searched and search.reason == "" and search.left == prediction.pose
     score = stages.judge_score(scans[20], prediction, fit, search, the_rules, False, None)
-    assert score.reason == search.reason
-    assert stages.correct(scans[20], prediction, search, score, the_rules).pose == prediction.pose
-    assert search.why.startswith("odometry fault suspected")
+    assert score.reason == ""
+    correction = stages.correct(scans[20], prediction, search, score, the_rules)
+    assert correction.accepted and correction.kind == "fit" and correction.pose == search.result.pose
+    assert search.why.startswith("odometry fault: ")
+    # A place beyond the fault model (the sweep's heading window) is not taken.
+    narrow = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_heading_window=10 * DEG))
+    outside = search_stage(scans[20], prediction, fit, narrow, history)
+    assert outside.cause is None and outside.fault is not None and not outside.fault.more_probable
     # No sweep before the track has a typical cost, nor without the fault component.
     unknown = search_stage(scans[20], prediction, fit, the_rules)
     assert unknown.cause is None and unknown.fault is None and unknown.pending is None

@@ -60,11 +60,30 @@ class PendingPlace(NamedTuple):
     silent: int = 0
 
 
-CorrectionKind = Literal["fused", "weak_axis", "fit", "prediction"]
+class LeftPlace(NamedTuple):
+    """The place an adopted jump left behind, followed with the odometry (stage 7).
+
+    Attributes:
+        pose: the place at the scan of `odom` (T_map_base).
+        odom: the odometry pose (T_odom_base) of that scan.
+        evidence: what the scans judged since it was left prefer it by, in total: the sum of
+            the scan's cost at the update's pose less its cost at the place (the fault cost `F`
+            added where the update's pose needed a fault of its own); it is taken back above
+            `F`, forgotten below `-F`.
+    """
+
+    pose: Pose
+    odom: Pose
+    evidence: float = 0.0
+
+
+CorrectionKind = Literal["fused", "weak_axis", "fit", "prediction_mode", "prediction"]
 """How `Correction.pose` was made: "fused", the Kalman update of the prediction with the fit
 (`FusionRule`); "weak_axis", the fit, except along a degenerate axis where the prediction is
-corrected as far as the variances say (`fuse_along_weak_axis`); "fit", the fit alone; "prediction",
-no accepted fit: the prediction."""
+corrected as far as the variances say (`fuse_along_weak_axis`); "fit", the fit alone;
+"prediction_mode", a fit that disagrees with the prediction, which the scan does not prefer to the
+prediction's surroundings by the fault cost: the mode of the scan's likelihood times the
+prediction's Gaussian; "prediction", no accepted fit: the prediction."""
 
 RecoveryAction = Literal["step", "coast", "verify", "clear"]
 """What the recovery did: "step", it searched or followed its places with the scan; "coast", the
@@ -196,16 +215,19 @@ class SearchDecision:
         found: the refined fit at the unambiguous place the search found, when one passed its
             checks; None otherwise.
         result: the fit the update goes on with: the search's place for an uncertain prediction,
-            the confirmed pending place (stage 3), else the fit from the prediction.
+            the place an odometry fault leaves the robot at, the confirmed pending place (stage 3),
+            else the fit from the prediction.
         reason: why `result` is not accepted ("" when it is, so far); after a rejected jump, the
-            gate's reason and where the pending place is; after a suspected odometry fault, where
-            the place the scan prefers to the fit is.
-        searched: `result` is a search's or a confirmed place's fit, over the whole scan (not
-            fused with the prediction; adopted as `Estimate.relocalized`).
-        pending: the place the next scan is to confirm, after a rejected jump or a suspected
-            odometry fault; None otherwise.
+            gate's reason and where the pending place is.
+        searched: `result` is a search's, a fault's or a confirmed place's fit, over the whole
+            scan (not fused with the prediction; adopted as `Estimate.relocalized`).
+        pending: the place the next scan is to confirm, after a rejected jump; None otherwise.
         fault: the heading sweep for an odometry fault, when it ran (`cause` is "fault" when
-            it found a place of higher posterior that ICP fits soundly); None otherwise.
+            it found a place of higher posterior that ICP fits soundly, taken as `result`); None
+            otherwise.
+        left: after a place the fault sweep found was taken, the pose it leaves: the prediction
+            (T_map_base; were the scan corrupted, it would say nothing, and the robot would be
+            where the odometry puts it), which the next scans weigh (stage 7); None otherwise.
     """
 
     cause: SearchCause | None
@@ -215,6 +237,7 @@ class SearchDecision:
     searched: bool
     pending: PendingPlace | None = None
     fault: FaultSweep | None = None
+    left: Pose | None = None
 
     @property
     def why(self) -> str:
@@ -230,10 +253,11 @@ class SearchDecision:
                 )
             return "no search"
         if self.cause == "fault":
-            assert self.fault is not None and self.pending is not None
+            assert self.fault is not None
             return (
-                f"odometry fault suspected: the scan's cost {self.fault.current_cost:.1f} against a typical "
-                f"{self.fault.typical:.1f}; a place costing {self.fault.cost:.1f} is pending for the next scan"
+                f"odometry fault: the scan's cost {self.fault.current_cost:.1f} against a typical "
+                f"{self.fault.typical:.1f}; a place within the fault model costing {self.fault.cost:.1f} is "
+                "taken, the track's own pose left behind for the next scans to weigh"
             )
         if self.cause == "uncertain":
             return (
@@ -315,6 +339,10 @@ class Correction:
             "fused": "the fit fused with the prediction",
             "weak_axis": "the fit, with the prediction kept along its degenerate axis as far as the variances say",
             "fit": "the fit alone",
+            "prediction_mode": (
+                "the fit disagrees with the prediction, but the scan does not prefer it to the prediction's "
+                "surroundings by the fault cost: the scan's most likely pose near the prediction"
+            ),
             "prediction": "no accepted fit: the prediction",
         }[self.kind]
         if self.refused:
@@ -328,38 +356,49 @@ class Correction:
 class LeftPlaceDecision:
     """Stage 7: the place an adopted jump left behind, weighed against this scan.
 
-    A place that a pending jump or an odometry fault led to, once the next scan confirms it, is
-    taken; the place the track would have been at instead (that update's fit from the
+    A place an odometry fault led to is taken at once, one a pending jump led to once the next
+    scan confirms it; the place the track would have been at instead (that update's fit from the
     prediction, or the prediction) is then followed with the odometry, climbed to the mode of each
     scan's likelihood in the plan's field, for as long as the scans cannot rule it out by the
-    fault cost (`planicp.tracking.odometry_fault`): a fault and a map whose passes disagree look
-    alike on two scans.
+    fault cost (`planicp.tracking.odometry_fault`): a fault, a scan turned within the fault
+    window and a map whose passes disagree look alike on one scan.
 
     Attributes:
         place: the place left behind, followed to this scan and climbed (T_map_base); None when
-            none is followed, or this update cannot judge it (no accepted fit, or lost).
+            none is followed (or while lost).
         cost: the scan's cost at `place` (no prior); NaN when `place` is None.
-        current_cost: the scan's cost at the corrected pose; NaN when `place` is None.
-        returned: ICP from `place` when this scan prefers it to the corrected pose by the fault
-            cost: the update takes `place`, and follows the pose it leaves instead. None otherwise.
-        kept: the place and this scan's odometry pose, still followed; None when the scan
-            prefers the corrected pose by the fault cost (ruled out), or none was followed.
+        current_cost: the scan's cost at the corrected pose (the prediction, without an accepted
+            fit); NaN when `place` is None.
+        returned: ICP from `place` when the scans since it was left prefer it by more than the
+            fault cost (and, without an accepted fit, ICP from it passes the gate): the update
+            takes `place`, and follows the pose it leaves instead. None otherwise.
+        evidence: what the scans judged since the place was left prefer it by, this one's
+            included (see `LeftPlace.evidence`); NaN when `place` is None.
+        kept: the place at this scan (unclimbed, without an accepted fit), still followed;
+            None when it is taken back, ruled out, merged, or none was followed.
+        merged: the place's mode is the corrected pose's (within the 99.9 % bound of its
+            covariance): one hypothesis again, and the place is forgotten.
     """
 
     place: Pose | None
     cost: float = math.nan
     current_cost: float = math.nan
     returned: IcpResult | None = None
-    kept: tuple[Pose, Pose] | None = None
+    evidence: float = math.nan
+    kept: LeftPlace | None = None
+    merged: bool = False
 
     @property
     def why(self) -> str:
         """One sentence on this decision."""
         if self.place is None:
-            if self.kept is not None:
-                return "the place left behind is followed; this update cannot judge it"
             return "no place left behind is followed"
-        costs = f"cost {self.cost:.1f} there against {self.current_cost:.1f} here"
+        costs = (
+            f"cost {self.cost:.1f} there against {self.current_cost:.1f} here; "
+            f"{self.evidence:+.1f} for it since it was left"
+        )
+        if self.merged:
+            return "the place left behind has the track's own mode again: forgotten"
         if self.returned is not None:
             return f"this scan prefers the place left behind ({costs}): taken back"
         if self.kept is None:

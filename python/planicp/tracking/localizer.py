@@ -17,7 +17,7 @@ from ..plans.plan_map import PlanMap
 from ..se2 import compose, inverse, pose_to_matrix, wrap_angle
 from .acceptance_gate import AcceptanceGate
 from .continuity_rule import ContinuityRule
-from .decisions import Decision, PendingPlace
+from .decisions import Decision, LeftPlace, PendingPlace
 from .degeneracy_rule import Degeneracy, DegeneracyRule
 from .fusion_rule import FusionRule
 from .icp_config import IcpConfig
@@ -61,8 +61,9 @@ class Estimate:
         reason: why the result was not accepted ("" when it was).
         covariance: 3x3 over (x, y, yaw) of `pose` (m^2, m rad, rad^2): the fusion of ICP's and
             the odometry prediction's when accepted (ICP's alone after an odometry fault), the
-            prediction's otherwise; while a place is pending for the next scan to confirm (a
-            suspected odometry fault, a rejected jump), widened towards it (see
+            prediction's otherwise; while a place is pending for the next scan to confirm (after
+            a rejected jump), or the place an adopted one left behind is not yet ruled out (after
+            an odometry fault), widened towards it (see
             `planicp.tracking.stages.pending.spread_over_pending`).
         degeneracy: the weak axis of an accepted fit that does not fix the position along it
             (along which `pose` kept the odometry motion, corrected only as far as ICP's variance
@@ -161,10 +162,10 @@ class Localizer:
     corrupted scan fits some place beyond the gate too. Where the refinement runs, a scan far worse
     explained than the track's recent ones may mean the odometry strayed beyond its noise (a
     heading fault ICP cannot climb out of): the plan's likelihood field is swept for such a fault
-    (`planicp.tracking.odometry_fault`), and a place found is taken the same way, when the next
-    scan confirms it. The place such a jump left behind is followed with the odometry and taken
-    back when a scan prefers it by as much as a fault's place must be preferred, since two scans
-    cannot tell a fault from a map whose passes disagree (`LeftPlaceDecision`).
+    (`planicp.tracking.odometry_fault`), and a place found is taken at once. The place such a
+    jump left behind is followed with the odometry and taken back when the scans since prefer it,
+    in total, by as much as a fault's place must be preferred, since one scan cannot tell a fault
+    from a turned scan or a map whose passes disagree (`LeftPlaceDecision`).
 
     `update` runs these steps as an ordered pipeline of stages (`planicp.tracking.stages`: predict,
     fit, confirm a pending place, search, score, correct, weigh the place left behind, judge lost,
@@ -292,7 +293,7 @@ class Localizer:
         # with the odometry poses of those scans: one is taken only when a later scan confirms it
         # (see `update` and `confirm_pending`).
         self._pending: tuple[PendingPlace, ...] = ()
-        self._left: tuple[Pose, Pose] | None = None
+        self._left: LeftPlace | None = None
         # The scan's cost in the likelihood field at the last accepted poses: how well this
         # track's scans are explained, against which a suspected odometry fault is judged.
         self._costs = CostHistory()
@@ -388,9 +389,12 @@ class Localizer:
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
             correction = correct(points, prediction, search, score, rules)
             # 7. The place an adopted jump left behind, taken back if this scan prefers it.
-            left = weigh_left_place(points, self._left, odom, correction, rules, was_lost)
+            faulted = search.cause == "fault" and search.searched
+            left = weigh_left_place(
+                points, self._left, odom, correction, rules, was_lost, faulted, prediction.covariance
+            )
             # 8. Lost or not. 9. While lost, the recovery, which may adopt a place.
-            lost = judge_lost(self._detector, score, correction, search, was_lost, rules)
+            lost = judge_lost(self._detector, score, correction, search, was_lost, rules, left)
             recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
             adopted = recovery.adopted
             if lost.lost:
@@ -415,10 +419,12 @@ class Localizer:
             if now_lost or adopted is not None:
                 self._left = None
             elif returned:
-                self._left = (correction.pose, odom)
+                self._left = LeftPlace(correction.pose, odom)
             elif confirmation.confirmed is not None and correction.accepted:
                 own = fit.result.pose if fit.passed and fit.result is not None else prediction.pose
-                self._left = (own, odom)
+                self._left = LeftPlace(own, odom)
+            elif search.left is not None and correction.accepted:
+                self._left = LeftPlace(search.left, odom)
             else:
                 self._left = left.kept
             relocalized = search.searched or adopted is not None or returned
@@ -449,8 +455,10 @@ class Localizer:
             kept = fit.kept
             if relocalized and result is not None and kept is not None and len(result.inlier_mask) == len(points):
                 kept = None  # a search's result is over the whole scan
-            # What the places still pending leave open of the pose (reported only).
-            reported = spread_over_pending(pose, covariance, self._pending)
+            # What the places still pending, and the place left behind, leave open of the pose
+            # (reported only).
+            followed = () if self._left is None else (PendingPlace(self._left.pose, self._left.odom),)
+            reported = spread_over_pending(pose, covariance, self._pending + followed)
             return Estimate(
                 pose,
                 accepted,

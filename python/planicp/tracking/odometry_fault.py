@@ -30,9 +30,10 @@ turn with it: on orebro one from 24 degrees off the prediction ended 5 m along t
 turned by 180 degrees, where the corridor fits the scan reversed), nor one the step cannot have
 left the robot at by turning more than the robot or slipping (`within_fault`: beyond the sector
 the reported motion sweeps from the last pose), and when the full climb leaves them, the best
-end of the sweep's climbs is the place. What it finds is not
-taken on this scan's word: the search stage leaves it pending, for the next scan to confirm, as a
-place a rejected jump leads to (a corrupted scan, turned or shifted, fits some place too).
+end of the sweep's climbs is the place. The search stage takes what it finds at once, the
+posterior's mode, and keeps the prediction it leaves as a second hypothesis that the next scans
+weigh (`planicp.tracking.stages.left_place`): a scan turned within the window fits a turned place
+as a fault's scan fits the true one, and only the scans after tell them apart.
 """
 
 from __future__ import annotations

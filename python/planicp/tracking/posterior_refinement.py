@@ -60,8 +60,10 @@ class PosteriorRefinement(Settings):
         fault_probability: the chance, per update, that the odometry strayed far beyond its
             motion noise (the fault component of the motion model, see
             `planicp.tracking.odometry_fault`): a place the scan fits better than the update's
-            own pose by `-2 ln(fault_probability)` (13.8 at 1e-3) is searched for and left
-            pending for the next scan to confirm. 0 turns the search off.
+            own pose by `-2 ln(fault_probability)` (13.8 at 1e-3) is searched for and taken,
+            the pose it leaves weighed by the next scans; a fit beyond the prediction's
+            covariance is weighed against the prediction's surroundings by as much. 0 turns
+            both off.
         fault_heading_window: how far either way of the predicted heading that search starts
             its climbs and the place it finds may lie, radians (below 45 degrees: a building's
             rooms map onto one another by 90-degree turns).

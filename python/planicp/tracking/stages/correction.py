@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from ..._validation import Pose
 from ..decisions import Correction, Prediction, ScoreDecision, SearchDecision
 from ..degeneracy_rule import fuse_along_weak_axis
+from ..odometry_fault import fault_cost
 from ..posterior_refinement import refine_pose
 from .rules import Rules
 
@@ -47,8 +48,34 @@ def correct(
     else:
         covariance = finite_or(result.covariance, prediction.covariance)
         correction = Correction(result.pose, covariance, True, None, "fit")
-        prior = None  # the odometry faulted, and the scan constrains every direction
+        if not search.searched:
+            return _fault_or_prediction(points, correction, prediction, rules)
+        prior = None
     return correction if search.searched else _refined(points, correction, prior, rules)
+
+
+def _fault_or_prediction(
+    points: NDArray[np.float64], fit: Correction, prediction: Prediction, rules: Rules
+) -> Correction:
+    """A fit from the prediction that disagrees with it beyond their covariances (`fit`, not
+    degenerate) weighed as the max-mixture motion model weighs it: either the odometry faulted,
+    and the prediction is no evidence (the scan's likelihood alone, climbed from the fit, at the
+    fault cost `F`), or it did not, and the pose is the mode of the scan's likelihood times the
+    prediction's Gaussian, climbed from the prediction. The one of lower cost is taken. On
+    freiburg-campus (odometry seed 7) three fits 0.3-0.4 m from a sound prediction were taken alone
+    for one scan each, at costs 11 units below the prediction's mode, less than `F` (13.8): single
+    scans whose walls the map drew twice. Without the refinement's field and its fault component,
+    the fit alone, refined with no prior."""
+    refinement = rules.refinement
+    if not refinement.weighs_faults:
+        return _refined(points, fit, None, rules)
+    faulted = _refined(points, fit, None, rules)
+    assert faulted.refinement is not None
+    prior = ("prediction", prediction.pose, prediction.covariance)
+    held = refine_pose(points, prediction.pose, rules.plan, prior, refinement)
+    if faulted.refinement.cost + fault_cost(refinement.fault_probability) < held.cost:
+        return faulted
+    return Correction(held.pose, prediction.covariance, True, None, "prediction_mode", refinement=held)
 
 
 def _corrupted_scan(search: SearchDecision) -> str:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..decisions import Correction, LostDecision, ScoreDecision, SearchDecision
+from ..decisions import Correction, LeftPlaceDecision, LostDecision, ScoreDecision, SearchDecision
 from ..lost_rule import LostDetector
 from .rules import Rules
 
@@ -14,9 +14,11 @@ def judge_lost(
     search: SearchDecision,
     was_lost: bool,
     rules: Rules,
+    left: LeftPlaceDecision | None = None,
 ) -> LostDecision:
     """The lost rule's verdict, with this scan counted in `detector` unless it is clutter
-    (`ScoreDecision.continues`)."""
+    (`ScoreDecision.continues`); a scan that takes back the place left behind (`left`, stage 7)
+    counts as accepted, with the share of it ICP from there explains."""
     if score.continues:
         lost = detector.hold()
         return LostDecision(lost, True, False, detector.score, detector.rejections)
@@ -24,6 +26,9 @@ def judge_lost(
     # state only when it explains as much of the scan as the recovery asks of a place it adopts:
     # a wrong place may explain a third of the scan and pass the gate. (Otherwise the recovery
     # ends it; in a symmetric room it cannot choose, and a sound track would stay lost.)
+    if left is not None and left.returned is not None and not was_lost:
+        lost = detector.update(left.returned.inlier_ratio, True)
+        return LostDecision(lost, False, True, detector.score, detector.rejections)
     clears = not was_lost or search.searched or score.score >= rules.recovery.min_inlier_ratio
     counted = correction.accepted and clears
     lost = detector.update(score.score, counted)

@@ -143,16 +143,17 @@ def _fault_confirmed_by(place: Pose, fit: Pose, rules: Rules, cost: Callable[[Po
 def spread_over_pending(
     pose: Pose, covariance: NDArray[np.float64], places: tuple[PendingPlace, ...]
 ) -> NDArray[np.float64]:
-    """The covariance an update reports about `pose` (T_map_base) while `places` are pending: the
+    """The covariance an update reports about `pose` (T_map_base) while `places` are open: the
     track's own `covariance` (3x3 over x, y, yaw: m^2, m rad, rad^2) plus, for each place, its
     offset from `pose` (x, y in metres, yaw wrapped, in radians) times its outer product,
-    weighted 1 / (number of places + 1). A pending place is one the scans have not ruled out (a
-    suspected odometry fault, or a corrupted scan's jump, until the next scan says which): the
+    weighted 1 / (number of places + 1). An open place is one the scans have not ruled out (a
+    rejected jump's place until the next scan confirms or refutes it; the place an adopted
+    odometry fault left behind, until a scan prefers the track to it by the fault cost): the
     robot is there or on the track, as far as the localizer can tell, and the second moment about
     the reported pose of that mixture, each hypothesis weighed alike and spread as the track, is
     this. On fhw the update holding the prediction after a 19-degree fault reported a 2 cm
     deviation 33 cm from the robot. Only what is reported: the track goes on with its own
-    covariance, and the next scan confirms the place or refutes it."""
+    covariance."""
     if not places:
         return covariance
     weight = 1.0 / (len(places) + 1)

@@ -10,7 +10,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._validation import Pose
-from ...se2 import wrap_angle
 from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction, SearchCause, SearchDecision
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
@@ -46,7 +45,7 @@ def search_near_prediction(
 
     Where neither search leaves a place, a scan the update's pose explains far worse than the
     track's recent scans (their costs in the plan's likelihood field, `history`) is swept for an
-    odometry fault (`_fault_search`)."""
+    odometry fault (`_fault_search`), whose place is taken at once."""
     if pending.confirmed is not None:
         return SearchDecision(None, None, pending.confirmed, "", True)
     result, reason = fit.result, fit.reason
@@ -88,12 +87,13 @@ def _fault_search(
 ) -> SearchDecision:
     """`decision`, or, where the heading sweep for an odometry fault
     (`planicp.tracking.odometry_fault.sweep_for_fault`) finds a place of higher posterior than
-    the update's pose (`decision`'s fit when accepted, else the prediction) and ICP from it fits
-    soundly, the same decision with that fit left pending for the next scan to confirm (cause
-    "fault") and a reason that refuses the update's own fit: the update keeps the prediction
-    meanwhile, since the scan prefers the place to the fit by the fault cost. Not while `lost`
-    (the recovery searches then), for a scan that could not be aligned, nor without the posterior
-    refinement (whose likelihood field the sweep climbs)."""
+    the update's pose (`decision`'s fit when accepted, else the prediction) within the fault
+    model and ICP from it fits soundly, that fit taken at once (cause "fault", `searched`: not
+    fused with the prediction, which says nothing after a fault), with the prediction left
+    behind (`SearchDecision.left`) for the next scans to weigh (stage 7): one scan does not tell
+    a fault from a scan turned within the fault window. Not while `lost` (the recovery searches
+    then), for a scan that could not be aligned, nor without the posterior refinement (whose
+    likelihood field the sweep climbs)."""
     if lost or decision.result is None:
         return decision
     current = decision.result.pose if decision.reason == "" else prediction.pose
@@ -111,23 +111,11 @@ def _fault_search(
         place.pose, prediction.pose, motion, rules.refinement, tolerance
     ):
         return replace(decision, fault=sweep)
-    # The scan prefers another place to the fit by the fault cost: either the odometry faulted
-    # and the fit is wrong, or the scan is corrupted and neither is right. The fit is no
-    # evidence either way, so the update keeps the prediction until the next scan decides.
-    reason = (
-        f"the scan fits a place {_distance(prediction.pose, place.pose):.2f} m and "
-        f"{math.degrees(abs(wrap_angle(place.pose[2] - prediction.pose[2]))):.1f} deg from the prediction "
-        f"better than the fit (cost {sweep.cost:.1f} against {sweep.current_cost:.1f}): an odometry fault "
-        "or a corrupted scan, taken if the next scan confirms it"
-    )
-    return replace(
-        decision,
-        cause="fault",
-        found=place,
-        reason=reason,
-        pending=PendingPlace(place.pose, prediction.odom),
-        fault=sweep,
-    )
+    # The scan prefers a place within the fault model to the fit by the fault cost: the posterior's
+    # mode, with the odometry's fault component as its prior. A corrupted scan (turned within the
+    # window) fits such a place too, and then says nothing: the robot is where the odometry puts
+    # it, so the prediction stays a hypothesis (stage 7 weighs it against the next scans).
+    return SearchDecision("fault", place, place, "", True, fault=sweep, left=prediction.pose)
 
 
 def search_cause(
