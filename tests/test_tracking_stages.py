@@ -39,6 +39,7 @@ from planicp.tracking.decisions import (
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
 from planicp.tracking.odometry_fault import CostHistory, FaultSweep, fault_cost, scan_cost
+from planicp.tracking.posterior_refinement import refine_pose
 from planicp.tracking.recovery import Recovery, SearchBudget
 
 # The synthetic office, its drive and scans: the module fixtures of test_localizer.py.
@@ -638,6 +639,46 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     fit = stages.fit_from_prediction(scans[20], good, the_rules, False)
     calm = search_stage(scans[20], good, fit, the_rules, history)
     assert calm.cause is None and calm.fault is None and calm.why == "no search"
+
+
+def test_a_jump_an_odometry_fault_explains_is_taken_at_once_and_a_jump_beyond_it_waits(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # The odometry reported 1 m ahead and 10 degrees of turn, the robot moved 0.4 m straight:
+    # ICP from the prediction finds the true pose, 0.6 m away, beyond the gate.
+    the_rules = rules(plan, refinement=PosteriorRefinement(enabled=True))
+    truth = path[20]
+    predicted = se2.compose(truth, (0.6, 0.0, 10 * DEG))
+    history = _history(scan_cost(scans[20], truth, plan, the_rules.refinement))
+    slipped = Prediction((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), predicted, SMALL, False)
+    fit = stages.fit_from_prediction(scans[20], slipped, the_rules, False)
+    assert fit.result is not None and fit.reason.startswith("correction of 0.60")
+    search = search_stage(scans[20], slipped, fit, the_rules, history)
+    # The place lies where the odometry's step can have left the robot (it slipped), explains the
+    # scan as the track's scans are, and far better than the prediction's surroundings: the
+    # posterior's mode, taken at once, the prediction left behind for the next scans to weigh.
+    assert search.cause == "jump" and search.searched and search.pending is None
+    assert search.left == predicted and search.result is not None
+    assert error(truth, search.result.pose)[0] < 0.01
+    assert search.why.startswith("jump beyond the gate to a place an odometry fault explains: taken")
+    score = stages.judge_score(scans[20], slipped, fit, search, the_rules, False, None)
+    correction = stages.correct(scans[20], slipped, search, score, the_rules)
+    assert correction.accepted and correction.pose == search.result.pose
+    # The same place after no reported motion lies beyond what the step can have done (0.6 m from
+    # where the robot stood, more than the gate's 0.5 m): the jump waits for the next scan.
+    still = Prediction((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), predicted, SMALL, False)
+    waits = search_stage(scans[20], still, fit, the_rules, history)
+    assert waits.cause == "jump" and not waits.searched and waits.left is None and waits.pending is not None
+    assert error(truth, waits.pending.pose)[0] < 0.01
+    # A track whose scans are as poorly explained as the prediction's surroundings explain this
+    # one gives no evidence of a fault (as on a map that drew a wall twice): it waits too.
+    held = refine_pose(scans[20], predicted, plan, ("prediction", predicted, SMALL), the_rules.refinement)
+    poor = _history(held.cost - 0.5 * fault_cost(the_rules.refinement.fault_probability))
+    assert search_stage(scans[20], slipped, fit, the_rules, poor).pending is not None
+    # So it does without the fault component, and before the track has a typical cost.
+    off = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_probability=0.0))
+    assert search_stage(scans[20], slipped, fit, off, history).pending is not None
+    assert search_stage(scans[20], slipped, fit, the_rules).pending is not None
 
 
 def test_a_pending_place_the_scan_prefers_as_a_fault_would_is_confirmed(

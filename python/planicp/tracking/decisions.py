@@ -225,7 +225,8 @@ class SearchDecision:
         fault: the heading sweep for an odometry fault, when it ran (`cause` is "fault" when
             it found a place of higher posterior that ICP fits soundly, taken as `result`); None
             otherwise.
-        left: after a place the fault sweep found was taken, the pose it leaves: the prediction
+        left: after a place the fault sweep found, or a jump's place an odometry fault explains,
+            was taken, the pose it leaves: the prediction
             (T_map_base; were the scan corrupted, it would say nothing, and the robot would be
             where the odometry puts it), which the next scans weigh (stage 7); None otherwise.
     """
@@ -264,6 +265,11 @@ class SearchDecision:
                 "uncertain prediction: the search found a place, taken"
                 if self.found is not None
                 else "uncertain prediction: the search found no place that passes"
+            )
+        if self.searched:
+            return (
+                "jump beyond the gate to a place an odometry fault explains: taken, the prediction left "
+                "behind for the next scans to weigh"
             )
         return f"jump rejected: {self.reason}"
 

@@ -389,7 +389,7 @@ class Localizer:
             score = judge_score(points, prediction, fit, search, rules, was_lost, self._anchor)
             correction = correct(points, prediction, search, score, rules)
             # 7. The place an adopted jump left behind, taken back if this scan prefers it.
-            faulted = search.cause == "fault" and search.searched
+            faulted = search.left is not None  # this update took a place an odometry fault explains
             left = weigh_left_place(
                 points, self._left, odom, correction, rules, was_lost, faulted, prediction.covariance
             )
