@@ -329,6 +329,34 @@ def test_the_recovery_stage_reports_the_place_it_adopts(
     assert idle.action == "clear" and idle.hypotheses == ()
 
 
+def test_a_track_lost_where_the_scans_preferred_the_place_left_behind_is_searched_for_around_that_place(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # The track is 5 m off (a turned scan taken as a fault, then scans that fit nothing soundly);
+    # the place it left behind is where the robot is. The search near the last pose (3 m) is
+    # centred on that place, and finds the robot there.
+    config = RecoveryConfig(search_nodes=None)
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    lost = LostDecision(True, False, False, math.nan, 3)
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    wrong = (path[0][0] + 4.0, path[0][1] - 3.0, path[0][2] + 2.0)
+    prediction = Prediction((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), wrong, SMALL, True)
+
+    def near_places(lost_at: Pose | None) -> tuple[Any, list[Pose]]:
+        recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+        decision = stages.recover(
+            recovery, LostDetector(LostRule()), scans[0], prediction, fit, idle_pose(prediction), lost, lost_at
+        )
+        return decision, [h.pose for h in recovery.hypotheses if h.near]
+
+    decision, near = near_places(path[0])
+    assert decision.lost_at == path[0] and decision.why.startswith("lost where the scans preferred the place left")
+    assert any(error(path[0], p)[0] < 0.05 for p in near)
+    decision, near = near_places(None)
+    assert decision.lost_at is None and decision.why.startswith("lost: the recovery follows")
+    assert not any(error(path[0], p)[0] < 0.5 for p in near)
+
+
 def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

@@ -455,6 +455,10 @@ class RecoveryDecision:
             the places that rival the one on trial.
         on_trial: after this update the pose follows a place adopted before the search of the
             whole plan ended, which goes on (`Estimate.provisional`).
+        lost_at: the pose the localizer lost track at, when it was not the prediction: the place
+            an adopted jump left behind, which the scans since preferred to the track
+            (`LeftPlaceDecision.evidence` above zero); the lost pose coasts from it and the
+            recovery searches around it. None otherwise.
     """
 
     action: RecoveryAction
@@ -462,6 +466,7 @@ class RecoveryDecision:
     covariance: NDArray[np.float64] | None
     hypotheses: tuple[Pose, ...]
     on_trial: bool = False
+    lost_at: Pose | None = None
 
     @property
     def why(self) -> str:
@@ -483,6 +488,11 @@ class RecoveryDecision:
             return "not lost: the recovery is idle"
         if self.action == "coast":
             return "lost, scan too small to align: the recovery's places follow the odometry"
+        if self.lost_at is not None:
+            return (
+                f"lost where the scans preferred the place left behind to the track: the pose coasts from that "
+                f"place, and the recovery searches around it and follows {len(self.hypotheses)} place(s)"
+            )
         return f"lost: the recovery follows {len(self.hypotheses)} place(s)"
 
 

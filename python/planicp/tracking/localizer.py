@@ -395,7 +395,11 @@ class Localizer:
             )
             # 8. Lost or not. 9. While lost, the recovery, which may adopt a place.
             lost = judge_lost(self._detector, score, correction, search, was_lost, rules, left)
-            recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost)
+            # A track lost while the scans preferred the place it left behind: the robot is more
+            # likely there, and the lost pose coasts from it.
+            likelier = left.kept if lost.lost and left.kept is not None and left.evidence > 0.0 else None
+            lost_at = None if likelier is None else likelier.pose
+            recovery = recover(self._recovery, self._detector, points, prediction, fit, correction, lost, lost_at)
             adopted = recovery.adopted
             if lost.lost:
                 self._pending = ()  # the recovery looks for the robot now
@@ -412,6 +416,8 @@ class Localizer:
                 accepted, now_lost = True, False
             else:
                 pose, covariance, result = correction.pose, correction.covariance, search.result
+                if recovery.lost_at is not None:
+                    pose = recovery.lost_at
                 reason = score.reason or correction.refused
                 accepted, now_lost = correction.accepted, lost.lost
             # The place this update leaves, followed while the scans cannot rule it out: the

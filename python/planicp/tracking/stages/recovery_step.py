@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..._validation import Pose
 from ..decisions import Correction, FitDecision, LostDecision, Prediction, RecoveryAction, RecoveryDecision
 from ..lost_rule import LostDetector
 from ..recovery import Recovery
@@ -19,19 +20,24 @@ def recover(
     fit: FitDecision,
     correction: Correction,
     lost: LostDecision,
+    lost_at: Pose | None = None,
 ) -> RecoveryDecision:
     """While lost, one step of the recovery with this scan (when it could be aligned; otherwise
     its places follow the odometry), and the place it adopts, if any: then the lost state ends
     (`detector` is reset). While a place adopted before the whole plan was searched is on trial,
     that search goes on beside the tracked pose (`Recovery.verify`, from the `correction`), and a
-    better place it finds is adopted. Otherwise the recovery forgets its places."""
+    better place it finds is adopted. Otherwise the recovery forgets its places.
+
+    `lost_at`: where the localizer lost track when that is not the prediction (the place an
+    adopted jump left behind, which the scans preferred to the track: `RecoveryDecision.lost_at`);
+    the search near the last pose is then centred there."""
     found = None
     action: RecoveryAction
     if (lost.lost or recovery.on_trial) and not fit.usable:
         recovery.coast(prediction.motion)
         action = "coast"
     elif lost.lost:
-        found = recovery.step(points, prediction.motion, prediction.pose)
+        found = recovery.step(points, prediction.motion, prediction.pose if lost_at is None else lost_at)
         action = "step"
     elif recovery.on_trial:
         found = recovery.verify(points, prediction.motion, correction.pose)
@@ -43,4 +49,6 @@ def recover(
     if found is not None:
         covariance = finite_or(found.result.covariance, prediction.covariance)
         detector.reset()
-    return RecoveryDecision(action, found, covariance, tuple(h.pose for h in recovery.hypotheses), recovery.on_trial)
+    hypotheses = tuple(h.pose for h in recovery.hypotheses)
+    at = lost_at if action == "step" and found is None else None
+    return RecoveryDecision(action, found, covariance, hypotheses, recovery.on_trial, at)
