@@ -157,6 +157,21 @@ def test_the_cost_history_and_the_fault_cost() -> None:
     for _ in range(30):
         history.record(7.0)
     assert history.typical() == 7.0  # only the last twenty count
+    # A cost beyond the typical one by the fault cost (a corrupted scan accepted because no place
+    # explained it better) is no measure of the track's scans: three of them among twenty raise
+    # the median when recorded, and are left out when the fault cost is given.
+    threshold = fault_cost(1e-3)
+    ruled, plain = CostHistory(), CostHistory()
+    for k in range(20):
+        for h, limit in ((ruled, threshold), (plain, math.inf)):
+            if k in (5, 10, 15):
+                h.record(7.0 + threshold + 1.0, (float(k), 0.0, 0.0), limit)
+            h.record(7.0 + 0.1 * k, (float(k), 0.0, 0.0), limit)
+    assert ruled.typical() == pytest.approx(7.95) and plain.typical() == pytest.approx(8.25)
+    # The pose is the last accepted one either way.
+    ruled.record(7.0 + threshold + 1.0, (30.0, 0.0, 0.0), threshold)
+    assert ruled.typical() == pytest.approx(7.95)
+    assert ruled.motion_since((31.0, 0.0, 0.0), (0.5, 0.0, 0.0)) == pytest.approx((1.0, 0.0, 0.0))
     history.clear()
     assert history.typical() is None
     # The steps a fault may lie in: from the last accepted pose's odometry (the updates after it

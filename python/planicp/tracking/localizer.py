@@ -25,7 +25,7 @@ from .icp_result import IcpResult
 from .lost_rule import LostDetector, LostRule
 from .motion_noise import MotionNoise
 from .occlusion_rule import OcclusionFilter, OcclusionRule
-from .odometry_fault import CostHistory, scan_cost
+from .odometry_fault import CostHistory, fault_cost, scan_cost
 from .posterior_refinement import PosteriorRefinement
 from .recovery import Hypothesis, Recovery, RecoveryConfig
 from .relocalize import Relocalization, prepare_search, relocalize
@@ -445,7 +445,7 @@ class Localizer:
                 # Stage 7 costed the corrected pose already when it weighed a followed place.
                 weighed = left.place is not None and pose is correction.pose
                 cost = left.current_cost if weighed else scan_cost(points, pose, self.plan, rules.refinement)
-                self._costs.record(cost, odom)
+                self._costs.record(cost, odom, fault_cost(rules.refinement.fault_probability))
             # The scale check observes the fit from the prediction when it stays where the
             # odometry says the robot is (a plan off in scale explains too little of the scans
             # for the gate long before its fits jump: it is rejected, but in the right place).

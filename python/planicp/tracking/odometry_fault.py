@@ -16,10 +16,11 @@ fault that leaves the pose anywhere near the prediction. Under the fault compone
 `posterior_refinement`), wherever it lies. So a place beyond the Gaussian's reach is more probable
 than the update's own fit when the scan's cost there is lower by more than `F`; that can only
 happen when the fit's cost exceeds the track's typical cost (the median of the last accepted
-updates, `CostHistory`) by `F`, and only then is the sweep run (a few updates in a hundred on the
-real logs, none on most). A place the sweep finds is a fault found only when it also explains
-the scan as the track's scans are (its cost within `F` of the typical one): a place merely less
-bad than the fit is no evidence of where the robot is.
+updates that were not themselves that far above it, `CostHistory`) by `F`, and only then is the
+sweep run (a few updates in a hundred on the real logs, none on most). A place the sweep finds
+is a fault found only when it also explains the scan as the track's scans are (its cost within
+`F` of the typical one): a place merely less bad than the fit is no evidence of where the robot
+is.
 
 The sweep climbs the likelihood field (no prior) from the prediction's position turned by every
 `FAULT_HEADING_STEP` within `fault_heading_window` either way, and then once more, fully, from the
@@ -84,9 +85,15 @@ class CostHistory:
         self._costs: deque[float] = deque(maxlen=HISTORY)
         self._odom: Pose | None = None
 
-    def record(self, cost: float, odom: Pose | None = None) -> None:
-        """Adds the cost at an accepted pose, whose update received the odometry pose `odom`."""
-        self._costs.append(float(cost))
+    def record(self, cost: float, odom: Pose | None = None, threshold: float = math.inf) -> None:
+        """Adds the cost at an accepted pose, whose update received the odometry pose `odom`,
+        unless it exceeds the typical cost by more than `threshold` (the fault cost: a scan far
+        worse explained than the track's, accepted because no place explained it better, says
+        what a corrupted scan costs, not what the track's scans do); the pose is the last
+        accepted one either way."""
+        typical = self.typical()
+        if typical is None or cost <= typical + threshold:
+            self._costs.append(float(cost))
         self._odom = odom
 
     def clear(self) -> None:
