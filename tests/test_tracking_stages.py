@@ -357,6 +357,29 @@ def test_a_track_lost_where_the_scans_preferred_the_place_left_behind_is_searche
     assert not any(error(path[0], p)[0] < 0.5 for p in near)
 
 
+def test_the_search_near_a_lost_robot_covers_the_path_the_odometry_drove_from_where_track_was_lost(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # Lost at path[0] on a scan no place explains (a random cloud): the searches find nothing.
+    # The robot then drives 4 m to path[40] while the pose coasting on a faulted odometry runs 9 m
+    # off. The search near the robot, started again, covers 3 m plus the path driven around where
+    # track was lost, and finds it; around the coasting pose it would not.
+    config = RecoveryConfig(search_nodes=None)  # each search within its update
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+    cloud = np.random.default_rng(3).uniform(-10.0, 10.0, size=(360, 2))
+    assert recovery.step(cloud, (0.0, 0.0, 0.0), path[0]) is None and recovery.hypotheses == []
+    motion = se2.between(path[0], path[40])
+    driven = math.hypot(motion[0], motion[1])
+    assert 3.9 < driven < 4.1 and math.dist(path[0][:2], path[40][:2]) > 3.9
+    coasting = se2.compose(path[40], (9.0, 0.0, 1.2))
+    recovery.step(scans[40], motion, coasting)
+    near = [h.pose for h in recovery.hypotheses if h.near]
+    assert any(error(path[40], p)[0] < 0.05 for p in near), near
+    reach = config.local_radius + driven + 0.5  # the search's square, and ICP's last step from it
+    assert all(abs(p[0] - path[0][0]) <= reach and abs(p[1] - path[0][1]) <= reach for p in near)
+
+
 def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
