@@ -679,6 +679,17 @@ def test_a_scan_far_worse_explained_than_the_tracks_is_swept_for_an_odometry_fau
     narrow = rules(plan, refinement=PosteriorRefinement(enabled=True, fault_heading_window=10 * DEG))
     outside = search_stage(scans[20], prediction, fit, narrow, history)
     assert outside.cause is None and outside.fault is not None and not outside.fault.more_probable
+    assert outside.why.startswith(f"the scan's cost {outside.fault.current_cost:.1f} exceeds the track's typical")
+    # After a search for an uncertain prediction that found nothing, the decision says what the
+    # sweep found too (fhw's 66-degree fault, beyond the window, read "found no place" alone).
+    uncertain = replace(outside, cause="uncertain")
+    assert uncertain.why == (
+        "uncertain prediction: the search found no place that passes; the scan's cost "
+        f"{outside.fault.current_cost:.1f} exceeds the track's typical {outside.fault.typical:.1f} by over "
+        f"{outside.fault.threshold:.1f}: the sweep for an odometry fault found no place better by that "
+        f"(best {outside.fault.cost:.1f})"
+    )
+    assert replace(uncertain, fault=None).why == "uncertain prediction: the search found no place that passes"
     # No sweep before the track has a typical cost, nor without the fault component.
     unknown = search_stage(scans[20], prediction, fit, the_rules)
     assert unknown.cause is None and unknown.fault is None and unknown.pending is None

@@ -246,13 +246,7 @@ class SearchDecision:
         if self.cause is None:
             if self.searched:
                 return "the place a pending jump led to was confirmed"
-            if self.fault is not None:
-                return (
-                    f"the scan's cost {self.fault.current_cost:.1f} exceeds the track's typical "
-                    f"{self.fault.typical:.1f} by over {self.fault.threshold:.1f}: the sweep for an odometry "
-                    f"fault found no place better by that (best {self.fault.cost:.1f})"
-                )
-            return "no search"
+            return "no search" if self.fault is None else self._no_fault_found(self.fault)
         if self.cause == "fault":
             assert self.fault is not None
             return (
@@ -261,17 +255,25 @@ class SearchDecision:
                 "taken, the track's own pose left behind for the next scans to weigh"
             )
         if self.cause == "uncertain":
-            return (
-                "uncertain prediction: the search found a place, taken"
-                if self.found is not None
-                else "uncertain prediction: the search found no place that passes"
-            )
+            if self.found is not None:
+                return "uncertain prediction: the search found a place, taken"
+            found_none = "uncertain prediction: the search found no place that passes"
+            return found_none if self.fault is None else f"{found_none}; {self._no_fault_found(self.fault)}"
         if self.searched:
             return (
                 "jump beyond the gate to a place an odometry fault explains: taken, the prediction left "
                 "behind for the next scans to weigh"
             )
         return f"jump rejected: {self.reason}"
+
+    @staticmethod
+    def _no_fault_found(sweep: FaultSweep) -> str:
+        """What a sweep for an odometry fault that found no more probable place says."""
+        return (
+            f"the scan's cost {sweep.current_cost:.1f} exceeds the track's typical {sweep.typical:.1f} by over "
+            f"{sweep.threshold:.1f}: the sweep for an odometry fault found no place better by that "
+            f"(best {sweep.cost:.1f})"
+        )
 
 
 @dataclass(frozen=True)
