@@ -50,7 +50,7 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, inverse, wrap_angle
-from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement
+from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement, Refinement, refine_pose
 
 FAULT_HEADING_STEP = math.radians(6.0)
 """Radians between the sweep's starting headings: a climb from a heading within a few degrees of
@@ -210,6 +210,43 @@ def sweep_for_fault(
         pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
         cost = scan_cost(points, pose, plan, rule)
     return FaultSweep(pose, cost, current_cost, typical, threshold)
+
+
+@dataclass(frozen=True)
+class MixtureModes:
+    """The two modes the max-mixture motion model weighs for a place beyond the prediction.
+
+    Attributes:
+        faulted: the mode of the scan's likelihood (no prior) a climb from the place reaches:
+            the odometry faulted, and the prediction is no evidence.
+        held: the mode a climb from the prediction reaches under the prediction's Gaussian: it
+            did not.
+        threshold: `F`, what the fault component costs.
+    """
+
+    faulted: Refinement
+    held: Refinement
+    threshold: float
+
+    @property
+    def fault_preferred(self) -> bool:
+        """Whether the faulted mode is the more probable: its cost plus `F` below the held one's."""
+        return self.faulted.cost + self.threshold < self.held.cost
+
+
+def mixture_modes(
+    points: NDArray[np.float64],
+    place: Pose,
+    predicted: Pose,
+    predicted_covariance: NDArray[np.float64],
+    plan: PlanMap,
+    rule: PosteriorRefinement,
+) -> MixtureModes:
+    """The faulted and held modes (see `MixtureModes`) for `place` and the prediction `predicted`
+    (T_map_base) with its 3x3 covariance, in the plan's likelihood field."""
+    faulted = refine_pose(points, place, plan, None, rule)
+    held = refine_pose(points, predicted, plan, ("prediction", predicted, predicted_covariance), rule)
+    return MixtureModes(faulted, held, fault_cost(rule.fault_probability))
 
 
 def within_fault(pose: Pose, predicted: Pose, motion: Pose, rule: PosteriorRefinement, tolerance: float) -> bool:

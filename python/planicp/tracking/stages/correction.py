@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from ..._validation import Pose
 from ..decisions import Correction, Prediction, ScoreDecision, SearchDecision
 from ..degeneracy_rule import fuse_along_weak_axis
-from ..odometry_fault import fault_cost
+from ..odometry_fault import mixture_modes
 from ..posterior_refinement import refine_pose
 from .rules import Rules
 
@@ -69,12 +69,10 @@ def _fault_or_prediction(
     refinement = rules.refinement
     if not refinement.weighs_faults:
         return _refined(points, fit, None, rules)
-    faulted = _refined(points, fit, None, rules)
-    assert faulted.refinement is not None
-    prior = ("prediction", prediction.pose, prediction.covariance)
-    held = refine_pose(points, prediction.pose, rules.plan, prior, refinement)
-    if faulted.refinement.cost + fault_cost(refinement.fault_probability) < held.cost:
-        return faulted
+    modes = mixture_modes(points, fit.pose, prediction.pose, prediction.covariance, rules.plan, refinement)
+    if modes.fault_preferred:
+        return replace(fit, pose=modes.faulted.pose, refinement=modes.faulted)
+    held = modes.held
     return Correction(held.pose, prediction.covariance, True, None, "prediction_mode", refinement=held)
 
 
