@@ -513,6 +513,41 @@ def test_returns_through_walls_are_weighed_over_the_scans_that_confirm_a_place(
     assert recovery._follow(contradicted, through, motion) is None
 
 
+def test_a_place_followed_over_a_turned_step_is_found_within_the_odometry_spread(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A place that followed the odometry over a scan no place explained, on a step whose
+    odometry turned 15 degrees more than the robot, lies beyond what the gate lets ICP correct:
+    the next sound scan's fit from there is refused, and the place is found again by a search
+    within the odometry's spread since it was last fitted, not dropped. The same place fitted on
+    the scan before (no spread) is held to the gate, and a place 1.5 m from the robot, beyond the
+    spread, is dropped."""
+    from dataclasses import replace
+
+    from planicp.tracking.recovery import Hypothesis
+
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    fit = localize(scans[20], plan, path[20], recovery.icp)
+    junk = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[30].shape)
+    x, y, yaw = se2.between(path[20], path[30])
+    recovery.hypotheses = [Hypothesis(path[20], fit, 2, 2 * fit.inlier_ratio, True)]
+    assert not recovery._follow_all(junk, (x, y, yaw + math.radians(15.0)))
+    [coasted] = recovery.hypotheses
+    assert coasted.missed and coasted.spread[2, 2] > 0.0
+    motion = se2.between(path[30], path[40])
+    here = se2.compose(coasted.pose, motion)
+    assert recovery.gate.rejection(localize(scans[40], plan, here, recovery.icp), here) != ""
+    recovery.new_update()
+    followed = recovery._follow(coasted, scans[40], motion)
+    assert followed is not None and followed.streak == 3
+    assert error(followed.pose, path[40])[0] < 0.02 and error(followed.pose, path[40])[1] < math.radians(1.0)
+    assert not followed.missed and not followed.spread.any()
+    # Fitted on the scan before, the same place is held to the gate's one step.
+    assert recovery._follow(replace(coasted, spread=np.zeros((3, 3))), scans[40], motion) is None
+    far = replace(coasted, pose=se2.compose(coasted.pose, (1.5, 0.0, 0.0)))
+    assert recovery._follow(far, scans[40], motion) is None
+
+
 def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked(plan: PlanMap) -> None:
     """`Recovery.beyond_seen` is the upper bound of a prediction interval for the next sound scan's
     share, not mean + 3 deviations: six shares say little about the spread (on fhw, whose odometry
