@@ -80,7 +80,9 @@ corrupted run's scans more than 0.3 m off.
 `junk-draws` gives that share for each odometry draw of `--seeds` (the junk drawn with the same
 seed), per kind of corruption that recurs (one scan in five), its mean over the draws (where one
 draw's outcome turns on a few scans, the mean says more), and the largest over the draws of the
-99th percentile of the time per update.
+99th percentile of the time per update. With `--no-spare-time` the recovery's searches score only
+the nodes of each update (`RecoveryConfig(search_spare_time=None)`): what it finds, and when, is
+then the same on any machine and under any load.
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
 the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
@@ -126,6 +128,7 @@ from planicp import (
     Localizer,
     PlanMap,
     PosteriorRefinement,
+    RecoveryConfig,
     RelocalizationConfig,
     SearchInSteps,
     _core,
@@ -354,12 +357,17 @@ def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
 
 
 def tracked(
-    plan: Any, scans: list[np.ndarray], ref: np.ndarray, odom: np.ndarray, seconds: list[float] | None = None
+    plan: Any,
+    scans: list[np.ndarray],
+    ref: np.ndarray,
+    odom: np.ndarray,
+    seconds: list[float] | None = None,
+    recovery: RecoveryConfig | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 3) poses of a default `Localizer` started at the first reference pose, and the (N, 3)
-    poses it predicted from the odometry before each scan (stage 1, `Prediction.pose`); each
-    update's time in seconds is appended to `seconds` when given."""
-    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])))
+    """(N, 3) poses of a default `Localizer` (but for `recovery`, when given) started at the first
+    reference pose, and the (N, 3) poses it predicted from the odometry before each scan (stage 1,
+    `Prediction.pose`); each update's time in seconds is appended to `seconds` when given."""
+    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), recovery=recovery)
     poses, predicted = [], []
     for s, o in zip(scans, odom):
         start = time.perf_counter()
@@ -416,7 +424,9 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
-def junk_draws_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> None:
+def junk_draws_study(
+    harness: Any, logs: list[str], out: str, seeds: list[int], recovery: RecoveryConfig | None = None
+) -> None:
     kinds = ("turned 30 degrees", "turned 90 degrees", "random clouds")
     print("| log | corruption | " + " | ".join(f"seed {s}" for s in seeds) + " | mean | p99 ms (worst draw) |")
     print("|---|---|" + "---|" * (len(seeds) + 2))
@@ -427,7 +437,8 @@ def junk_draws_study(harness: Any, logs: list[str], out: str, seeds: list[int]) 
             plan, scans, ref, odom = load(harness, name, out, seed)
             for kind in kinds:
                 seconds: list[float] = []
-                est, _ = tracked(plan, corrupted(scans, kind, np.random.default_rng(seed)), ref, odom, seconds)
+                junk = corrupted(scans, kind, np.random.default_rng(seed))
+                est, _ = tracked(plan, junk, ref, odom, seconds, recovery)
                 lost[kind].append(100 * harness.error_metrics(est, ref, 0.3)["lost_frac"])
                 p99[kind].append(1e3 * float(np.quantile(seconds, 0.99)))
         for kind in kinds:
@@ -688,6 +699,11 @@ def main() -> None:
     )
     parser.add_argument("--seed", type=int, default=7, help="reference study: the odometry seed (the harness's is 7)")
     parser.add_argument(
+        "--no-spare-time",
+        action="store_true",
+        help="junk-draws study: RecoveryConfig(search_spare_time=None), the same on any machine",
+    )
+    parser.add_argument(
         "--filter-out",
         default=None,
         help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
@@ -715,7 +731,8 @@ def main() -> None:
         elif args.study == "junk":
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":
-            junk_draws_study(harness, args.logs, out, args.seeds)
+            recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
+            junk_draws_study(harness, args.logs, out, args.seeds, recovery)
         elif args.study == "field":
             field_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":

@@ -548,6 +548,36 @@ def test_a_place_followed_over_a_turned_step_is_found_within_the_odometry_spread
     assert recovery._follow(far, scans[40], motion) is None
 
 
+def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A search that ends an update after its scan finds its places again with the scan of that
+    update. A corrupted one, which none of them explains and no followed place does, tells them
+    not apart: they join the hypotheses moved by the odometry since the search's scan, having
+    missed it, and the next sound scan weighs them. When a followed place explained the scan,
+    the places it does not explain are dropped, as before."""
+    from planicp.tracking.relocalize import SearchRegion
+
+    junk = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[21].shape)
+    for explained in (False, True):
+        recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+        run = recovery._start(scans[20], SearchRegion(path[20], 0.5, math.radians(10.0)))
+        run.move(se2.between(path[20], path[21]), recovery.motion_noise)
+        recovery._follow_all(junk, se2.between(path[20], path[21]))  # no place followed yet
+        recovery._explained = explained
+        recovery.new_update()
+        assert recovery._advance(run, junk, None, whole_plan=False)
+        if explained:
+            assert recovery.hypotheses == []
+            continue
+        [kept] = recovery.hypotheses
+        assert kept.missed and kept.streak == 1 and kept.near and kept.spread[0, 0] > 0.0
+        assert error(kept.pose, path[21])[0] < 0.03
+        assert recovery._follow_all(scans[22], se2.between(path[21], path[22]))
+        [followed] = recovery.hypotheses
+        assert not followed.missed and followed.streak == 2 and error(followed.pose, path[22])[0] < 0.03
+
+
 def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked(plan: PlanMap) -> None:
     """`Recovery.beyond_seen` is the upper bound of a prediction interval for the next sound scan's
     share, not mean + 3 deviations: six shares say little about the spread (on fhw, whose odometry

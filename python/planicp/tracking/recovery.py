@@ -258,6 +258,8 @@ class Recovery:
     # Where the localizer lost track (T_map_base), and the odometry's path length since (metres).
     _lost_at: Pose | None = None
     _travelled: float = 0.0
+    # Whether a place followed (or the tracked one, on trial) explained this update's scan.
+    _explained: bool = False
 
     def step(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose) -> Hypothesis | None:
         """Feeds one scan, the odometry motion since the previous one and the pose the localizer
@@ -322,8 +324,10 @@ class Recovery:
         work on one scan's word (on fhw with one corrupted scan in five, dropping them all kept
         the recovery searching for 98 scans); a place that missed the scan before is dropped, so
         that places the scans keep refuting do not linger. Returns whether the scan was weighed
-        (False: the places followed the odometry over it)."""
+        (False: the places followed the odometry over it); `_explained` says whether some place
+        explained it (for the places a search that ends with this scan finds, `_advance`)."""
         followed = [self._follow(h, scan, motion) for h in self.hypotheses]
+        self._explained = explained_elsewhere or any(f is not None for f in followed)
         if self.hypotheses and not explained_elsewhere and all(f is None for f in followed):
             self.hypotheses = [
                 dataclasses.replace(
@@ -483,7 +487,15 @@ class Recovery:
         """Scores up to `nodes` (None: no limit) of `run`, within the update's time for it
         (`SearchBudget.seconds`, or `seconds` of the update's spare time), drawn from the update's
         budget; when the search ends, its places, found again with the current `scan`
-        (`_found_again`), join the hypotheses. Returns whether it ended."""
+        (`_found_again`), join the hypotheses. Returns whether it ended.
+
+        A scan that none of the places explains, nor any place followed (`_explained`), tells
+        them not apart, as `_follow_all` weighs it: the places then join the hypotheses moved by
+        the odometry since the search's scan, having missed this one (`Hypothesis.missed`, with
+        that motion's covariance as their `spread`), rather than end the search's work on one
+        scan's word (on fhw with one scan in five turned by 30 degrees, a search near the lost
+        robot ended on a turned scan; its places were dropped and the search started again over
+        a region grown by 9 m of driving)."""
         if seconds is None:
             seconds = self.budget.seconds(whole_plan=whole_plan)
         if (nodes is not None and nodes <= 0) or seconds == 0.0:
@@ -494,6 +506,7 @@ class Recovery:
         if search is None:
             return False
         near = run.steps.region is not None
+        unexplained: list[Hypothesis] = []
         for c in search.candidates:
             if c.inlier_ratio < self.config.min_inlier_ratio:
                 continue
@@ -501,10 +514,18 @@ class Recovery:
             if beyond > self.beyond_limit:
                 continue
             found = self._found_again(scan, c, run.since, run.spread, near=near)
-            if found is not None:
-                found = dataclasses.replace(found, beyond=beyond)
-            if found is not None and not any(_same(found.pose, h.pose) for h in self.hypotheses):
+            if found is None:
+                here = compose(c.pose, run.since)
+                unexplained.append(Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, True, run.spread.copy()))
+                continue
+            found = dataclasses.replace(found, beyond=beyond)
+            self._explained = True
+            if not any(_same(found.pose, h.pose) for h in self.hypotheses):
                 self.hypotheses.append(found)
+        if not self._explained:
+            for h in unexplained:
+                if not any(_same(h.pose, other.pose) for other in self.hypotheses):
+                    self.hypotheses.append(h)
         return True
 
     def _found_again(
