@@ -12,17 +12,20 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    `SearchInSteps`) and a search runs over as many updates as it needs: an update never stalls.
    Every distinct candidate of a search that explains at least `min_inlier_ratio` of its scan,
    moved with the odometry since that scan and aligned again, becomes a hypothesis when the
-   search ends. The search near the pose starts again, around the pose and with the scan of
+   search ends (moved only, when the scan of that update is explained by none of them nor by any
+   place followed). The search near the pose starts again, around the pose and with the scan of
    that update, while none of its places is followed.
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
-   prediction). A hypothesis whose fit explains less than `min_inlier_ratio` of the scan, or needs
-   a correction beyond the acceptance gate, is dropped; so is one whose mean inlier ratio over the
-   scans it has explained falls more than `margin` below the best hypothesis's, and one through
-   whose walls more of those scans' returns pass, on average, than `Recovery.beyond_limit` allows
-   (`max_beyond`, or what soundly tracked scans showed, when more; a candidate of the search, on
-   its one scan). A scan that no hypothesis explains tells none of them from another (a corrupted
-   scan, or one the plan does not show): the hypotheses follow the odometry over it, unless they
-   missed the scan before too (`_follow_all`).
+   prediction; for one that followed the odometry over scans it was not fitted to, a search
+   within the odometry's spread since where ICP fails). A hypothesis whose fit explains less than
+   `min_inlier_ratio` of the scan, or needs a correction beyond the acceptance gate, is dropped;
+   so is one whose mean inlier ratio over the scans it has explained falls more than `margin`
+   below the best hypothesis's, and one through whose walls more of those scans' returns pass,
+   on average, than `Recovery.beyond_limit` allows (`max_beyond`, or what soundly tracked scans
+   showed, when more; a candidate of the search, on its one scan). A scan that no hypothesis
+   explains tells none of them from another (a corrupted scan, or one the plan does not show):
+   the hypotheses follow the odometry over it, unless they missed the scan before too
+   (`_follow_all`).
 3. When both searches have ended and a single hypothesis has survived `confirmations` scans in a
    row, it is adopted. While several survive (a symmetric building), none is: the localizer stays
    lost and says so. When all are dropped, a new pair of searches starts.
