@@ -60,7 +60,9 @@ defaults (on these map_server maps: pairs through the nearest-wall index's masks
 view cast from the prediction (`IcpConfig.for_tracking(correspondence_search="kd_tree")`, what a
 drawn plan gets), on the harness's plan and on two noisier ones drawn from the same scans (every
 cell one end point falls in; 10 cm cells), and gives the mean ATE, the mean share of scans more
-than 0.3 m off and the worst draw's. `seeds --search kd_tree` tracks with the cast too.
+than 0.3 m off and the worst draw's. `seeds --search kd_tree` tracks with the cast too;
+`seeds --odometry-noise 3` from odometry whose Gaussian noise (not its drift) is three times the
+harness's.
 `log-odometry` tracks each log from its own odometry (the robot's wheels, not the harness's
 synthetic drift), as `planicp evaluate-log --odometry log` does, on the harness's scan sets and the
 swapped and reversed ones, with the masks and with the cast.
@@ -160,11 +162,13 @@ def load(
     scan_set: str = "harness",
     resolution: float = 0.05,
     min_hits: int = 2,
+    noise_scale: float = 1.0,
 ) -> tuple[Any, list[np.ndarray], np.ndarray, np.ndarray]:
     """(plan image, tracked scans, their reference poses, their odometry poses), as the harness
     makes them (its odometry drawn with `seed`; the harness's own is 7; its plan's cells of
-    `resolution` metres occupied where `min_hits` end points fall), or on another `scan_set` (see
-    the module: "swapped", "reversed")."""
+    `resolution` metres occupied where `min_hits` end points fall; its odometry's Gaussian noise,
+    not its drift, times `noise_scale`), or on another `scan_set` (see the module: "swapped",
+    "reversed")."""
     log = harness.read_carmen_log(log_path(harness, name))
     mapped, tracked = np.arange(0, len(log.scans), 2), np.arange(1, len(log.scans), 2)
     if scan_set == "swapped":
@@ -178,8 +182,18 @@ def load(
         tracked, stamps = tracked[::-1], stamps[-1] - stamps[::-1]
     scans = [log.scans[i] for i in tracked]
     ref = log.poses[tracked]
-    _, odom = harness.synthesize_odometry(ref, stamps, np.random.default_rng(seed))
+    noise = {} if noise_scale == 1.0 else _odometry_noise(harness, noise_scale)
+    _, odom = harness.synthesize_odometry(ref, stamps, np.random.default_rng(seed), **noise)
     return plan, scans, ref, odom
+
+
+def _odometry_noise(harness: Any, scale: float) -> dict[str, float]:
+    """The harness's `synthesize_odometry` noise arguments (not its drift) times `scale`."""
+    import inspect
+
+    defaults = inspect.signature(harness.synthesize_odometry).parameters
+    names = ("trans_noise", "rot_noise_per_rad", "rot_noise_per_m")
+    return {n: scale * float(defaults[n].default) for n in names}
 
 
 def search_study(harness: Any, logs: list[str], out: str) -> None:
@@ -277,14 +291,16 @@ def field_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> No
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
-def seeds_study(harness: Any, logs: list[str], out: str, seeds: list[int], search: str | None = None) -> None:
+def seeds_study(
+    harness: Any, logs: list[str], out: str, seeds: list[int], search: str | None = None, noise_scale: float = 1.0
+) -> None:
     print("| log | " + " | ".join(f"seed {s}" for s in seeds) + " | mean lost |")
     print("|---|" + "---|" * (len(seeds) + 1))
     config = None if search is None else IcpConfig.for_tracking(correspondence_search=search)
     for name in logs:
         cells, lost = [], []
         for seed in seeds:
-            m, _ = track(harness, *load(harness, name, out, seed), config)
+            m, _ = track(harness, *load(harness, name, out, seed, noise_scale=noise_scale), config)
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
@@ -699,6 +715,12 @@ def main() -> None:
     )
     parser.add_argument("--seed", type=int, default=7, help="reference study: the odometry seed (the harness's is 7)")
     parser.add_argument(
+        "--odometry-noise",
+        type=float,
+        default=1.0,
+        help="seeds study: the harness's odometry noise (not its drift) times this",
+    )
+    parser.add_argument(
         "--no-spare-time",
         action="store_true",
         help="junk-draws study: RecoveryConfig(search_spare_time=None), the same on any machine",
@@ -717,7 +739,7 @@ def main() -> None:
     print(f"planicp {planicp.__version__}")
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
-            seeds_study(harness, args.logs, out, args.seeds, args.search)
+            seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise)
         elif args.study == "slam-visibility":
             slam_visibility_study(harness, args.logs, out, args.seeds)
         elif args.study == "log-odometry":
