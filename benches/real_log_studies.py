@@ -84,7 +84,7 @@ seed), per kind of corruption that recurs (one scan in five), its mean over the 
 draw's outcome turns on a few scans, the mean says more), and the largest over the draws of the
 99th percentile of the time per update. With `--no-spare-time` the recovery's searches score only
 the nodes of each update (`RecoveryConfig(search_spare_time=None)`): what it finds, and when, is
-then the same on any machine and under any load.
+then the same on any machine and under any load (`faults --no-spare-time` likewise).
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
 the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
@@ -254,12 +254,13 @@ def track(
     config: IcpConfig | None = None,
     refinement: PosteriorRefinement | None = None,
     plan_map: PlanMap | None = None,
+    recovery: RecoveryConfig | None = None,
 ) -> tuple[dict[str, float], list[float]]:
     """The harness's error metrics (0.3 m for lost) of a `Localizer` started at the first reference
     pose (on `plan_map`, default the plan image read as a user reads it), and the seconds each
     update took."""
     pm = plan_map or PlanMap.from_ros_map(plan.yaml_path)
-    loc = Localizer(pm, tuple(map(float, ref[0])), config, refinement=refinement)
+    loc = Localizer(pm, tuple(map(float, ref[0])), config, refinement=refinement, recovery=recovery)
     loc.update(scans[0], tuple(map(float, odom[0])))
     est, spent = [ref[0]], []
     for k in range(1, len(scans)):
@@ -463,9 +464,15 @@ def junk_draws_study(
 
 
 def refinement_study(
-    harness: Any, logs: list[str], out: str, seeds: list[int], without: PosteriorRefinement | None = None
+    harness: Any,
+    logs: list[str],
+    out: str,
+    seeds: list[int],
+    without: PosteriorRefinement | None = None,
+    recovery: RecoveryConfig | None = None,
 ) -> None:
-    """Each log and seed tracked with `without` (default: no refinement) and with the defaults."""
+    """Each log and seed tracked with `without` (default: no refinement) and with the defaults
+    (but for `recovery`, in both, when given)."""
     print("| log | seed | without: ATE, lost | with (the default): ATE, lost |")
     print("|---|---|---|---|")
     for name in logs:
@@ -473,7 +480,7 @@ def refinement_study(
             data = load(harness, name, out, seed)
             cells = []
             for rule in (without or PosteriorRefinement(enabled=False), PosteriorRefinement()):
-                m, _ = track(harness, *data, refinement=rule)
+                m, _ = track(harness, *data, refinement=rule, recovery=recovery)
                 cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             print(f"| {name} | {seed} | " + " | ".join(cells) + " |", flush=True)
 
@@ -723,7 +730,7 @@ def main() -> None:
     parser.add_argument(
         "--no-spare-time",
         action="store_true",
-        help="junk-draws study: RecoveryConfig(search_spare_time=None), the same on any machine",
+        help="junk-draws and faults studies: RecoveryConfig(search_spare_time=None), the same on any machine",
     )
     parser.add_argument(
         "--filter-out",
@@ -737,6 +744,7 @@ def main() -> None:
     harness = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(harness)
     print(f"planicp {planicp.__version__}")
+    recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise)
@@ -753,14 +761,13 @@ def main() -> None:
         elif args.study == "junk":
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":
-            recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
             junk_draws_study(harness, args.logs, out, args.seeds, recovery)
         elif args.study == "field":
             field_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":
             refinement_study(harness, args.logs, out, args.seeds)
         elif args.study == "faults":
-            refinement_study(harness, args.logs, out, args.seeds, PosteriorRefinement(fault_probability=0.0))
+            refinement_study(harness, args.logs, out, args.seeds, PosteriorRefinement(fault_probability=0.0), recovery)
         elif args.study == "nees":
             nees_study(harness, args.logs, out)
         elif args.study == "alignments":
