@@ -12,6 +12,10 @@ centimetres over all drives, then the defaults' RMS as a multiple of the empty f
 and over all of them.
 
     python benches/crowd.py [--seeds 1 2 3 4 5] [--people 0 10 20 25 30 40] [--workers 2]
+
+With `--no-spare-time` every variant's recovery scores only the nodes of each update
+(`RecoveryConfig(search_spare_time=None)`): where a variant loses track, what it ends at is then
+the same on any machine and under any load.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planicp import FusionRule, IcpConfig, Localizer
+from planicp import FusionRule, IcpConfig, Localizer, RecoveryConfig
 from planicp.plans.default_plan import load_default_plan
 from planicp.sim.crowd import Crowd, crowded_scans
 from planicp.sim.experiment import ExperimentConfig, run_experiment
@@ -41,15 +45,17 @@ VARIANTS: dict[str, dict[str, Any]] = {
 }
 
 
-def errors_of(seed: int, people: int) -> tuple[float, dict[str, NDArray[np.float64]]]:
-    """(mean blocked share, {variant: position errors in metres}) for one drive and crowd size."""
+def errors_of(seed: int, people: int, no_spare_time: bool = False) -> tuple[float, dict[str, NDArray[np.float64]]]:
+    """(mean blocked share, {variant: position errors in metres}) for one drive and crowd size
+    (`no_spare_time`: the recovery's searches held to their nodes)."""
     plan = load_default_plan()
     config = ExperimentConfig(duration_s=30.0, seed=seed, furnishing=Furnishing(0, 0, 0, 0))
     recording, world = run_experiment(plan, config)
     scans, blocked = crowded_scans(recording, world.floor, config.lidar, Crowd(people), seed=seed)
     out = {}
     for name, options in VARIANTS.items():
-        localizer = Localizer(plan, tuple(recording.truth[0]), **options)
+        recovery = RecoveryConfig(search_spare_time=None) if no_spare_time else None
+        localizer = Localizer(plan, tuple(recording.truth[0]), recovery=recovery, **options)
         poses = np.array([localizer.update(s, tuple(o)).pose for s, o in zip(scans, recording.odometry_in_odom)])
         out[name] = np.hypot(*(poses[:, :2] - recording.truth[:, :2]).T)
     return float(np.mean(blocked)), out
@@ -60,10 +66,14 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4, 5], help="one 30 s drive per seed")
     parser.add_argument("--people", type=int, nargs="+", default=[0, 10, 20, 25, 30, 40])
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    parser.add_argument(
+        "--no-spare-time", action="store_true", help="RecoveryConfig(search_spare_time=None): the same on any machine"
+    )
     args = parser.parse_args()
     jobs = [(seed, people) for people in args.people for seed in args.seeds]
     with ProcessPoolExecutor(args.workers) as pool:
-        results = dict(zip(jobs, pool.map(errors_of, *zip(*jobs))))
+        spare = [args.no_spare_time] * len(jobs)
+        results = dict(zip(jobs, pool.map(errors_of, *zip(*jobs), spare)))
     print(f"{'people':>6s} {'blocked':>8s}  " + "  ".join(f"{name:>22s}" for name in VARIANTS))
     rms: dict[tuple[int, int], float] = {}
     for people in args.people:
