@@ -114,6 +114,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import inspect
 import math
 import os
 import sys
@@ -189,8 +190,6 @@ def load(
 
 def _odometry_noise(harness: Any, scale: float) -> dict[str, float]:
     """The harness's `synthesize_odometry` noise arguments (not its drift) times `scale`."""
-    import inspect
-
     defaults = inspect.signature(harness.synthesize_odometry).parameters
     names = ("trans_noise", "rot_noise_per_rad", "rot_noise_per_m")
     return {n: scale * float(defaults[n].default) for n in names}

@@ -519,7 +519,9 @@ class Recovery:
             found = self._found_again(scan, c, run.since, run.spread, near=near)
             if found is None:
                 here = compose(c.pose, run.since)
-                unexplained.append(Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, True, run.spread.copy()))
+                unexplained.append(
+                    Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, missed=True, spread=run.spread.copy())
+                )
                 continue
             found = dataclasses.replace(found, beyond=beyond)
             self._explained = True
