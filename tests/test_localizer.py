@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, localize, se2
+from planicp import AcceptanceGate, FusionRule, IcpConfig, Localizer, PlanMap, localize, relocalize, se2
 from planicp import sim as syn
 from planicp.tracking.fusion_rule import finite_covariance
 from planicp.tracking.recovery import Recovery, RecoveryConfig
@@ -576,6 +576,39 @@ def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
         assert recovery._follow_all(scans[22], se2.between(path[21], path[22]))
         [followed] = recovery.hypotheses
         assert not followed.missed and followed.streak == 2 and error(followed.pose, path[22])[0] < 0.03
+
+
+def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """Lost at a pose whose heading was 40 degrees off, then driven 4 m by sound odometry, the
+    robot is where the drive turned by that error puts it, 2.7 m from where the odometry does.
+    The search near it covers every heading, at each the drive turned by the heading's error
+    within `local_radius` plus the drive's spread: it finds the robot there, scoring fewer nodes
+    than the disk of the path's length around the lost pose (the search before)."""
+    from planicp.tracking.relocalize import SearchRegion
+
+    recovery = Recovery(plan, RecoveryConfig(local_radius=0.5), IcpConfig.for_tracking(), AcceptanceGate())
+    lost_at = (path[0][0], path[0][1], path[0][2] + math.radians(40.0))
+    recovery._lost_at = lost_at
+    for a, b in zip(path[:-1], path[1:]):
+        recovery._drive(se2.between(a, b))
+    coasted = se2.compose(lost_at, recovery._driven)
+    assert error(coasted, path[40])[0] > 2.0
+    region = recovery._near_region(lost_at)
+    assert region.lever != (0.0, 0.0) and region.radius < 0.5 + recovery._travelled - 2.0
+    ring = relocalize(scans[40], plan, region=region, config=recovery.config.search)
+    assert ring.best is not None and error(ring.best.pose, path[40])[0] < 0.05, ring.best
+    disk = relocalize(
+        scans[40], plan, region=SearchRegion(lost_at, 0.5 + recovery._travelled), config=recovery.config.search
+    )
+    assert ring.nodes < disk.nodes / 2
+    # Turned in place, the path is shorter than the spread's reach: the disk of its length.
+    recovery.clear()
+    recovery._lost_at = lost_at
+    recovery._drive((0.0, 0.0, 1.0))
+    near = recovery._near_region(lost_at)
+    assert near.lever == (0.0, 0.0) and near.radius == 0.5 and near.center == lost_at
 
 
 def test_the_limit_on_returns_through_walls_is_wide_while_few_scans_were_tracked(plan: PlanMap) -> None:

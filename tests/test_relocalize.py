@@ -219,6 +219,31 @@ def test_a_region_resolves_the_symmetry_and_stays_inside() -> None:
     assert found.nodes < whole.nodes
 
 
+def test_a_region_with_a_lever_finds_a_robot_whose_heading_broke(office: tuple[PlanMap, Simulator]) -> None:
+    # Lost at `lost` heading 0, the odometry drove 6 m ahead and turned 0.3 rad; the heading was
+    # 50 degrees off at the start, so the robot is at lost + R(50 deg) (6, 0), heading 50 deg +
+    # 0.3. A 0.5 m region with that lever finds it; its candidates stay in their headings' squares.
+    plan, sim = office
+    lost, turn = (20.0, 5.0, 0.0), math.radians(50.0)
+    truth = (lost[0] + 6.0 * math.cos(turn), lost[1] + 6.0 * math.sin(turn), turn + 0.3)
+    scan = sim.scan(truth, seed=8)
+    region = SearchRegion((lost[0], lost[1], 0.3), radius=0.5, lever=(6.0, 0.0))
+    found = relocalize(scan, plan, region=region)
+    assert found.best is not None and _close(found.best.pose, truth), found
+    for c in found.candidates:
+        x, y, yaw = c.search_pose
+        d = yaw - 0.3
+        assert abs(x - lost[0] - 6.0 * math.cos(d)) <= 0.55 and abs(y - lost[1] - 6.0 * math.sin(d)) <= 0.55, c
+    # Without the lever the 0.5 m squares are around the lost pose, 6 m from the robot.
+    near = relocalize(scan, plan, region=SearchRegion((lost[0], lost[1], 0.3), radius=0.5))
+    assert all(not _close(c.pose, truth, 1.0, 0.5) for c in near.candidates), near
+    for bad in [(1.0,), (math.nan, 0.0), 3.0]:
+        with pytest.raises(ValueError, match="lever"):
+            SearchRegion(lost, lever=bad)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="lever x"):
+        SearchRegion(lost, lever=("a", 0.0))  # type: ignore[arg-type]
+
+
 def test_max_candidates_and_config(office: tuple[PlanMap, Simulator]) -> None:
     plan, sim = office
     scan = sim.scan((20.0, 5.0, -2.0), seed=6)

@@ -311,7 +311,7 @@ class GlobalMatcher:
     def levels(self) -> int: ...
     def score_at(self, scan: NDArray[np.float64], pose: tuple[float, float, float]) -> float: ...
     def start(
-        self, scan: NDArray[np.float64], window: tuple[float, float, float, float, float] | None
+        self, scan: NDArray[np.float64], window: tuple[float, float, float, float, float, float, float] | None
     ) -> SearchRun: ...
 
 @final
@@ -364,7 +364,7 @@ class Relocalization:
 def relocalize(
     matcher: GlobalMatcher,
     scan: NDArray[np.float64],
-    window: tuple[float, float, float, float, float] | None,
+    window: tuple[float, float, float, float, float, float, float] | None,
     settings: IcpSettings,
     max_candidates: int,
     ambiguity_margin: float,

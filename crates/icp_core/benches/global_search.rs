@@ -53,7 +53,7 @@ fn benches(c: &mut Criterion) {
     g.bench_function("search_whole_plan", |b| {
         b.iter(|| matcher.search(black_box(&scan), None, cancel::NEVER).unwrap())
     });
-    let window = SearchWindow { center: Pose2::new(6.5, 4.6, 1.4), half_width: 1.0, half_angle: 0.35 };
+    let window = SearchWindow::new(Pose2::new(6.5, 4.6, 1.4), 1.0, 0.35);
     g.bench_function("search_window_1m_20deg", |b| {
         b.iter(|| matcher.search(black_box(&scan), Some(&window), cancel::NEVER).unwrap())
     });

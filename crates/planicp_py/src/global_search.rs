@@ -23,13 +23,16 @@ fn tuple(p: Pose2) -> PoseTuple {
     (p.x, p.y, p.yaw)
 }
 
-/// A search window as (x, y, yaw, half_width, half_angle): metres and radians.
-fn window_from(w: Option<(f64, f64, f64, f64, f64)>) -> Option<SearchWindow> {
+/// A search window as (x, y, yaw, half_width, half_angle, lever_x, lever_y): metres and radians.
+type WindowTuple = (f64, f64, f64, f64, f64, f64, f64);
+
+fn window_from(w: Option<WindowTuple>) -> Option<SearchWindow> {
     // The yaw as given; the core checks finiteness (Pose2::new would turn NaN into NaN anyway).
-    w.map(|(x, y, yaw, half_width, half_angle)| SearchWindow {
+    w.map(|(x, y, yaw, half_width, half_angle, lx, ly)| SearchWindow {
         center: Pose2 { x, y, yaw },
         half_width,
         half_angle,
+        lever: [lx, ly],
     })
 }
 
@@ -101,13 +104,10 @@ impl GlobalMatcher {
     }
 
     /// A search of scan points (N, 2, robot frame, metres) over the whole plan, or within
-    /// `window` (x, y, yaw, half_width, half_angle), that has scored no node yet: see `SearchRun`.
+    /// `window` (x, y, yaw, half_width, half_angle, lever_x, lever_y), that has scored no node
+    /// yet: see `SearchRun`.
     #[pyo3(signature = (scan, window))]
-    fn start(
-        &self,
-        scan: PyReadonlyArray2<'_, f64>,
-        window: Option<(f64, f64, f64, f64, f64)>,
-    ) -> PyResult<SearchRun> {
+    fn start(&self, scan: PyReadonlyArray2<'_, f64>, window: Option<WindowTuple>) -> PyResult<SearchRun> {
         let pts = points_from("scan points", &scan)?;
         let window = window_from(window);
         let run = guarded(|| self.inner.start(&pts, window.as_ref()))?;
@@ -227,14 +227,15 @@ pub struct Relocalization {
 }
 
 /// Global relocalization of scan points (N, 2, robot frame, metres) on the matcher's plan: over
-/// the whole plan, or within `window` (x, y, yaw, half_width, half_angle). Releases the GIL.
+/// the whole plan, or within `window` (x, y, yaw, half_width, half_angle, lever_x, lever_y).
+/// Releases the GIL.
 #[pyfunction]
 #[pyo3(signature = (matcher, scan, window, settings, max_candidates, ambiguity_margin))]
 pub fn relocalize(
     py: Python<'_>,
     matcher: &GlobalMatcher,
     scan: PyReadonlyArray2<'_, f64>,
-    window: Option<(f64, f64, f64, f64, f64)>,
+    window: Option<WindowTuple>,
     settings: &IcpSettings,
     max_candidates: usize,
     ambiguity_margin: f64,

@@ -3,13 +3,13 @@
 While the `Localizer` is lost, every scan goes to a `Recovery`:
 
 1. Without hypotheses, two searches start side by side (`_search`): one around the pose where
-   the localizer lost track (within `local_radius` plus the odometry's path length since, any
-   heading: a slip or a bad odometry step; the odometry's heading may be what broke, its
-   distance bounds where the robot went) and one of the whole plan (`relocalize`: the robot was
-   carried elsewhere). A search takes up to seconds on a large plan,
-   so all the searches of an update score at most `search_nodes` of their branch and bound
-   together (`SearchBudget`, half of it kept for the whole plan's search while it runs,
-   `SearchInSteps`) and a search runs over as many updates as it needs: an update never stalls.
+   the localizer lost track (a slip or a bad odometry step: any heading, and at each the drive
+   since turned by that heading's error, within `local_radius` plus the drive's spread,
+   `_near_region`) and one of the whole plan (`relocalize`: the robot was carried elsewhere). A
+   search takes up to seconds on a large plan, so all the searches of an update score at most
+   `search_nodes` of their branch and bound together (`SearchBudget`, half of it kept for the
+   whole plan's search while it runs, `SearchInSteps`) and a search runs over as many updates as
+   it needs: an update never stalls.
    Every distinct candidate of a search that explains at least `min_inlier_ratio` of its scan,
    moved with the odometry since that scan and aligned again, becomes a hypothesis when the
    search ends (moved only, when the scan of that update is explained by none of them nor by any
@@ -84,7 +84,9 @@ class RecoveryConfig(Settings):
         margin: a hypothesis whose mean inlier ratio is more than this below the best's is
             dropped; closer ones are rivals and keep the localizer from choosing (0..1).
         local_radius: metres around the pose where the localizer lost track searched before the
-            whole plan, plus the odometry's path length since (0: none).
+            whole plan, at each heading around where the odometry's drive since, turned by that
+            heading's error, ends, plus the drive's spread (or around the pose itself plus the
+            path length since, when that is less; `Recovery._near_region`) (0: none).
         max_beyond: largest share of a scan's returns that may lie beyond the walls a
             hypothesis's place shows (a beam does not pass a wall) for it to be kept, on average
             over the scans it has explained, in (0, 1] (1: no check). In a crowd most returns are
@@ -258,9 +260,12 @@ class Recovery:
     _trial: bool = False
     budget: SearchBudget = field(default_factory=lambda: SearchBudget(None))
     _incumbent: deque[float] = field(default_factory=lambda: deque(maxlen=1000))
-    # Where the localizer lost track (T_map_base), and the odometry's path length since (metres).
+    # Where the localizer lost track (T_map_base), and the odometry since: its path length
+    # (metres), its motion (in the frame of the pose lost at) and that motion's covariance.
     _lost_at: Pose | None = None
     _travelled: float = 0.0
+    _driven: Pose = (0.0, 0.0, 0.0)
+    _driven_spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
     # Whether a place followed (or the tracked one, on trial) explained this update's scan.
     _explained: bool = False
 
@@ -274,7 +279,7 @@ class Recovery:
         if self._lost_at is None:
             self._lost_at = last_pose
         else:
-            self._travelled += math.hypot(motion[0], motion[1])
+            self._drive(motion)
         followed = bool(self.hypotheses)
         self._follow_all(scan, motion)
         # When the last hypotheses are dropped, the next scan searches again.
@@ -397,7 +402,7 @@ class Recovery:
             )
             for h in self.hypotheses
         ]
-        self._travelled += math.hypot(motion[0], motion[1])
+        self._drive(motion)
         for run in (self._near, self._whole):
             if run is not None:
                 run.move(motion, self.motion_noise)
@@ -407,6 +412,13 @@ class Recovery:
         self.hypotheses = []
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
         self._lost_at, self._travelled = None, 0.0
+        self._driven, self._driven_spread = (0.0, 0.0, 0.0), np.zeros((3, 3))
+
+    def _drive(self, motion: Pose) -> None:
+        """The odometry moved the lost robot by `motion` since the last update."""
+        self._travelled += math.hypot(motion[0], motion[1])
+        self._driven_spread = self.motion_noise.propagate_checked(self._driven_spread, self._driven, motion)
+        self._driven = compose(self._driven, motion)
 
     @property
     def searching(self) -> bool:
@@ -415,9 +427,10 @@ class Recovery:
 
     def _search(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose, near: bool = True) -> None:
         """One update's share of the search cycle: two searches run side by side, one around
-        the pose where the localizer lost track (`last_pose` at the first lost update), within
-        `local_radius` plus the odometry's path length since, any heading (a slip or a bad
-        odometry step), and one of the whole plan (the robot was carried elsewhere). The search
+        the pose where the localizer lost track (`last_pose` at the first lost update), any
+        heading, at each the odometry's drive since turned by the heading's error, within
+        `local_radius` plus the drive's spread (a slip or a bad odometry step, `_near_region`),
+        and one of the whole plan (the robot was carried elsewhere). The search
         near the pose is not centred on the pose coasting on the odometry: after a fault beyond
         the sweep's window (fhw, 66 degrees) that pose runs off at the faulted heading, 2.5 m a
         scan, and a search that started on a corrupted scan and found nothing started again
@@ -425,8 +438,8 @@ class Recovery:
         search near the pose has the first claim on the update's budget but for the half reserved
         to the whole plan's search while that runs (`SearchBudget.reserved`, which the searches
         around the prediction cannot take either); when it ends and none of its places is
-        followed, it starts again with the scan of that update, over the region grown by the path
-        since (a search that ended updates after its scan may find nothing where the robot is
+        followed, it starts again with the scan of that update, over the region the drive since
+        gives (a search that ended updates after its scan may find nothing where the robot is
         now). When the whole plan's search ends, the cycle ends. The
         places a search that ends found, followed with the odometry since its scan, join the
         hypotheses. With `near=False` (a place on trial) only the whole plan's search goes on."""
@@ -438,8 +451,7 @@ class Recovery:
                 if run is not None:
                     run.move(motion, self.motion_noise)
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
-            center = last_pose if self._lost_at is None else self._lost_at
-            self._near = self._start(scan, SearchRegion(center, self.config.local_radius + self._travelled, math.pi))
+            self._near = self._start(scan, self._near_region(last_pose if self._lost_at is None else self._lost_at))
         if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
             self._near = None
         if self._whole is not None and self._advance(self._whole, scan, self.budget.left, whole_plan=True):
@@ -460,6 +472,28 @@ class Recovery:
             and self._advance(self._whole, scan, None, whole_plan=True, seconds=spare)
         ):
             self._end_cycle()
+
+    def _near_region(self, lost_at: Pose) -> SearchRegion:
+        """Where the robot may be now, lost at `lost_at` (T_map_base) and driven by the odometry
+        since (`_driven`, with the covariance `_driven_spread`), when what broke is the odometry's
+        heading (a slip, a bad step) before or at that pose: any heading, and at each the drive
+        turned by the heading's error, within `local_radius` (the slip's own displacement) plus
+        `sqrt(CHI2_3_999)` standard deviations of the drive's spread; or anywhere within
+        `local_radius` plus the path length since, when that is the smaller reach (a short drive).
+        A heading fault moves the robot along a ring around the lost pose, not within the disk
+        of its path length: after 20 m of driving at fhw's 2 m a scan, the ring's squares hold a
+        fraction of the disk's positions, and the search ends in as many updates as one begun
+        where track was lost."""
+        base = self.config.local_radius
+        reach = math.sqrt(CHI2_3_999) * largest_position_std(self._driven_spread)
+        if reach >= self._travelled:
+            return SearchRegion(lost_at, base + self._travelled, math.pi)
+        x, y, yaw = lost_at
+        dx, dy, turned = self._driven
+        c, s = math.cos(yaw), math.sin(yaw)
+        return SearchRegion(
+            (x, y, wrap_angle(yaw + turned)), base + reach, math.pi, lever=(c * dx - s * dy, s * dx + c * dy)
+        )
 
     def _end_cycle(self) -> None:
         """The whole plan's search has ended: so has the cycle; the best `max_hypotheses` places

@@ -106,13 +106,22 @@ class RelocalizationConfig(Settings):
 
 @dataclass(frozen=True)
 class SearchRegion:
-    """A part of the plan to search: positions within `radius` metres (a square of side
-    2 `radius`) of `center`'s (x, y), headings within `yaw_tolerance` radians of its yaw
-    (pi or more: any heading). `center` is a T_map_base pose (x, y, yaw)."""
+    """A part of the plan to search: headings within `yaw_tolerance` radians of `center`'s yaw
+    (pi or more: any heading) and, at each heading, positions within `radius` metres (a square of
+    side 2 `radius`) of `center`'s (x, y) plus `lever` turned by the heading's difference from
+    `center`'s yaw. `center` is a T_map_base pose (x, y, yaw); `lever` is (x, y) in the map frame,
+    metres.
+
+    With the default zero `lever` the positions are one square at every heading. A nonzero one
+    ties position to heading, for a robot that drove `lever` from `center`'s position while its
+    heading there was unknown (an odometry fault): at heading `center` yaw + d it is near
+    `center` + R(d) `lever`, on a ring around `center`, rather than anywhere within the lever's
+    length; `center`'s yaw is then the heading the drive ends at when d is 0."""
 
     center: Pose
     radius: float = 2.0
     yaw_tolerance: float = math.pi
+    lever: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", as_pose(self.center, "region center"))
@@ -122,6 +131,14 @@ class SearchRegion:
         t = real_number(self.yaw_tolerance, "region yaw_tolerance")
         if not (math.isfinite(t) and t >= 0.0):
             raise ValueError(f"region yaw_tolerance must be a finite number >= 0 radians, got {self.yaw_tolerance!r}")
+        try:
+            lx, ly = self.lever
+        except (TypeError, ValueError):
+            raise ValueError(f"region lever must be two numbers (x, y) in metres, got {self.lever!r}") from None
+        lever = (real_number(lx, "region lever x"), real_number(ly, "region lever y"))
+        if not (math.isfinite(lever[0]) and math.isfinite(lever[1])):
+            raise ValueError(f"region lever must be finite, got {self.lever!r}")
+        object.__setattr__(self, "lever", lever)
 
 
 @dataclass(frozen=True, repr=False)
@@ -307,8 +324,8 @@ class SearchInSteps:
         return _relocalization(raw, config, self._seconds)
 
 
-_Window = tuple[float, float, float, float, float]
-"""A native search window: (x, y, yaw, half_width, half_angle)."""
+_Window = tuple[float, float, float, float, float, float, float]
+"""A native search window: (x, y, yaw, half_width, half_angle, lever_x, lever_y)."""
 
 
 def _search_arguments(
@@ -325,7 +342,9 @@ def _search_arguments(
         raise TypeError(f"region must be a planicp.SearchRegion or None, got {type(region).__name__}")
     count = whole_number(max_candidates, "max_candidates", 1, 1000)
     points = as_points(scan_xy, "scan_xy")
-    window = None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance))
+    window = (
+        None if region is None else (*region.center, float(region.radius), float(region.yaw_tolerance), *region.lever)
+    )
     return config, count, points, window
 
 

@@ -141,8 +141,16 @@ impl GlobalSearchConfig {
     }
 }
 
-/// Where to search: positions within `half_width` metres (a square) of `center` and headings
-/// within `half_angle` radians of its yaw (`>= pi`: every heading).
+/// Where to search: headings within `half_angle` radians of `center`'s yaw (`>= pi`: every
+/// heading) and, at heading `yaw`, positions within `half_width` metres (a square) of `center`'s
+/// position plus `lever` turned by `yaw - center.yaw`.
+///
+/// With a zero `lever` the positions are the same square at every heading. A nonzero one ties
+/// position to heading: a robot that drove `lever` (map frame, metres) from `center`'s position
+/// while its heading there was unknown is, at heading `yaw`, at the end of the lever turned by
+/// the heading's error `yaw - center.yaw` (`center.yaw`: the heading the drive ends at when that
+/// error is zero). The positions then form a ring of squares around `center` rather than a disk
+/// of the lever's length, `(lever / half_width)^2 / pi` times fewer of them for a long lever.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SearchWindow {
     /// Centre of the window, `T_map_base`.
@@ -151,15 +159,32 @@ pub struct SearchWindow {
     pub half_width: f64,
     /// Half the range of headings, radians.
     pub half_angle: f64,
+    /// Offset of the square from `center` at heading `center.yaw` (map frame, metres), turned
+    /// with the heading.
+    pub lever: [f64; 2],
 }
 
 impl SearchWindow {
+    /// A square of half-width `half_width` around `center` at every heading within `half_angle`
+    /// of its yaw (no lever).
+    pub fn new(center: Pose2, half_width: f64, half_angle: f64) -> Self {
+        SearchWindow { center, half_width, half_angle, lever: [0.0, 0.0] }
+    }
+
+    /// The centre of the square of positions searched at heading `yaw` (map frame, metres).
+    pub fn center_at(&self, yaw: f64) -> [f64; 2] {
+        let (s, c) = (yaw - self.center.yaw).sin_cos();
+        let [lx, ly] = self.lever;
+        [self.center.x + c * lx - s * ly, self.center.y + s * lx + c * ly]
+    }
+
     /// Checks the window.
     pub fn validate(&self) -> Result<()> {
         if !self.center.is_finite() {
             return Err(invalid("window center", format!("{:?}", self.center), "must be finite"));
         }
         check_finite("window center", &[[self.center.x, self.center.y]])?;
+        check_finite("window lever", &[self.lever])?;
         if !(self.half_width.is_finite() && self.half_width >= 0.0) {
             return Err(invalid("window half_width", self.half_width, "must be a finite number >= 0 metres"));
         }

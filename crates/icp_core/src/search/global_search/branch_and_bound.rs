@@ -26,7 +26,6 @@ pub struct SearchRun {
     pub(super) complete: bool,
     pub(super) finished: bool,
     pub(super) best: BestList,
-    pub(super) center: [f64; 2],
     pub(super) res: f64,
     pub(super) step: f64,
     pub(super) scan_points: usize,
@@ -164,11 +163,11 @@ impl SearchRun {
             return;
         }
         if n.level == 0 {
-            let yaw = self.rotated[n.rotation as usize].yaw;
+            let rotated = &self.rotated[n.rotation as usize];
             let pose = Pose2::new(
-                self.center[0] + n.ix as f64 * self.res,
-                self.center[1] + n.iy as f64 * self.res,
-                yaw,
+                rotated.center[0] + n.ix as f64 * self.res,
+                rotated.center[1] + n.iy as f64 * self.res,
+                rotated.yaw,
             );
             self.best.insert(Candidate { pose, score: n.score as f64 });
             return;

@@ -38,9 +38,11 @@ impl PartialEq for Node {
 
 impl Eq for Node {}
 
-/// The scan's cells at one rotation, for the window's centre translation.
+/// The scan's cells at one rotation, for the centre of that rotation's square of translations.
 pub(super) struct RotatedScan {
     pub(super) yaw: f64,
+    /// The centre of the rotation's square of translations (map frame, metres).
+    pub(super) center: [f64; 2],
     pub(super) cells: Vec<[i64; 2]>,
 }
 

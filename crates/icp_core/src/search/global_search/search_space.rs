@@ -62,12 +62,13 @@ impl GlobalMatcher {
         let points = self.thin_scan(scan)?;
         let res = self.config.resolution;
         let step = self.angular_step(&points);
-        let (center, half_cells, yaws) = match window {
+        // Per rotation: its heading and the centre of its square of positions.
+        let (half_cells, rotations) = match window {
             None => {
                 let [lo, hi] = self.bounds;
                 let center = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
                 let half = [((hi[0] - lo[0]) / 2.0 / res).ceil(), ((hi[1] - lo[1]) / 2.0 / res).ceil()];
-                (center, half, full_circle(step))
+                (half, full_circle(step)?.into_iter().map(|yaw| (yaw, center)).collect::<Vec<_>>())
             }
             Some(w) => {
                 // A window wider than the plan along an axis is the plan's extent there (the whole
@@ -77,16 +78,17 @@ impl GlobalMatcher {
                 // a cell and left a window beyond them a single position; fhw's recovery, over
                 // odometry seeds 1-5, then lost 63-84 % of the scans instead of 43-60 %.)
                 let [lo, hi] = self.bounds;
-                let clip = |c: f64, axis: usize| {
-                    if 2.0 * w.half_width >= hi[axis] - lo[axis] {
-                        ((lo[axis] + hi[axis]) / 2.0, ((hi[axis] - lo[axis]) / 2.0 / res).ceil())
+                let whole = |axis: usize| 2.0 * w.half_width >= hi[axis] - lo[axis];
+                let half = |axis: usize| {
+                    if whole(axis) {
+                        ((hi[axis] - lo[axis]) / 2.0 / res).ceil()
                     } else {
-                        (c, (w.half_width / res).ceil())
+                        (w.half_width / res).ceil()
                     }
                 };
-                let ((cx, hx), (cy, hy)) = (clip(w.center.x, 0), clip(w.center.y, 1));
+                let centre = |c: f64, axis: usize| if whole(axis) { (lo[axis] + hi[axis]) / 2.0 } else { c };
                 let yaws = if w.half_angle >= PI {
-                    full_circle(step)
+                    full_circle(step)?
                 } else {
                     let m = (w.half_angle / step).ceil() as i64;
                     let n = (2 * m + 1) as usize;
@@ -94,12 +96,18 @@ impl GlobalMatcher {
                         return Err(rotations_error(n));
                     }
                     let d = if m > 0 { w.half_angle / m as f64 } else { 0.0 };
-                    Ok((-m..=m).map(|k| w.center.yaw + k as f64 * d).collect())
+                    (-m..=m).map(|k| w.center.yaw + k as f64 * d).collect()
                 };
-                ([cx, cy], [hx, hy], yaws)
+                let rotations = yaws
+                    .into_iter()
+                    .map(|yaw| {
+                        let [cx, cy] = w.center_at(yaw);
+                        (yaw, [centre(cx, 0), centre(cy, 1)])
+                    })
+                    .collect();
+                ([half(0), half(1)], rotations)
             }
         };
-        let yaws = yaws?;
         // The lattice must fit in i32 offsets and in the node budget's meaning.
         if !(half_cells[0] < 1e8 && half_cells[1] < 1e8) {
             return Err(invalid(
@@ -109,12 +117,12 @@ impl GlobalMatcher {
             ));
         }
         let (wx, wy) = (half_cells[0] as i32, half_cells[1] as i32);
-        let rotated: Vec<RotatedScan> = yaws
+        let rotated: Vec<RotatedScan> = rotations
             .iter()
-            .map(|&yaw| {
+            .map(|&(yaw, center)| {
                 let pose = Pose2::new(center[0], center[1], yaw);
                 let cells = points.iter().map(|p| self.pyramid.cell_of(pose.transform_point(*p))).collect();
-                RotatedScan { yaw, cells }
+                RotatedScan { yaw, center, cells }
             })
             .collect();
         let top = self.config.levels - 1;
@@ -136,7 +144,6 @@ impl GlobalMatcher {
                 nms_distance: self.config.nms_distance,
                 nms_angle: self.config.nms_angle,
             },
-            center,
             res,
             step,
             scan_points: points.len(),

@@ -67,13 +67,13 @@ fn a_window_larger_than_the_plan_searches_the_plan() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let truth = Pose2::new(2.5, 2.0, 0.7);
     let scan = scan_from(&map, truth, &mut rng, 0.01);
-    let huge = SearchWindow { center: Pose2::new(6.0, 4.0, 0.0), half_width: 1e4, half_angle: PI };
+    let huge = SearchWindow::new(Pose2::new(6.0, 4.0, 0.0), 1e4, PI);
     let clipped = matcher.search(&scan, Some(&huge), cancel::NEVER).unwrap();
     let whole = matcher.search(&scan, None, cancel::NEVER).unwrap();
     assert_eq!(clipped.nodes, whole.nodes);
     assert!(close(&clipped.candidates[0].pose, &truth, 0.3, 0.1), "{:?}", clipped.candidates[0]);
     // Wholly outside the plan: searched where it is (nothing to find), no error.
-    let away = SearchWindow { center: Pose2::new(500.0, 4.0, 0.0), half_width: 2.0, half_angle: 0.1 };
+    let away = SearchWindow::new(Pose2::new(500.0, 4.0, 0.0), 2.0, 0.1);
     assert!(matcher.search(&scan, Some(&away), cancel::NEVER).is_ok());
 }
 
@@ -90,7 +90,7 @@ fn a_window_across_the_plans_edge_keeps_its_own_lattice() {
     let truth = Pose2::new(0.33 + 0.37 * res, 3.0 + 0.21 * res, 0.4);
     let scan = scan_from(&map, truth, &mut rng, 0.01);
     let centre = Pose2::new(0.33, 3.0, 0.4);
-    let window = SearchWindow { center: centre, half_width: 1.0, half_angle: 0.2 };
+    let window = SearchWindow::new(centre, 1.0, 0.2);
     let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
     assert!(out.complete && !out.candidates.is_empty());
     for c in &out.candidates {
@@ -100,6 +100,39 @@ fn a_window_across_the_plans_edge_keeps_its_own_lattice() {
         }
     }
     assert!(close(&out.candidates[0].pose, &truth, res, 0.05), "{:?}", out.candidates[0]);
+}
+
+#[test]
+fn a_window_with_a_lever_searches_the_ring_its_heading_error_turns_it_to() {
+    // A robot lost at (2, 2) heading 0 drove 4 m ahead by its odometry, but its heading was 1.2
+    // rad off: it is at (2, 2) + R(1.2) (4, 0). The window with that lever finds it there, at
+    // heading 1.2, with squares of 0.5 m: every candidate lies within its heading's square.
+    let map = PointMap::new(asymmetric_floor(), None).unwrap();
+    let matcher = GlobalMatcher::new(&map, GlobalSearchConfig::default()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let (turn, lever) = (1.2f64, [4.0, 0.0]);
+    let truth = Pose2::new(2.0 + 4.0 * turn.cos(), 2.0 + 4.0 * turn.sin(), turn);
+    let scan = scan_from(&map, truth, &mut rng, 0.01);
+    let window = SearchWindow { center: Pose2::new(2.0, 2.0, 0.0), half_width: 0.5, half_angle: PI, lever };
+    let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
+    assert!(out.complete && !out.candidates.is_empty());
+    assert!(close(&out.candidates[0].pose, &truth, 0.15, 0.05), "{:?}", out.candidates[0]);
+    let res = GlobalSearchConfig::default().resolution;
+    for c in &out.candidates {
+        let [cx, cy] = window.center_at(c.pose.yaw);
+        assert!(
+            (c.pose.x - cx).abs() <= 0.5 + res && (c.pose.y - cy).abs() <= 0.5 + res,
+            "{c:?} off its square"
+        );
+    }
+    // Without the lever the same squares are searched around (2, 2): the robot is not there.
+    let no_lever = SearchWindow::new(Pose2::new(2.0, 2.0, 0.0), 0.5, PI);
+    let out = matcher.search(&scan, Some(&no_lever), cancel::NEVER).unwrap();
+    assert!(out.candidates.iter().all(|c| !close(&c.pose, &truth, 0.5, 0.2)), "{:?}", out.candidates);
+    // A lever that is not finite is refused with its name.
+    let bad = SearchWindow { lever: [f64::NAN, 0.0], ..window };
+    let err = matcher.search(&scan, Some(&bad), cancel::NEVER).unwrap_err();
+    assert!(err.to_string().contains("lever"), "{err}");
 }
 
 #[test]
@@ -137,7 +170,7 @@ fn branch_and_bound_equals_exhaustive_search() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
     let truth = Pose2::new(3.0, 5.0, 0.2);
     let scan = scan_from(&map, truth, &mut rng, 0.01);
-    let window = SearchWindow { center: Pose2::new(3.3, 4.8, 0.25), half_width: 0.6, half_angle: 0.1 };
+    let window = SearchWindow::new(Pose2::new(3.3, 4.8, 0.25), 0.6, 0.1);
     let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
     let best = out.candidates[0];
     // Exhaustive: every lattice translation at every swept rotation.
@@ -194,7 +227,7 @@ fn a_window_restricts_the_search() {
     let mut rng = ChaCha8Rng::seed_from_u64(14);
     let truth = Pose2::new(10.0, 3.5, 1.0);
     let scan = scan_from(&map, truth, &mut rng, 0.01);
-    let window = SearchWindow { center: Pose2::new(10.4, 3.2, 1.2), half_width: 1.0, half_angle: 0.4 };
+    let window = SearchWindow::new(Pose2::new(10.4, 3.2, 1.2), 1.0, 0.4);
     let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
     let full = matcher.search(&scan, None, cancel::NEVER).unwrap();
     assert!(out.nodes < full.nodes / 5, "window {} vs whole plan {} nodes", out.nodes, full.nodes);
@@ -204,7 +237,7 @@ fn a_window_restricts_the_search() {
         assert!(wrap_angle(c.pose.yaw - 1.2).abs() <= 0.4 + 1e-9, "{c:?}");
     }
     // A window that excludes the truth finds nothing as good.
-    let away = SearchWindow { center: Pose2::new(2.0, 2.0, -2.0), half_width: 0.5, half_angle: 0.1 };
+    let away = SearchWindow::new(Pose2::new(2.0, 2.0, -2.0), 0.5, 0.1);
     let out = matcher.search(&scan, Some(&away), cancel::NEVER).unwrap();
     assert!(out.candidates.iter().all(|c| c.score < full.candidates[0].score - 0.2));
 }
@@ -274,7 +307,7 @@ fn the_node_budget_makes_the_search_incomplete() {
     let matcher = GlobalMatcher::new(&map, cfg).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(15);
     let scan = scan_from(&map, Pose2::new(2.5, 2.0, 0.7), &mut rng, 0.01);
-    let window = SearchWindow { center: Pose2::new(2.5, 2.0, 0.7), half_width: 1.0, half_angle: 0.3 };
+    let window = SearchWindow::new(Pose2::new(2.5, 2.0, 0.7), 1.0, 0.3);
     let out = matcher.search(&scan, Some(&window), cancel::NEVER).unwrap();
     assert!(!out.complete && out.nodes <= 25 + 3, "{out:?}");
 }
@@ -297,9 +330,9 @@ fn rejects_bad_input() {
         Err(IcpError::TooFewPoints { need: MIN_SEARCH_POINTS, .. })
     ));
     for w in [
-        SearchWindow { center: Pose2::new(f64::NAN, 0.0, 0.0), half_width: 1.0, half_angle: 0.1 },
-        SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: -1.0, half_angle: 0.1 },
-        SearchWindow { center: Pose2::new(1.0, 1.0, 0.0), half_width: 1.0, half_angle: f64::INFINITY },
+        SearchWindow::new(Pose2::new(f64::NAN, 0.0, 0.0), 1.0, 0.1),
+        SearchWindow::new(Pose2::new(1.0, 1.0, 0.0), -1.0, 0.1),
+        SearchWindow::new(Pose2::new(1.0, 1.0, 0.0), 1.0, f64::INFINITY),
     ] {
         assert!(
             matches!(matcher.search(&good, Some(&w), cancel::NEVER), Err(IcpError::InvalidParameter { .. })),
