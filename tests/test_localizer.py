@@ -592,21 +592,21 @@ def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drov
     lost_at = (path[0][0], path[0][1], path[0][2] + math.radians(40.0))
     recovery._lost_at = lost_at
     for a, b in zip(path[:-1], path[1:]):
-        recovery._drive(se2.between(a, b))
-    coasted = se2.compose(lost_at, recovery._driven)
+        recovery._drive.add(se2.between(a, b), recovery.motion_noise)
+    coasted = se2.compose(lost_at, recovery._drive.motion)
     assert error(coasted, path[40])[0] > 2.0
     region = recovery._near_region(lost_at)
-    assert region.lever != (0.0, 0.0) and region.radius < 0.5 + recovery._travelled - 2.0
+    assert region.lever != (0.0, 0.0) and region.radius < 0.5 + recovery._drive.path - 2.0
     ring = relocalize(scans[40], plan, region=region, config=recovery.config.search)
     assert ring.best is not None and error(ring.best.pose, path[40])[0] < 0.05, ring.best
     disk = relocalize(
-        scans[40], plan, region=SearchRegion(lost_at, 0.5 + recovery._travelled), config=recovery.config.search
+        scans[40], plan, region=SearchRegion(lost_at, 0.5 + recovery._drive.path), config=recovery.config.search
     )
     assert ring.nodes < disk.nodes / 2
     # Turned in place, the path is shorter than the spread's reach: the disk of its length.
     recovery.clear()
     recovery._lost_at = lost_at
-    recovery._drive((0.0, 0.0, 1.0))
+    recovery._drive.add((0.0, 0.0, 1.0), recovery.motion_noise)
     near = recovery._near_region(lost_at)
     assert near.lever == (0.0, 0.0) and near.radius == 0.5 and near.center == lost_at
 

@@ -19,6 +19,7 @@ from planicp import (
     PlanMap,
     PosteriorRefinement,
     RecoveryConfig,
+    localize,
     se2,
 )
 from planicp.tracking import stages
@@ -378,6 +379,55 @@ def test_the_search_near_a_lost_robot_covers_the_path_the_odometry_drove_from_wh
     assert any(error(path[40], p)[0] < 0.05 for p in near), near
     reach = config.local_radius + driven + 0.5  # the search's square, and ICP's last step from it
     assert all(abs(p[0] - path[0][0]) <= reach and abs(p[1] - path[0][1]) <= reach for p in near)
+
+
+def test_a_track_lost_after_scans_that_vouched_for_nothing_is_searched_for_from_the_last_vouched_pose(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # The scan at path[0] vouched for the pose; the next 20 updates were tracked on fits that
+    # explained too little to vouch (a broken odometry step followed), and the track ended 5 m
+    # off. Lost at the 21st, the search near the robot pivots on path[0] with the odometry's drive
+    # since, and finds it; from the pose the track reached (a fresh recovery), it does not.
+    config = RecoveryConfig(search_nodes=None)  # each search within its update
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    lost = LostDecision(True, False, False, math.nan, 3)
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    wrong = (path[21][0] + 4.0, path[21][1] - 3.0, path[21][2] + 0.5)
+    prediction = Prediction((0.0, 0.0, 0.0), se2.between(path[20], path[21]), wrong, SMALL, False)
+
+    def near_places(vouched: bool) -> list[Pose]:
+        recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+        if vouched:
+            recovery.note_tracked((0.0, 0.0, 0.0), path[0], vouched=True)
+            for a, b in zip(path[:20], path[1:21]):
+                recovery.note_tracked(se2.between(a, b), wrong, vouched=False)
+        stages.recover(recovery, LostDetector(LostRule()), scans[21], prediction, fit, idle_pose(prediction), lost)
+        assert recovery._lost_at == (path[0] if vouched else wrong)
+        return [h.pose for h in recovery.hypotheses if h.near]
+
+    assert any(error(path[21], p)[0] < 0.05 for p in near_places(vouched=True))
+    assert not any(error(path[21], p)[0] < 0.5 for p in near_places(vouched=False))
+
+
+def test_a_scan_vouches_for_the_pose_when_its_fit_explains_as_much_as_the_tracks_sound_fits_do(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # Sound fits explained 88-96 % of their scans: one that explains 40 % is still sound (the plan
+    # explains it above the lost rule's bar) and recorded, but vouches for nothing.
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    for share in (0.90, 0.94, 0.88, 0.96, 0.92, 0.91):
+        recovery.observe_explained(share)
+    result = localize(scans[0], plan, path[0], IcpConfig.for_tracking())
+    fit = FitDecision(result, None, None, False, "", usable=True)
+    score = ScoreDecision(0.9, False, None, "")
+    n = result.num_inliers
+    well = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, False, False)
+    assert well.vouched and well.explained_share == pytest.approx(0.93, abs=0.01)
+    assert "vouched" in well.why
+    poorly = stages.keep_records(recovery, fit, score, result, int(n / 0.40), True, False, False)
+    assert not poorly.vouched and poorly.explained_share == pytest.approx(0.40, abs=0.01)
+    relocalized = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, True, False)
+    assert not relocalized.vouched and relocalized.explained_share is None
 
 
 def test_an_estimate_lists_the_decisions_of_its_stages_in_order(

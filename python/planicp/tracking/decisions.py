@@ -510,11 +510,16 @@ class Bookkeeping:
             recorded for `Recovery.beyond_limit` (a soundly tracked scan); None when not recorded.
         explained_share: the share of the scan's returns its fit explained, recorded for
             `Recovery.explained_seen` (a soundly tracked scan); None when not recorded.
+        vouched: the scan vouches for the pose: soundly tracked, and its fit explained at least
+            the share of its returns the track's sound fits make likely (`Recovery.explained_seen`
+            before this one). A track lost later is searched for from the last such pose
+            (`Recovery.note_tracked`).
     """
 
     anchored: bool
     beyond_share: float | None
     explained_share: float | None = None
+    vouched: bool = False
 
     @property
     def why(self) -> str:
@@ -524,6 +529,8 @@ class Bookkeeping:
             parts.append(f"{100 * self.beyond_share:.0f} % of its returns beyond the walls recorded")
         if self.explained_share is not None:
             parts.append(f"{100 * self.explained_share:.0f} % of its returns explained recorded")
+        if self.vouched:
+            parts.append("the pose is vouched for")
         return "; ".join(parts)
 
 

@@ -286,6 +286,7 @@ class Localizer:
             plan.prepare_index()
         self._pose: Pose = _wrapped(as_pose(initial_pose, "initial_pose"))
         self._covariance = _covariance(initial_covariance)
+        self._recovery.note_tracked((0.0, 0.0, 0.0), self._pose, vouched=True)  # the pose given
         self._last_odom: Pose | None = None
         # The last scan the plan explained, with its odometry pose.
         self._anchor: tuple[NDArray[np.float64], Pose] | None = None
@@ -329,6 +330,7 @@ class Localizer:
             self._costs.clear()
             self._detector.reset()
             self._recovery.clear()
+            self._recovery.note_tracked((0.0, 0.0, 0.0), new_pose, vouched=True)  # the pose given
 
     def relocalize(self, scan_xy: Any) -> Relocalization:
         """Searches the whole plan for the robot from one scan (base-frame points, metres), now.
@@ -349,6 +351,7 @@ class Localizer:
                 self._pose = best.pose
                 self._covariance = finite_or(best.result.covariance, self._covariance)
                 self._detector.reset()
+                self._recovery.note_tracked((0.0, 0.0, 0.0), best.pose, vouched=True)
             else:
                 self._recovery.hypotheses = [
                     Hypothesis(c.pose, c.result, 1, c.inlier_ratio)
@@ -436,6 +439,8 @@ class Localizer:
             relocalized = search.searched or adopted is not None or returned
             # 10. What the next updates need.
             records = keep_records(self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost)
+            if not now_lost:
+                self._recovery.note_tracked(prediction.motion, pose, vouched=records.vouched or adopted is not None)
             self._pose = pose
             self._covariance = covariance.copy()  # the decisions hold `covariance`: a caller may change them
             self._last_odom = odom

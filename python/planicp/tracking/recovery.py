@@ -260,26 +260,43 @@ class Recovery:
     _trial: bool = False
     budget: SearchBudget = field(default_factory=lambda: SearchBudget(None))
     _incumbent: deque[float] = field(default_factory=lambda: deque(maxlen=1000))
-    # Where the localizer lost track (T_map_base), and the odometry since: its path length
-    # (metres), its motion (in the frame of the pose lost at) and that motion's covariance.
+    # Where the localizer lost track (T_map_base), and the odometry's drive since.
     _lost_at: Pose | None = None
-    _travelled: float = 0.0
-    _driven: Pose = (0.0, 0.0, 0.0)
-    _driven_spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
+    _drive: _Drive = field(default_factory=lambda: _Drive())
+    # The last pose a tracked scan vouched for (`note_tracked`), and the odometry's drive since;
+    # kept across `clear`.
+    _vouched_at: Pose | None = None
+    _since_vouched: _Drive = field(default_factory=lambda: _Drive())
     # Whether a place followed (or the tracked one, on trial) explained this update's scan.
     _explained: bool = False
 
-    def step(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose) -> Hypothesis | None:
+    def step(
+        self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose, likelier: Pose | None = None
+    ) -> Hypothesis | None:
         """Feeds one scan, the odometry motion since the previous one and the pose the localizer
         predicts (T_map_base); returns the hypothesis to adopt, or None while the robot is not
         found yet. A place on trial (see `verify`) that the localizer lost again is given up with
-        its search: a new cycle starts from the searches near the last pose."""
+        its search: a new cycle starts from the searches near the last pose.
+
+        Where track was lost, for the search near it (`_near_region`): at the first lost update,
+        `likelier` when given (a place the scans preferred to the track), else the last pose a
+        tracked scan vouched for (`note_tracked`), with the odometry's drive since, else
+        `last_pose`. The updates between the last vouched pose and the loss may have followed a
+        broken odometry step with fits that explain too little to vouch for anything, and the
+        pose they leave can be metres off (fhw's map at 0.1 m: 11.8 m when the loss was
+        declared)."""
         if self._trial:
             self.clear()
         if self._lost_at is None:
-            self._lost_at = last_pose
+            if likelier is not None:
+                self._lost_at, self._drive = likelier, _Drive()
+            elif self._vouched_at is not None:
+                self._lost_at, self._drive = self._vouched_at, self._since_vouched.copy()
+                self._drive.add(motion, self.motion_noise)
+            else:
+                self._lost_at, self._drive = last_pose, _Drive()
         else:
-            self._drive(motion)
+            self._drive.add(motion, self.motion_noise)
         followed = bool(self.hypotheses)
         self._follow_all(scan, motion)
         # When the last hypotheses are dropped, the next scan searches again.
@@ -402,7 +419,10 @@ class Recovery:
             )
             for h in self.hypotheses
         ]
-        self._drive(motion)
+        if self._lost_at is None:
+            self.note_tracked(motion, (0.0, 0.0, 0.0), vouched=False)
+        else:
+            self._drive.add(motion, self.motion_noise)
         for run in (self._near, self._whole):
             if run is not None:
                 run.move(motion, self.motion_noise)
@@ -411,14 +431,17 @@ class Recovery:
         """Forgets every hypothesis and any search in progress (the pose was given or found)."""
         self.hypotheses = []
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
-        self._lost_at, self._travelled = None, 0.0
-        self._driven, self._driven_spread = (0.0, 0.0, 0.0), np.zeros((3, 3))
+        self._lost_at, self._drive = None, _Drive()
 
-    def _drive(self, motion: Pose) -> None:
-        """The odometry moved the lost robot by `motion` since the last update."""
-        self._travelled += math.hypot(motion[0], motion[1])
-        self._driven_spread = self.motion_noise.propagate_checked(self._driven_spread, self._driven, motion)
-        self._driven = compose(self._driven, motion)
+    def note_tracked(self, motion: Pose, pose: Pose, *, vouched: bool) -> None:
+        """An update tracked (not lost) to `pose` (T_map_base) after the odometry moved the robot
+        by `motion`: the last pose a scan vouched for when `vouched` (a sound fit that explained
+        at least `explained_seen` of its scan, a place adopted, a pose given), otherwise one more
+        step of the odometry's drive since that pose."""
+        if vouched:
+            self._vouched_at, self._since_vouched = pose, _Drive()
+        elif self._vouched_at is not None:
+            self._since_vouched.add(motion, self.motion_noise)
 
     @property
     def searching(self) -> bool:
@@ -475,21 +498,22 @@ class Recovery:
 
     def _near_region(self, lost_at: Pose) -> SearchRegion:
         """Where the robot may be now, lost at `lost_at` (T_map_base) and driven by the odometry
-        since (`_driven`, with the covariance `_driven_spread`), when what broke is the odometry's
+        since (`_drive`), when what broke is the odometry's
         heading (a slip, a bad step) before or at that pose: any heading, and at each the drive
         turned by the heading's error, within `local_radius` (the slip's own displacement) plus
-        `sqrt(CHI2_3_999)` standard deviations of the drive's spread; or anywhere within
+        `sqrt(CHI2_3_999)` standard deviations of the drive's spread at that heading
+        (`_Drive.spread_given_heading`); or anywhere within
         `local_radius` plus the path length since, when that is the smaller reach (a short drive).
         A heading fault moves the robot along a ring around the lost pose, not within the disk
         of its path length: after 20 m of driving at fhw's 2 m a scan, the ring's squares hold a
         fraction of the disk's positions, and the search ends in as many updates as one begun
         where track was lost."""
-        base = self.config.local_radius
-        reach = math.sqrt(CHI2_3_999) * largest_position_std(self._driven_spread)
-        if reach >= self._travelled:
-            return SearchRegion(lost_at, base + self._travelled, math.pi)
+        base, drive = self.config.local_radius, self._drive
+        reach = math.sqrt(CHI2_3_999) * largest_position_std(drive.spread_given_heading())
+        if reach >= drive.path:
+            return SearchRegion(lost_at, base + drive.path, math.pi)
         x, y, yaw = lost_at
-        dx, dy, turned = self._driven
+        dx, dy, turned = drive.motion
         c, s = math.cos(yaw), math.sin(yaw)
         return SearchRegion(
             (x, y, wrap_angle(yaw + turned)), base + reach, math.pi, lever=(c * dx - s * dy, s * dx + c * dy)
@@ -717,6 +741,41 @@ class Recovery:
         found again as with the percentile (docs/benchmarks.md)."""
         interval = _prediction_interval(self.explained_shares)
         return 0.0 if interval is None else max(0.0, interval[0] - interval[1])
+
+
+@dataclass
+class _Drive:
+    """The odometry's drive from a pose: its path length (metres), its motion (in the frame of
+    that pose) and the motion's covariance (`MotionNoise` along the drive)."""
+
+    path: float = 0.0
+    motion: Pose = (0.0, 0.0, 0.0)
+    spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
+
+    def add(self, motion: Pose, noise: MotionNoise) -> None:
+        """The robot moved by `motion` since the last update."""
+        self.path += math.hypot(motion[0], motion[1])
+        self.spread = noise.propagate_checked(self.spread, self.motion, motion)
+        self.motion = compose(self.motion, motion)
+
+    def spread_given_heading(self) -> NDArray[np.float64]:
+        """The covariance of the drive's end position given its heading (the position block's
+        Schur complement; heading entries zero): what is left of the position's spread at each
+        heading a search sweeps. A heading error early in the drive turns the whole rest of it,
+        and a search over every heading places each heading's square where that turn puts it;
+        counted as position spread, one 129-degree odometry step of fhw (a 0.11 rad deviation)
+        widened the square by 12 m after 26 m of driving."""
+        spread = self.spread.copy()
+        yaw = float(spread[2, 2])
+        if yaw > 0.0:
+            spread[:2, :2] -= np.outer(spread[:2, 2], spread[2, :2]) / yaw
+        spread[2, :] = 0.0
+        spread[:, 2] = 0.0
+        return spread
+
+    def copy(self) -> _Drive:
+        """An independent copy."""
+        return _Drive(self.path, self.motion, self.spread.copy())
 
 
 @dataclass

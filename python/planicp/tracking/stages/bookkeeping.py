@@ -25,14 +25,17 @@ def keep_records(
     from it: the share of its returns beyond the walls seen from the prediction (see
     `Recovery.beyond_limit`) and the share of its `scan_points` the fit `result` explained (over
     the whole scan, as the recovery's fits count theirs: returns left out in front of the walls
-    are not explained; see `Recovery.explained_seen`)."""
+    are not explained; see `Recovery.explained_seen`); and whether the scan vouches for the pose
+    (that share at least `explained_seen` before it is recorded)."""
     anchored = bool(accepted and (score.continues or not score.poor))
     share = explained = None
     sound = accepted and not score.poor and not relocalized and not lost
     if sound and fit.beyond is not None:
         share = float(np.mean(fit.beyond))
         recovery.observe_beyond(share)
+    vouched = False
     if sound and result is not None and scan_points > 0:
         explained = result.num_inliers / scan_points
+        vouched = explained >= recovery.explained_seen
         recovery.observe_explained(explained)
-    return Bookkeeping(anchored, share, explained)
+    return Bookkeeping(anchored, share, explained, vouched)

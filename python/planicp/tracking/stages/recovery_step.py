@@ -30,14 +30,15 @@ def recover(
 
     `lost_at`: where the localizer lost track when that is not the prediction (the place an
     adopted jump left behind, which the scans preferred to the track: `RecoveryDecision.lost_at`);
-    the search near the last pose is then centred there."""
+    the search near the last pose is then centred there, and otherwise on the last pose a scan
+    vouched for (`Recovery.step`)."""
     found = None
     action: RecoveryAction
     if (lost.lost or recovery.on_trial) and not fit.usable:
         recovery.coast(prediction.motion)
         action = "coast"
     elif lost.lost:
-        found = recovery.step(points, prediction.motion, prediction.pose if lost_at is None else lost_at)
+        found = recovery.step(points, prediction.motion, prediction.pose, likelier=lost_at)
         action = "step"
     elif recovery.on_trial:
         found = recovery.verify(points, prediction.motion, correction.pose)
