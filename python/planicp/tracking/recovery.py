@@ -419,10 +419,10 @@ class Recovery:
             )
             for h in self.hypotheses
         ]
-        if self._lost_at is None:
-            self.note_tracked(motion, (0.0, 0.0, 0.0), vouched=False)
-        else:
+        if self._lost_at is not None:
             self._drive.add(motion, self.motion_noise)
+        elif self._vouched_at is not None:  # on trial: the drive since the last vouched pose
+            self._since_vouched.add(motion, self.motion_noise)
         for run in (self._near, self._whole):
             if run is not None:
                 run.move(motion, self.motion_noise)
@@ -449,23 +449,22 @@ class Recovery:
         return self._cycle
 
     def _search(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose, near: bool = True) -> None:
-        """One update's share of the search cycle: two searches run side by side, one around
-        the pose where the localizer lost track (`last_pose` at the first lost update), any
-        heading, at each the odometry's drive since turned by the heading's error, within
-        `local_radius` plus the drive's spread (a slip or a bad odometry step, `_near_region`),
-        and one of the whole plan (the robot was carried elsewhere). The search
-        near the pose is not centred on the pose coasting on the odometry: after a fault beyond
-        the sweep's window (fhw, 66 degrees) that pose runs off at the faulted heading, 2.5 m a
-        scan, and a search that started on a corrupted scan and found nothing started again
-        beyond the robot (with one scan in five a random cloud, 62 scans lost instead of 4). The
-        search near the pose has the first claim on the update's budget but for the half reserved
-        to the whole plan's search while that runs (`SearchBudget.reserved`, which the searches
-        around the prediction cannot take either); when it ends and none of its places is
-        followed, it starts again with the scan of that update, over the region the drive since
-        gives (a search that ended updates after its scan may find nothing where the robot is
-        now). When the whole plan's search ends, the cycle ends. The
-        places a search that ends found, followed with the odometry since its scan, join the
-        hypotheses. With `near=False` (a place on trial) only the whole plan's search goes on."""
+        """One update's share of the search cycle: two searches run side by side, one around the
+        pose where the localizer lost track (`_lost_at`, see `step`), any heading, at each the
+        odometry's drive since turned by the heading's error, within `local_radius` plus the drive's
+        spread (a slip or a bad odometry step, `_near_region`), and one of the whole plan (the robot
+        was carried elsewhere). The search near the pose is not centred on the pose coasting on the
+        odometry: after a fault beyond the sweep's window (fhw, 66 degrees) that pose runs off at
+        the faulted heading, 2.5 m a scan, and a search that started on a corrupted scan and found
+        nothing started again beyond the robot (with one scan in five a random cloud, 62 scans lost
+        instead of 4). The search near the pose has the first claim on the update's budget but for
+        the half reserved to the whole plan's search while that runs (`SearchBudget.reserved`, which
+        the searches around the prediction cannot take either); when it ends and none of its places
+        is followed, it starts again with the scan of that update, over the region the drive since
+        gives (a search that ended updates after its scan may find nothing where the robot is now).
+        When the whole plan's search ends, the cycle ends. The places a search that ends found,
+        followed with the odometry since its scan, join the hypotheses. With `near=False` (a place
+        on trial) only the whole plan's search goes on."""
         if not self._cycle:
             self._cycle = True
             self._whole = self._start(scan, None)
@@ -497,17 +496,16 @@ class Recovery:
             self._end_cycle()
 
     def _near_region(self, lost_at: Pose) -> SearchRegion:
-        """Where the robot may be now, lost at `lost_at` (T_map_base) and driven by the odometry
-        since (`_drive`), when what broke is the odometry's
-        heading (a slip, a bad step) before or at that pose: any heading, and at each the drive
-        turned by the heading's error, within `local_radius` (the slip's own displacement) plus
-        `sqrt(CHI2_3_999)` standard deviations of the drive's spread at that heading
-        (`_Drive.spread_given_heading`); or anywhere within
-        `local_radius` plus the path length since, when that is the smaller reach (a short drive).
-        A heading fault moves the robot along a ring around the lost pose, not within the disk
-        of its path length: after 20 m of driving at fhw's 2 m a scan, the ring's squares hold a
-        fraction of the disk's positions, and the search ends in as many updates as one begun
-        where track was lost."""
+        """Where the robot may be now, lost at `lost_at` (T_map_base, see `step`) and driven by
+        the odometry since (`_drive`), when what broke is the odometry's heading (a slip, a bad
+        step) at or after that pose: any heading, and at each the drive turned by the heading's
+        error, within `local_radius` (the slip's own displacement) plus `sqrt(CHI2_3_999)`
+        standard deviations of the drive's position spread at that heading
+        (`_Drive.spread_given_heading`); or anywhere within `local_radius` plus the path length
+        since, when that is the smaller reach (a turn in place). A heading fault moves the robot
+        along a ring around the lost pose, not anywhere within the disk of its path length: on
+        fhw after 29 m of driving the squares had a half-width of 12.8 m where the disk's radius
+        would have been 32 m."""
         base, drive = self.config.local_radius, self._drive
         reach = math.sqrt(CHI2_3_999) * largest_position_std(drive.spread_given_heading())
         if reach >= drive.path:
