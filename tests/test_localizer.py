@@ -562,7 +562,7 @@ def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
     for explained in (False, True):
         recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
         run = recovery._start(scans[20], SearchRegion(path[20], 0.5, math.radians(10.0)))
-        run.move(se2.between(path[20], path[21]), recovery.motion_noise)
+        run.drive.add(se2.between(path[20], path[21]), recovery.motion_noise)
         recovery._follow_all(junk, se2.between(path[20], path[21]))  # no place followed yet
         recovery._explained = explained
         recovery.new_update()

@@ -245,6 +245,19 @@ def mixture_modes(
     """The faulted and held modes (see `MixtureModes`) for `place` and the prediction `predicted`
     (T_map_base) with its 3x3 covariance, in the plan's likelihood field."""
     faulted = refine_pose(points, place, plan, None, rule)
+    return with_held_mode(faulted, points, predicted, predicted_covariance, plan, rule)
+
+
+def with_held_mode(
+    faulted: Refinement,
+    points: NDArray[np.float64],
+    predicted: Pose,
+    predicted_covariance: NDArray[np.float64],
+    plan: PlanMap,
+    rule: PosteriorRefinement,
+) -> MixtureModes:
+    """`mixture_modes` for a faulted mode already climbed (`refine_pose` with no prior): the held
+    mode is climbed only when the faulted one is worth weighing."""
     held = refine_pose(points, predicted, plan, ("prediction", predicted, predicted_covariance), rule)
     return MixtureModes(faulted, held, fault_cost(rule.fault_probability))
 

@@ -425,7 +425,7 @@ class Recovery:
             self._since_vouched.add(motion, self.motion_noise)
         for run in (self._near, self._whole):
             if run is not None:
-                run.move(motion, self.motion_noise)
+                run.drive.add(motion, self.motion_noise)
 
     def clear(self) -> None:
         """Forgets every hypothesis and any search in progress (the pose was given or found)."""
@@ -471,7 +471,7 @@ class Recovery:
         else:
             for run in (self._near, self._whole):
                 if run is not None:
-                    run.move(motion, self.motion_noise)
+                    run.drive.add(motion, self.motion_noise)
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
             self._near = self._start(scan, self._near_region(last_pose if self._lost_at is None else self._lost_at))
         if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
@@ -572,11 +572,12 @@ class Recovery:
             beyond = self._beyond_share(run.steps.scan, c.pose)
             if beyond > self.beyond_limit:
                 continue
-            found = self._found_again(scan, c, run.since, run.spread, near=near)
+            since, spread = run.drive.motion, run.drive.spread
+            found = self._found_again(scan, c, since, spread, near=near)
             if found is None:
-                here = compose(c.pose, run.since)
+                here = compose(c.pose, since)
                 unexplained.append(
-                    Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, missed=True, spread=run.spread.copy())
+                    Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, missed=True, spread=spread.copy())
                 )
                 continue
             found = dataclasses.replace(found, beyond=beyond)
@@ -778,18 +779,11 @@ class _Drive:
 
 @dataclass
 class _Run:
-    """A search spread over updates: its steps, and the odometry motion since its scan (the
-    identity while it is scored within the update that started it) with that motion's
-    covariance."""
+    """A search spread over updates: its steps, and the odometry's drive since its scan (none
+    while it is scored within the update that started it)."""
 
     steps: SearchInSteps
-    since: Pose = (0.0, 0.0, 0.0)
-    spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
-
-    def move(self, motion: Pose, noise: MotionNoise) -> None:
-        """The robot moved by `motion` since the last update."""
-        self.spread = noise.propagate(self.spread, self.since, motion)
-        self.since = compose(self.since, motion)
+    drive: _Drive = field(default_factory=lambda: _Drive())
 
 
 BEYOND_WINDOW = 50

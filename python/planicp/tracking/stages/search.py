@@ -14,7 +14,8 @@ from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction, 
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
 from ..motion_noise import largest_position_std
-from ..odometry_fault import CostHistory, mixture_modes, sweep_for_fault, within_fault
+from ..odometry_fault import CostHistory, fault_cost, sweep_for_fault, with_held_mode, within_fault
+from ..posterior_refinement import refine_pose
 from ..recovery import SearchBudget
 from ..relocalize import SearchRegion
 from .fit import aligned_from
@@ -107,14 +108,14 @@ def _a_fault_explains(
     motion = history.motion_since(prediction.odom, prediction.motion)
     if not within_fault(place.pose, prediction.pose, motion, refinement, rules.gate.max_translation_jump):
         return False
-    modes = mixture_modes(points, place.pose, prediction.pose, prediction.covariance, rules.plan, refinement)
-    bound = typical + modes.threshold
-    return (
-        modes.faulted.cost <= bound
-        and within_fault(modes.faulted.pose, prediction.pose, motion, refinement, rules.gate.max_translation_jump)
-        and modes.held.cost > bound
-        and modes.fault_preferred
-    )
+    faulted = refine_pose(points, place.pose, rules.plan, None, refinement)
+    bound = typical + fault_cost(refinement.fault_probability)
+    if faulted.cost > bound or not within_fault(
+        faulted.pose, prediction.pose, motion, refinement, rules.gate.max_translation_jump
+    ):
+        return False  # the held mode's climb is not needed
+    modes = with_held_mode(faulted, points, prediction.pose, prediction.covariance, rules.plan, refinement)
+    return modes.held.cost > bound and modes.fault_preferred
 
 
 def _fault_search(
