@@ -421,13 +421,69 @@ def test_a_scan_vouches_for_the_pose_when_its_fit_explains_as_much_as_the_tracks
     fit = FitDecision(result, None, None, False, "", usable=True)
     score = ScoreDecision(0.9, False, None, "")
     n = result.num_inliers
-    well = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, False, False)
+    well = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, False, False, rules(plan))
     assert well.vouched and well.explained_share == pytest.approx(0.93, abs=0.01)
     assert "vouched" in well.why
-    poorly = stages.keep_records(recovery, fit, score, result, int(n / 0.40), True, False, False)
+    poorly = stages.keep_records(recovery, fit, score, result, int(n / 0.40), True, False, False, rules(plan))
     assert not poorly.vouched and poorly.explained_share == pytest.approx(0.40, abs=0.01)
-    relocalized = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, True, False)
+    relocalized = stages.keep_records(recovery, fit, score, result, int(n / 0.93), True, True, False, rules(plan))
     assert not relocalized.vouched and relocalized.explained_share is None
+
+
+def test_the_gate_and_the_lost_rule_relax_their_bars_on_what_a_fit_explains_to_what_sound_fits_teach(
+    plan: PlanMap,
+) -> None:
+    gate, rule = AcceptanceGate(), LostRule()
+    assert gate.relaxed_to(None) is gate and rule.relaxed_to(None) is rule
+    assert gate.relaxed_to(0.5) is gate and rule.relaxed_to(0.5) is rule  # never raised
+    assert gate.relaxed_to(0.1).min_inlier_ratio == 0.1 and rule.relaxed_to(0.1).min_score == 0.1
+    assert gate.relaxed_to(0.1).min_inliers == gate.min_inliers  # the count a fit needs stays
+    loc = Localizer(plan, (0.0, 0.0, 0.0))
+    assert loc._rules().gate == gate and loc._rules().lost == rule  # nothing learned yet
+    # Sound fits that explained 88-96 % of their scans: the bars stay as set.
+    for share in (0.90, 0.94, 0.88, 0.96, 0.92, 0.91):
+        loc._recovery.observe_explained(share)
+    assert loc._rules().gate == gate and loc._rules().lost == rule
+    # A map that lacks many walls: sound fits explained 44-99 %, and a right fit may explain less
+    # than the bars as set.
+    loc = Localizer(plan, (0.0, 0.0, 0.0))
+    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
+        loc._recovery.observe_explained(share)
+    bar = loc._recovery.explained_seen
+    assert 0.0 < bar < 0.15
+    rules_now = loc._rules()
+    assert rules_now.gate.min_inlier_ratio == bar and rules_now.lost.min_score == bar
+    assert rules_now.gate_as_set == gate and rules_now.lost_as_set == rule
+    detector = LostDetector(rule)
+    for _ in range(rule.window):
+        detector.update(0.2, True, rules_now.lost)
+    assert not detector.lost  # 20 % is above the relaxed bar
+    detector.update(0.2, True)
+    assert detector.lost  # and below the rule as set
+
+
+def test_a_fit_only_the_relaxed_bars_pass_keeps_the_track_but_teaches_and_vouches_for_nothing(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    loc = Localizer(plan, path[0])
+    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
+        loc._recovery.observe_explained(share)
+    the_rules = loc._rules()
+    recovery = loc._recovery
+    result = localize(scans[0], plan, path[0], IcpConfig.for_tracking())
+    fit = FitDecision(result, None, None, False, "", usable=True)
+    n = result.num_inliers
+    recorded = len(recovery.explained_shares)
+    # The plan explains 20 % of the scan: above the relaxed bars, below the lost rule's as set.
+    score = ScoreDecision(0.2, False, None, "")
+    relaxed = stages.keep_records(recovery, fit, score, result, int(n / 0.2), True, False, False, the_rules)
+    assert relaxed.anchored and not relaxed.vouched and relaxed.explained_share is None
+    assert len(recovery.explained_shares) == recorded
+    sound = stages.keep_records(
+        recovery, fit, ScoreDecision(0.5, False, None, ""), result, int(n / 0.5), True, False, False, the_rules
+    )
+    assert sound.vouched and sound.explained_share == pytest.approx(0.5, abs=0.01)
+    assert len(recovery.explained_shares) == recorded + 1
 
 
 def test_an_estimate_lists_the_decisions_of_its_stages_in_order(

@@ -438,7 +438,9 @@ class Localizer:
                 self._left = left.kept
             relocalized = search.searched or adopted is not None or returned
             # 10. What the next updates need.
-            records = keep_records(self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost)
+            records = keep_records(
+                self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost, rules
+            )
             if not now_lost:
                 self._recovery.note_tracked(prediction.motion, pose, vouched=records.vouched or adopted is not None)
             self._pose = pose
@@ -491,20 +493,24 @@ class Localizer:
 
     def _rules(self) -> Rules:
         """The plan and rules as this update reads them (a caller may replace `gate` and the
-        others between updates)."""
+        others between updates): the gate's and the lost rule's bars on the share of a scan a
+        fit explains relaxed to what the track has learned of this plan (`Recovery.explained_bar`)."""
+        explained = self._recovery.explained_bar
         return Rules(
             self.plan,
             self.config,
             self._wide_config,
-            self.gate,
+            self.gate.relaxed_to(explained),
             self.motion_noise,
             self.degeneracy,
             self.continuity,
             self.fusion,
             self._occlusion,
-            self._detector.rule,
+            self._detector.rule.relaxed_to(explained),
             self._recovery.config,
             self.refinement,
+            self.gate,
+            self._detector.rule,
         )
 
 

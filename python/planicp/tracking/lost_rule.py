@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from dataclasses import dataclass, field
@@ -26,7 +27,9 @@ class LostRule(Settings):
 
     Attributes:
         window: scans the score is averaged over (>= 1).
-        min_score: lowest acceptable mean score, in [0, 1]. The `Localizer` checks every scan
+        min_score: lowest acceptable mean score, in [0, 1], until the track has learned how
+            little of its scans this plan explains where the localizer is right: then the lower
+            of this and that share (`relaxed_to`, `Recovery.explained_bar`). The `Localizer` checks every scan
             scoring below it against the last well explained scan (`ContinuityRule`): a scan
             that continues it is clutter and does not count (in a cluttered room the plan may
             explain only a third of the scans while every fit is sound); one that does not is
@@ -40,22 +43,36 @@ class LostRule(Settings):
     min_score: Annotated[float, Real(ge=0.0, le=1.0)] = 0.35
     max_rejections: Annotated[int, Whole(ge=1, le=10_000)] = 3
 
+    def relaxed_to(self, explained: float | None) -> LostRule:
+        """This rule with `min_score` lowered to `explained` where that is lower (None:
+        unchanged): the share of its scan a sound fit may explain on this plan
+        (`Recovery.explained_bar`; see `AcceptanceGate.relaxed_to`)."""
+        if explained is None or explained >= self.min_score:
+            return self
+        return dataclasses.replace(self, min_score=explained)
+
 
 @dataclass
 class LostDetector:
-    """The running state `LostRule` is applied to."""
+    """The running state `LostRule` is applied to: the last `window` scores, the rejections in
+    a row, and the rule the last update judged them by (`judged_by`: `rule` relaxed to what the
+    track has learned of the plan; None before the first update)."""
 
     rule: LostRule = field(default_factory=LostRule)
     scores: deque[float] = field(default_factory=deque)
     rejections: int = 0
+    judged_by: LostRule | None = None
 
     def hold(self) -> bool:
         """A scan that tells nothing about being lost (rejected in clutter, but continuing the
         previous scan): the state is kept. Returns whether lost."""
         return self.lost
 
-    def update(self, score: float, accepted: bool) -> bool:
-        """Adds one scan's score (NaN counts as 0) and acceptance; returns whether lost."""
+    def update(self, score: float, accepted: bool, rule: LostRule | None = None) -> bool:
+        """Adds one scan's score (NaN counts as 0) and acceptance; returns whether lost, by `rule`
+        (the bars this update applies, `LostRule.relaxed_to`; default `self.rule`), which the
+        `lost` verdict keeps until the next update."""
+        self.judged_by = self.rule if rule is None else rule
         self.scores.append(0.0 if math.isnan(score) else score)
         while len(self.scores) > self.rule.window:
             self.scores.popleft()
@@ -70,8 +87,9 @@ class LostDetector:
     @property
     def lost(self) -> bool:
         """Whether the rule says lost now."""
-        full = len(self.scores) >= self.rule.window
-        return (full and self.score < self.rule.min_score) or self.rejections >= self.rule.max_rejections
+        rule = self.rule if self.judged_by is None else self.judged_by
+        full = len(self.scores) >= rule.window
+        return (full and self.score < rule.min_score) or self.rejections >= rule.max_rejections
 
     def declare_lost(self) -> None:
         """Lost from now until the next `reset` (the robot was reported moved or unknown)."""
@@ -81,3 +99,4 @@ class LostDetector:
         """Forgets the history (after a relocalization or a pose given by the user)."""
         self.scores.clear()
         self.rejections = 0
+        self.judged_by = None

@@ -741,6 +741,17 @@ class Recovery:
         interval = _prediction_interval(self.explained_shares)
         return 0.0 if interval is None else max(0.0, interval[0] - interval[1])
 
+    @property
+    def explained_bar(self) -> float | None:
+        """`explained_seen` once two soundly tracked scans have been recorded (None before): the
+        share of its scan below which the acceptance gate and the lost rule stop trusting a fit
+        on this plan, where that is lower than theirs (`AcceptanceGate.relaxed_to`,
+        `LostRule.relaxed_to`). Only fits that pass the bars as set are recorded (the
+        `Localizer`'s bookkeeping), so that a fit the relaxed bars let through cannot lower them
+        further. The recovery's own `min_inlier_ratio` is not relaxed: a place is adopted only
+        on scans it explains well."""
+        return self.explained_seen if len(self.explained_shares) >= 2 else None
+
 
 @dataclass
 class _Drive:

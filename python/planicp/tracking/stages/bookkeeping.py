@@ -7,6 +7,7 @@ import numpy as np
 from ..decisions import Bookkeeping, FitDecision, ScoreDecision
 from ..icp_result import IcpResult
 from ..recovery import Recovery
+from .rules import Rules
 
 
 def keep_records(
@@ -18,6 +19,7 @@ def keep_records(
     accepted: bool,
     relocalized: bool,
     lost: bool,
+    rules: Rules,
 ) -> Bookkeeping:
     """Whether the scan becomes the continuity anchor (an `accepted` fit the plan explains well,
     or clutter that continues the last anchor), and, for a soundly tracked scan (accepted, well
@@ -26,10 +28,15 @@ def keep_records(
     `Recovery.beyond_limit`) and the share of its `scan_points` the fit `result` explained (over
     the whole scan, as the recovery's fits count theirs: returns left out in front of the walls
     are not explained; see `Recovery.explained_seen`); and whether the scan vouches for the pose
-    (that share at least `explained_seen` before it is recorded)."""
+    (that share at least `explained_seen` before it is recorded). A fit that passes only the bars
+    relaxed to what the plan explains (`Rules.gate`, `Rules.lost`), not those as set
+    (`Rules.gate_as_set`, `Rules.lost_as_set`), keeps the track but is not sound: it teaches
+    nothing, so that the bars it passed cannot fall further, and vouches for nothing."""
     anchored = bool(accepted and (score.continues or not score.poor))
     share = explained = None
     sound = accepted and not score.poor and not relocalized and not lost
+    if sound and result is not None:
+        sound = rules.gate_as_set.fit_rejection(result) == "" and score.score >= rules.lost_as_set.min_score
     if sound and fit.beyond is not None:
         share = float(np.mean(fit.beyond))
         recovery.observe_beyond(share)

@@ -27,9 +27,9 @@ def judge_lost(
     # a wrong place may explain a third of the scan and pass the gate. (Otherwise the recovery
     # ends it; in a symmetric room it cannot choose, and a sound track would stay lost.)
     if left is not None and left.returned is not None and not was_lost:
-        lost = detector.update(left.returned.inlier_ratio, True)
+        lost = detector.update(left.returned.inlier_ratio, True, rules.lost)
         return LostDecision(lost, False, True, detector.score, detector.rejections)
     clears = not was_lost or search.searched or score.score >= rules.recovery.min_inlier_ratio
     counted = correction.accepted and clears
-    lost = detector.update(score.score, counted)
+    lost = detector.update(score.score, counted, rules.lost)
     return LostDecision(lost, False, counted, detector.score, detector.rejections)

@@ -26,12 +26,16 @@ class Rules:
         config: ICP settings.
         wide_config: `config` with the KD-tree search: the retry of a poor fit with the index,
             and the fits at pending places.
-        gate, motion_noise, degeneracy, continuity, fusion: the rules of those names.
+        gate: the acceptance gate this update applies: the `Localizer`'s, its inlier-ratio bar
+            relaxed to what the track has learned of the plan (`AcceptanceGate.relaxed_to`).
+        motion_noise, degeneracy, continuity, fusion: the rules of those names.
         occlusion: the occlusion filter; None: every return is aligned.
-        lost: the lost rule.
+        lost: the lost rule this update applies, relaxed as `gate` (`LostRule.relaxed_to`).
         recovery: the recovery's settings (its `local_radius`, `margin`, `min_inlier_ratio` and
             search serve the searches around the prediction too).
         refinement: how a corrected pose is refined in the plan's likelihood field.
+        gate_as_set, lost_as_set: the gate and the lost rule as set, not relaxed: a fit is
+            recorded as sound (and so teaches what the plan explains) only when it passes them.
     """
 
     plan: PlanMap
@@ -46,3 +50,5 @@ class Rules:
     lost: LostRule
     recovery: RecoveryConfig
     refinement: PosteriorRefinement
+    gate_as_set: AcceptanceGate
+    lost_as_set: LostRule
