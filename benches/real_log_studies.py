@@ -16,6 +16,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py log-odometry     # the logs' own odometry: the masks or a cast
     python benches/real_log_studies.py reference        # the scans off the reference: whose error is it
     python benches/real_log_studies.py beyond           # returns a cast from the reference puts beyond the walls
+    python benches/real_log_studies.py bars             # the gate's and lost rule's bars: relaxed or as set
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -106,6 +107,14 @@ return more than the rule's margin short of the wall in its direction is in fron
 the margin past it beyond it), and gives the median and 90th percentile share of each: at the
 true pose a wall that stops every beam has neither but for clutter in front.
 
+`bars` tracks each log on the harness's plan drawn with `--min-hits` end points per cell, with the
+`Localizer`'s defaults (the gate's and the lost rule's bars on the share of a scan a fit explains
+relaxed to what the track's sound fits make likely, `Recovery.explained_bar`) and with them as set
+(`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`), and gives for each the ATE, the
+share of scans more than 0.3 m off and the fits refused, and for the defaults the bar learned
+(`Recovery.explained_seen`) from the 20th update on: its least value and its median, and the share
+of updates whose bars were relaxed.
+
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
 """
@@ -127,8 +136,10 @@ import numpy as np
 
 import planicp
 from planicp import (
+    AcceptanceGate,
     IcpConfig,
     Localizer,
+    LostRule,
     PlanMap,
     PosteriorRefinement,
     RecoveryConfig,
@@ -440,6 +451,42 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
+def bars_study(harness: Any, logs: list[str], out: str, min_hits: int) -> None:
+    print(
+        "| log | relaxed (default): ATE, off, refused | as set: ATE, off, refused "
+        "| bar learned: least, median | updates relaxed |"
+    )
+    print("|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
+        cells, learned, relaxed = [], [], 0
+        for relaxes in (True, False):
+            pm = PlanMap.from_ros_map(plan.yaml_path)
+            loc = Localizer(
+                pm,
+                tuple(map(float, ref[0])),
+                gate=AcceptanceGate(relaxes=relaxes),
+                lost_rule=LostRule(relaxes=relaxes),
+            )
+            loc.update(scans[0], tuple(map(float, odom[0])))
+            est, refused = [ref[0]], 0
+            for k in range(1, len(scans)):
+                bar = loc._recovery.explained_bar
+                e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
+                est.append(np.array(e.pose))
+                refused += not e.accepted
+                if relaxes and k >= 20 and bar is not None:
+                    learned.append(bar)
+                    relaxed += bar < max(AcceptanceGate().min_inlier_ratio, LostRule().min_score)
+            m = harness.error_metrics(np.array(est), ref, 0.3)
+            cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %, {refused}")
+        a = np.array(learned) if learned else np.array([math.nan])
+        share = 100 * relaxed / max(1, len(learned))
+        print(
+            f"| {name} | " + " | ".join(cells) + f" | {a.min():.2f}, {np.median(a):.2f} | {share:.0f} % |", flush=True
+        )
+
+
 def junk_draws_study(
     harness: Any, logs: list[str], out: str, seeds: list[int], recovery: RecoveryConfig | None = None
 ) -> None:
@@ -702,6 +749,7 @@ def main() -> None:
             "log-odometry",
             "reference",
             "beyond",
+            "bars",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
@@ -736,6 +784,9 @@ def main() -> None:
         default=None,
         help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
     )
+    parser.add_argument(
+        "--min-hits", type=int, default=2, help="bars study: end points per cell of the plan (the harness's is 2)"
+    )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
     if spec is None or spec.loader is None or not os.path.exists(args.harness):
@@ -753,6 +804,8 @@ def main() -> None:
             log_odometry_study(harness, args.logs)
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
+        elif args.study == "bars":
+            bars_study(harness, args.logs, out, args.min_hits)
         elif args.study == "reference":
             reference_study(harness, args.logs, out, args.filter_out, args.seed)
         elif args.study == "scan-sets":

@@ -438,6 +438,8 @@ def test_the_gate_and_the_lost_rule_relax_their_bars_on_what_a_fit_explains_to_w
     assert gate.relaxed_to(0.5) is gate and rule.relaxed_to(0.5) is rule  # never raised
     assert gate.relaxed_to(0.1).min_inlier_ratio == 0.1 and rule.relaxed_to(0.1).min_score == 0.1
     assert gate.relaxed_to(0.1).min_inliers == gate.min_inliers  # the count a fit needs stays
+    fixed_gate, fixed_rule = AcceptanceGate(relaxes=False), LostRule(relaxes=False)
+    assert fixed_gate.relaxed_to(0.1) is fixed_gate and fixed_rule.relaxed_to(0.1) is fixed_rule
     loc = Localizer(plan, (0.0, 0.0, 0.0))
     assert loc._rules().gate == gate and loc._rules().lost == rule  # nothing learned yet
     # Sound fits that explained 88-96 % of their scans: the bars stay as set.

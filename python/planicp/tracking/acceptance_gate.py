@@ -28,6 +28,7 @@ class AcceptanceGate(Settings):
         min_inlier_ratio: smallest share of scan points that are inliers, until the track has
             learned how little of its scans this plan explains where the localizer is right:
             then the lower of this and that share (`relaxed_to`, `Recovery.explained_bar`).
+        relaxes: whether `min_inlier_ratio` relaxes so (False: the bar as set, always).
         max_translation_jump: largest correction (metres) of the odometry prediction.
         max_rotation_jump: largest correction (radians) of the odometry prediction.
     """
@@ -35,18 +36,19 @@ class AcceptanceGate(Settings):
     require_convergence: Flag = False
     min_inliers: Annotated[int, Whole(ge=0)] = 30
     min_inlier_ratio: Annotated[float, Real(ge=0.0, le=1.0)] = 0.25
+    relaxes: Flag = True
     max_translation_jump: Annotated[float, Real(gt=0.0, unit="metres")] = 0.5
     max_rotation_jump: Annotated[float, Real(gt=0.0, unit="radians")] = math.radians(10.0)
 
     def relaxed_to(self, explained: float | None) -> AcceptanceGate:
-        """This gate with `min_inlier_ratio` lowered to `explained` where that is lower (None:
-        unchanged): the share of its scan a sound fit may explain on this plan
+        """This gate with `min_inlier_ratio` lowered to `explained` where that is lower (None, or
+        not `relaxes`: unchanged): the share of its scan a sound fit may explain on this plan
         (`Recovery.explained_bar`). A map made with few scans (a SLAM map whose cells need
         several hits) lacks walls the robot sees: on orebro's map whose cells need 3 hits, the
         reference pose explains 10-17 % of three scans in a row (docs/benchmarks.md, "Sparser
         and denser maps"), and a fixed 25 % refused their right fits until the odometry had
         carried the track away."""
-        if explained is None or explained >= self.min_inlier_ratio:
+        if explained is None or not self.relaxes or explained >= self.min_inlier_ratio:
             return self
         return dataclasses.replace(self, min_inlier_ratio=explained)
 

@@ -10,7 +10,7 @@ from typing import Annotated
 
 from pydantic.dataclasses import dataclass as pydantic_dataclass
 
-from .._settings import SETTINGS, Real, Settings, Whole
+from .._settings import SETTINGS, Flag, Real, Settings, Whole
 
 
 @pydantic_dataclass(frozen=True, config=SETTINGS)
@@ -37,17 +37,20 @@ class LostRule(Settings):
             rule kept) the plan explains at least as well as a continuation must overlap
             (`ContinuityRule.min_overlap`) counts as clutter too: a crowd hides most walls.
         max_rejections: rejections in a row that mean lost (>= 1).
+        relaxes: whether `min_score` relaxes to what the track has learned (False: the bar as
+            set, always).
     """
 
     window: Annotated[int, Whole(ge=1, le=10_000)] = 5
     min_score: Annotated[float, Real(ge=0.0, le=1.0)] = 0.35
     max_rejections: Annotated[int, Whole(ge=1, le=10_000)] = 3
+    relaxes: Flag = True
 
     def relaxed_to(self, explained: float | None) -> LostRule:
-        """This rule with `min_score` lowered to `explained` where that is lower (None:
-        unchanged): the share of its scan a sound fit may explain on this plan
+        """This rule with `min_score` lowered to `explained` where that is lower (None, or not
+        `relaxes`: unchanged): the share of its scan a sound fit may explain on this plan
         (`Recovery.explained_bar`; see `AcceptanceGate.relaxed_to`)."""
-        if explained is None or explained >= self.min_score:
+        if explained is None or not self.relaxes or explained >= self.min_score:
             return self
         return dataclasses.replace(self, min_score=explained)
 
