@@ -83,9 +83,10 @@ corrupted run's scans more than 0.3 m off.
 `junk-draws` gives that share for each odometry draw of `--seeds` (the junk drawn with the same
 seed), per kind of corruption that recurs (one scan in five), its mean over the draws (where one
 draw's outcome turns on a few scans, the mean says more), and the largest over the draws of the
-99th percentile of the time per update. With `--no-spare-time` the recovery's searches score only
-the nodes of each update (`RecoveryConfig(search_spare_time=None)`): what it finds, and when, is
-then the same on any machine and under any load (`faults --no-spare-time` likewise).
+99th percentile of the time per update; with `--bars-as-set`, with the gate's and the lost
+rule's bars on the share of a scan a fit explains as set, not learned. With `--no-spare-time` the
+recovery's searches score only the nodes of each update (`RecoveryConfig(search_spare_time=None)`):
+what it finds, and when, is then the same on any machine and under any load (`faults --no-spare-time` likewise).
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
 the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
@@ -107,7 +108,8 @@ return more than the rule's margin short of the wall in its direction is in fron
 the margin past it beyond it), and gives the median and 90th percentile share of each: at the
 true pose a wall that stops every beam has neither but for clutter in front.
 
-`bars` tracks each log on the harness's plan drawn with `--min-hits` end points per cell, with the
+`bars` tracks each log, from the odometry of each of `--seeds`, on the harness's plan drawn with
+`--min-hits` end points per cell, with the
 `Localizer`'s defaults (the gate's and the lost rule's bars on the share of a scan a fit explains
 relaxed to what the track's sound fits make likely, `Recovery.explained_bar`) and with them as set
 (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`), and gives for each the ATE, the
@@ -390,11 +392,19 @@ def tracked(
     odom: np.ndarray,
     seconds: list[float] | None = None,
     recovery: RecoveryConfig | None = None,
+    bars_as_set: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 3) poses of a default `Localizer` (but for `recovery`, when given) started at the first
-    reference pose, and the (N, 3) poses it predicted from the odometry before each scan (stage 1,
-    `Prediction.pose`); each update's time in seconds is appended to `seconds` when given."""
-    loc = Localizer(PlanMap.from_ros_map(plan.yaml_path), tuple(map(float, ref[0])), recovery=recovery)
+    """(N, 3) poses of a default `Localizer` (but for `recovery`, when given, and with the gate's
+    and the lost rule's bars as set when `bars_as_set`) started at the first reference pose, and
+    the (N, 3) poses it predicted from the odometry before each scan (stage 1, `Prediction.pose`);
+    each update's time in seconds is appended to `seconds` when given."""
+    loc = Localizer(
+        PlanMap.from_ros_map(plan.yaml_path),
+        tuple(map(float, ref[0])),
+        recovery=recovery,
+        gate=AcceptanceGate(relaxes=not bars_as_set),
+        lost_rule=LostRule(relaxes=not bars_as_set),
+    )
     poses, predicted = [], []
     for s, o in zip(scans, odom):
         start = time.perf_counter()
@@ -451,44 +461,50 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
-def bars_study(harness: Any, logs: list[str], out: str, min_hits: int) -> None:
+def bars_study(harness: Any, logs: list[str], out: str, min_hits: int, seeds: list[int]) -> None:
     print(
-        "| log | relaxed (default): ATE, off, refused | as set: ATE, off, refused "
+        "| log | seed | relaxed (default): ATE, off, refused | as set: ATE, off, refused "
         "| bar learned: least, median | updates relaxed |"
     )
-    print("|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|")
     for name in logs:
-        plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
-        cells, learned, relaxed = [], [], 0
-        for relaxes in (True, False):
-            pm = PlanMap.from_ros_map(plan.yaml_path)
-            loc = Localizer(
-                pm,
-                tuple(map(float, ref[0])),
-                gate=AcceptanceGate(relaxes=relaxes),
-                lost_rule=LostRule(relaxes=relaxes),
+        for seed in seeds:
+            plan, scans, ref, odom = load(harness, name, out, seed, min_hits=min_hits)
+            cells, learned, relaxed = [], [], 0
+            for relaxes in (True, False):
+                loc = Localizer(
+                    PlanMap.from_ros_map(plan.yaml_path),
+                    tuple(map(float, ref[0])),
+                    gate=AcceptanceGate(relaxes=relaxes),
+                    lost_rule=LostRule(relaxes=relaxes),
+                )
+                loc.update(scans[0], tuple(map(float, odom[0])))
+                est, refused = [ref[0]], 0
+                for k in range(1, len(scans)):
+                    bar = loc._recovery.explained_bar
+                    e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
+                    est.append(np.array(e.pose))
+                    refused += not e.accepted
+                    if relaxes and k >= 20 and bar is not None:
+                        learned.append(bar)
+                        relaxed += bar < max(AcceptanceGate().min_inlier_ratio, LostRule().min_score)
+                m = harness.error_metrics(np.array(est), ref, 0.3)
+                cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %, {refused}")
+            a = np.array(learned) if learned else np.array([math.nan])
+            share = 100 * relaxed / max(1, len(learned))
+            print(
+                f"| {name} | {seed} | " + " | ".join(cells) + f" | {a.min():.2f}, {np.median(a):.2f} | {share:.0f} % |",
+                flush=True,
             )
-            loc.update(scans[0], tuple(map(float, odom[0])))
-            est, refused = [ref[0]], 0
-            for k in range(1, len(scans)):
-                bar = loc._recovery.explained_bar
-                e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
-                est.append(np.array(e.pose))
-                refused += not e.accepted
-                if relaxes and k >= 20 and bar is not None:
-                    learned.append(bar)
-                    relaxed += bar < max(AcceptanceGate().min_inlier_ratio, LostRule().min_score)
-            m = harness.error_metrics(np.array(est), ref, 0.3)
-            cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %, {refused}")
-        a = np.array(learned) if learned else np.array([math.nan])
-        share = 100 * relaxed / max(1, len(learned))
-        print(
-            f"| {name} | " + " | ".join(cells) + f" | {a.min():.2f}, {np.median(a):.2f} | {share:.0f} % |", flush=True
-        )
 
 
 def junk_draws_study(
-    harness: Any, logs: list[str], out: str, seeds: list[int], recovery: RecoveryConfig | None = None
+    harness: Any,
+    logs: list[str],
+    out: str,
+    seeds: list[int],
+    recovery: RecoveryConfig | None = None,
+    bars_as_set: bool = False,
 ) -> None:
     kinds = ("turned 30 degrees", "turned 90 degrees", "random clouds")
     print("| log | corruption | " + " | ".join(f"seed {s}" for s in seeds) + " | mean | p99 ms (worst draw) |")
@@ -501,7 +517,7 @@ def junk_draws_study(
             for kind in kinds:
                 seconds: list[float] = []
                 junk = corrupted(scans, kind, np.random.default_rng(seed))
-                est, _ = tracked(plan, junk, ref, odom, seconds, recovery)
+                est, _ = tracked(plan, junk, ref, odom, seconds, recovery, bars_as_set)
                 lost[kind].append(100 * harness.error_metrics(est, ref, 0.3)["lost_frac"])
                 p99[kind].append(1e3 * float(np.quantile(seconds, 0.99)))
         for kind in kinds:
@@ -759,7 +775,7 @@ def main() -> None:
         nargs="+",
         type=int,
         default=[1, 2, 3, 4, 5, 6, 7],
-        help="odometry seeds of the seeds and junk-draws studies",
+        help="odometry seeds of the seeds, junk-draws and bars studies",
     )
     parser.add_argument(
         "--search",
@@ -785,6 +801,11 @@ def main() -> None:
         help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
     )
     parser.add_argument(
+        "--bars-as-set",
+        action="store_true",
+        help="junk-draws study: AcceptanceGate(relaxes=False), LostRule(relaxes=False): the bars not learned",
+    )
+    parser.add_argument(
         "--min-hits", type=int, default=2, help="bars study: end points per cell of the plan (the harness's is 2)"
     )
     args = parser.parse_args()
@@ -805,7 +826,7 @@ def main() -> None:
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
         elif args.study == "bars":
-            bars_study(harness, args.logs, out, args.min_hits)
+            bars_study(harness, args.logs, out, args.min_hits, args.seeds)
         elif args.study == "reference":
             reference_study(harness, args.logs, out, args.filter_out, args.seed)
         elif args.study == "scan-sets":
@@ -813,7 +834,7 @@ def main() -> None:
         elif args.study == "junk":
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":
-            junk_draws_study(harness, args.logs, out, args.seeds, recovery)
+            junk_draws_study(harness, args.logs, out, args.seeds, recovery, args.bars_as_set)
         elif args.study == "field":
             field_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":
