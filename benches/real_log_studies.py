@@ -17,6 +17,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py reference        # the scans off the reference: whose error is it
     python benches/real_log_studies.py beyond           # returns a cast from the reference puts beyond the walls
     python benches/real_log_studies.py bars             # the gate's and lost rule's bars: relaxed or as set
+    python benches/real_log_studies.py kidnap           # a robot carried elsewhere: noticed, found again
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -117,6 +118,15 @@ share of scans more than 0.3 m off and the fits refused, and for the defaults th
 (`Recovery.explained_seen`) from the 20th update on: its least value and its median, and the share
 of updates whose bars were relaxed.
 
+`kidnap` tracks each log (harness odometry seed 7, plan drawn with `--min-hits` end points per cell)
+to six evenly spaced scans K, then feeds the scans from the first scan J at least 20 scans later
+and more than 8 m from scan K's reference pose, with odometry that continues smoothly (the robot
+carried there without telling the localizer), for 25 updates; with the searches' spare time off
+(`RecoveryConfig(search_spare_time=None)`, the same on any machine), with the bars learned and as
+set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`). It gives the updates until the
+localizer said lost and until its estimate was back within 0.3 m of the reference and not lost
+("-": not within the 25).
+
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
 """
@@ -150,6 +160,7 @@ from planicp import (
     _core,
     localize,
     relocalize,
+    se2,
 )
 from planicp.tracking.decisions import Prediction
 from planicp.tracking.odometry_fault import climb
@@ -498,6 +509,40 @@ def bars_study(harness: Any, logs: list[str], out: str, min_hits: int, seeds: li
             )
 
 
+def kidnap_study(harness: Any, logs: list[str], out: str, min_hits: int) -> None:
+    print("| log | K | J | learned: lost after, back after | as set: lost after, back after |")
+    print("|---|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
+        n = len(scans)
+        for k in np.linspace(30, n - 60, 6).astype(int):
+            j = next((j for j in range(k + 20, n - 25) if math.dist(ref[j][:2], ref[k][:2]) > 8.0), None)
+            if j is None:
+                continue
+            cells = []
+            for relaxes in (True, False):
+                loc = Localizer(
+                    PlanMap.from_ros_map(plan.yaml_path),
+                    tuple(map(float, ref[0])),
+                    gate=AcceptanceGate(relaxes=relaxes),
+                    lost_rule=LostRule(relaxes=relaxes),
+                    recovery=RecoveryConfig(search_spare_time=None),
+                )
+                for i in range(k + 1):
+                    loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
+                last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
+                lost_at = back_at = None
+                for i in range(25):
+                    moved = se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
+                    e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
+                    if lost_at is None and e.lost:
+                        lost_at = i + 1
+                    if back_at is None and not e.lost and math.dist(e.pose[:2], ref[j + i][:2]) < 0.3:
+                        back_at = i + 1
+                cells.append(f"{'-' if lost_at is None else lost_at}, {'-' if back_at is None else back_at}")
+            print(f"| {name} | {k} | {j} | " + " | ".join(cells) + " |", flush=True)
+
+
 def junk_draws_study(
     harness: Any,
     logs: list[str],
@@ -766,6 +811,7 @@ def main() -> None:
             "reference",
             "beyond",
             "bars",
+            "kidnap",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
@@ -806,7 +852,10 @@ def main() -> None:
         help="junk-draws study: AcceptanceGate(relaxes=False), LostRule(relaxes=False): the bars not learned",
     )
     parser.add_argument(
-        "--min-hits", type=int, default=2, help="bars study: end points per cell of the plan (the harness's is 2)"
+        "--min-hits",
+        type=int,
+        default=2,
+        help="bars and kidnap studies: end points per cell of the plan (the harness's is 2)",
     )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
@@ -825,6 +874,8 @@ def main() -> None:
             log_odometry_study(harness, args.logs)
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
+        elif args.study == "kidnap":
+            kidnap_study(harness, args.logs, out, args.min_hits)
         elif args.study == "bars":
             bars_study(harness, args.logs, out, args.min_hits, args.seeds)
         elif args.study == "reference":

@@ -488,6 +488,55 @@ def test_a_fit_only_the_relaxed_bars_pass_keeps_the_track_but_teaches_and_vouche
     assert len(recovery.explained_shares) == recorded + 1
 
 
+def test_a_track_kept_only_by_the_relaxed_lost_bar_is_doubted_and_a_better_place_replaces_it(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # Sound fits that spread widely (a patchy map): the lost rule's bar is relaxed below 0.2.
+    loc = Localizer(plan, path[0])
+    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
+        loc._recovery.observe_explained(share)
+    relaxed = loc._rules()
+    assert relaxed.lost.min_score < 0.2 < relaxed.lost_as_set.min_score
+    score = ScoreDecision(0.2, False, None, "")
+    prediction = prediction_at(path[0])
+    sound = Correction(path[0], SMALL, True, None, "fused")
+    search = SearchDecision(None, None, None, "", False)
+    detector = LostDetector(relaxed.lost_as_set)
+    verdicts = [stages.judge_lost(detector, score, sound, search, False, relaxed) for _ in range(5)]
+    assert not any(v.lost for v in verdicts) and verdicts[-1].doubted and not verdicts[0].doubted
+    assert "searched beside the track" in verdicts[-1].why
+    detector = LostDetector(relaxed.lost_as_set)
+    as_set = replace(relaxed, lost=relaxed.lost_as_set)
+    verdicts = [stages.judge_lost(detector, score, sound, search, False, as_set) for _ in range(5)]
+    assert verdicts[-1].lost and not verdicts[-1].doubted
+    # In doubt, the whole plan is searched beside the track (here a place 5 m and 115 degrees
+    # off, which the scans do not fit): the place the scans fit replaces it.
+    config = RecoveryConfig(confirmations=2, search_nodes=None)  # each search within its update
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+    doubted = LostDecision(False, False, True, 0.2, 0, doubted=True)
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    wrong = (path[0][0] + 4.0, path[0][1] - 3.0, path[0][2] + 2.0)
+    decisions = []
+    for i in range(4):
+        motion = (0.0, 0.0, 0.0) if i == 0 else se2.between(path[i - 1], path[i])
+        wrong = se2.compose(wrong, motion)
+        tracked = prediction_at(wrong)
+        correction = Correction(wrong, SMALL, True, None, "fused")
+        decisions.append(stages.recover(recovery, LostDetector(), scans[i], tracked, fit, correction, doubted))
+        if decisions[-1].adopted is not None:
+            break
+    assert all(d.action == "verify" for d in decisions) and decisions[0].on_trial
+    adopted = decisions[-1].adopted
+    assert adopted is not None, [d.why for d in decisions]
+    assert error(path[len(decisions) - 1], adopted.pose)[0] < 0.05
+    # Not in doubt, nor on trial: the recovery is idle.
+    idle = stages.recover(
+        recovery, LostDetector(), scans[0], prediction, fit, sound, LostDecision(False, False, True, 0.9, 0)
+    )
+    assert idle.action == "clear" and not idle.on_trial
+
+
 def test_an_estimate_lists_the_decisions_of_its_stages_in_order(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

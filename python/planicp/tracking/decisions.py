@@ -426,6 +426,10 @@ class LostDecision:
             lost, explains as much of the scan as the recovery asks of a place it adopts).
         window_score: the mean score over the lost rule's window after this scan.
         rejections: scans in a row the lost rule counts as rejected.
+        doubted: not lost only because the rule's bar is relaxed to what the track has learned of
+            the plan (`LostRule.relaxed_to`): the rule as set would say lost. The recovery then
+            searches the whole plan beside the track, and a place that explains the scans better
+            replaces it (`Recovery.doubt`).
     """
 
     lost: bool
@@ -433,6 +437,7 @@ class LostDecision:
     counted_accepted: bool
     window_score: float
     rejections: int
+    doubted: bool = False
 
     @property
     def why(self) -> str:
@@ -440,7 +445,8 @@ class LostDecision:
         state = "lost" if self.lost else "tracking"
         if self.held:
             return f"{state}: the scan is not counted (clutter)"
-        return f"{state}: mean score {self.window_score:.2f}, {self.rejections} rejection(s) in a row"
+        doubt = "; lost by the bar as set: the whole plan is searched beside the track" if self.doubted else ""
+        return f"{state}: mean score {self.window_score:.2f}, {self.rejections} rejection(s) in a row{doubt}"
 
 
 @dataclass(frozen=True)

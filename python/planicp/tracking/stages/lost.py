@@ -32,4 +32,12 @@ def judge_lost(
     clears = not was_lost or search.searched or score.score >= rules.recovery.min_inlier_ratio
     counted = correction.accepted and clears
     lost = detector.update(score.score, counted, rules.lost)
-    return LostDecision(lost, False, counted, detector.score, detector.rejections)
+    return LostDecision(lost, False, counted, detector.score, detector.rejections, _doubted(detector, lost, rules))
+
+
+def _doubted(detector: LostDetector, lost: bool, rules: Rules) -> bool:
+    """Whether the track is kept only because the lost rule's bar is relaxed: the rule as set
+    (`Rules.lost_as_set`) would say lost over the same window."""
+    as_set = rules.lost_as_set
+    full = len(detector.scores) >= as_set.window
+    return not lost and full and detector.score < as_set.min_score

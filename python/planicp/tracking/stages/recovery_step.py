@@ -26,7 +26,9 @@ def recover(
     its places follow the odometry), and the place it adopts, if any: then the lost state ends
     (`detector` is reset). While a place adopted before the whole plan was searched is on trial,
     that search goes on beside the tracked pose (`Recovery.verify`, from the `correction`), and a
-    better place it finds is adopted. Otherwise the recovery forgets its places.
+    better place it finds is adopted; so it does, begun with this scan, while the track is kept
+    only because the lost rule's bar is relaxed (`LostDecision.doubted`, `Recovery.doubt`).
+    Otherwise the recovery forgets its places.
 
     `lost_at`: where the localizer lost track when that is not the prediction (the place an
     adopted jump left behind, which the scans preferred to the track: `RecoveryDecision.lost_at`);
@@ -40,8 +42,11 @@ def recover(
     elif lost.lost:
         found = recovery.step(points, prediction.motion, prediction.pose, likelier=lost_at)
         action = "step"
-    elif recovery.on_trial:
-        found = recovery.verify(points, prediction.motion, correction.pose)
+    elif recovery.on_trial or lost.doubted:
+        begin = not recovery.on_trial
+        if begin:
+            recovery.doubt()
+        found = recovery.verify(points, prediction.motion, correction.pose, begin=begin)
         action = "verify"
     else:
         recovery.clear()
