@@ -121,9 +121,9 @@ of updates whose bars were relaxed.
 `kidnap` tracks each log (harness odometry seed 7, plan drawn with `--min-hits` end points per cell)
 to six evenly spaced scans K, then feeds the scans from the first scan J at least 20 scans later
 and more than 8 m from scan K's reference pose, with odometry that continues smoothly (the robot
-carried there without telling the localizer), for 25 updates; with the searches' spare time off
-(`RecoveryConfig(search_spare_time=None)`, the same on any machine), with the bars learned and as
-set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`). It gives the updates until the
+carried there without telling the localizer), for 25 updates, with the `Localizer`'s defaults
+(with `--no-spare-time`, the searches' spare time off: the same on any machine), with the bars
+learned and as set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`). It gives the updates until the
 localizer said lost and until its estimate was back within 0.3 m of the reference and not lost
 ("-": not within the 25).
 
@@ -509,7 +509,9 @@ def bars_study(harness: Any, logs: list[str], out: str, min_hits: int, seeds: li
             )
 
 
-def kidnap_study(harness: Any, logs: list[str], out: str, min_hits: int) -> None:
+def kidnap_study(
+    harness: Any, logs: list[str], out: str, min_hits: int, recovery: RecoveryConfig | None = None
+) -> None:
     print("| log | K | J | learned: lost after, back after | as set: lost after, back after |")
     print("|---|---|---|---|---|")
     for name in logs:
@@ -526,7 +528,7 @@ def kidnap_study(harness: Any, logs: list[str], out: str, min_hits: int) -> None
                     tuple(map(float, ref[0])),
                     gate=AcceptanceGate(relaxes=relaxes),
                     lost_rule=LostRule(relaxes=relaxes),
-                    recovery=RecoveryConfig(search_spare_time=None),
+                    recovery=recovery,
                 )
                 for i in range(k + 1):
                     loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
@@ -839,7 +841,7 @@ def main() -> None:
     parser.add_argument(
         "--no-spare-time",
         action="store_true",
-        help="junk-draws and faults studies: RecoveryConfig(search_spare_time=None), the same on any machine",
+        help="junk-draws, faults and kidnap studies: RecoveryConfig(search_spare_time=None), the same on any machine",
     )
     parser.add_argument(
         "--filter-out",
@@ -875,7 +877,7 @@ def main() -> None:
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
         elif args.study == "kidnap":
-            kidnap_study(harness, args.logs, out, args.min_hits)
+            kidnap_study(harness, args.logs, out, args.min_hits, recovery)
         elif args.study == "bars":
             bars_study(harness, args.logs, out, args.min_hits, args.seeds)
         elif args.study == "reference":
