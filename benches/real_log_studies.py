@@ -396,6 +396,19 @@ def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
             )
 
 
+def localizer(plan: Any, start: np.ndarray, relaxes: bool = True, recovery: RecoveryConfig | None = None) -> Localizer:
+    """A `Localizer` on the harness's plan image read as a user reads it, at `start`, with the
+    defaults but for `recovery` (when given) and the gate's and lost rule's bars as set unless
+    `relaxes`."""
+    return Localizer(
+        PlanMap.from_ros_map(plan.yaml_path),
+        tuple(map(float, start)),
+        recovery=recovery,
+        gate=AcceptanceGate(relaxes=relaxes),
+        lost_rule=LostRule(relaxes=relaxes),
+    )
+
+
 def tracked(
     plan: Any,
     scans: list[np.ndarray],
@@ -409,13 +422,7 @@ def tracked(
     and the lost rule's bars as set when `bars_as_set`) started at the first reference pose, and
     the (N, 3) poses it predicted from the odometry before each scan (stage 1, `Prediction.pose`);
     each update's time in seconds is appended to `seconds` when given."""
-    loc = Localizer(
-        PlanMap.from_ros_map(plan.yaml_path),
-        tuple(map(float, ref[0])),
-        recovery=recovery,
-        gate=AcceptanceGate(relaxes=not bars_as_set),
-        lost_rule=LostRule(relaxes=not bars_as_set),
-    )
+    loc = localizer(plan, ref[0], not bars_as_set, recovery)
     poses, predicted = [], []
     for s, o in zip(scans, odom):
         start = time.perf_counter()
@@ -483,12 +490,7 @@ def bars_study(harness: Any, logs: list[str], out: str, min_hits: int, seeds: li
             plan, scans, ref, odom = load(harness, name, out, seed, min_hits=min_hits)
             cells, learned, relaxed = [], [], 0
             for relaxes in (True, False):
-                loc = Localizer(
-                    PlanMap.from_ros_map(plan.yaml_path),
-                    tuple(map(float, ref[0])),
-                    gate=AcceptanceGate(relaxes=relaxes),
-                    lost_rule=LostRule(relaxes=relaxes),
-                )
+                loc = localizer(plan, ref[0], relaxes)
                 loc.update(scans[0], tuple(map(float, odom[0])))
                 est, refused = [ref[0]], 0
                 for k in range(1, len(scans)):
@@ -523,13 +525,7 @@ def kidnap_study(
                 continue
             cells = []
             for relaxes in (True, False):
-                loc = Localizer(
-                    PlanMap.from_ros_map(plan.yaml_path),
-                    tuple(map(float, ref[0])),
-                    gate=AcceptanceGate(relaxes=relaxes),
-                    lost_rule=LostRule(relaxes=relaxes),
-                    recovery=recovery,
-                )
+                loc = localizer(plan, ref[0], relaxes, recovery)
                 for i in range(k + 1):
                     loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
                 last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))

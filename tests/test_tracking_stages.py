@@ -430,6 +430,20 @@ def test_a_scan_vouches_for_the_pose_when_its_fit_explains_as_much_as_the_tracks
     assert not relocalized.vouched and relocalized.explained_share is None
 
 
+PATCHY = (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44)
+"""Shares of their scans the sound fits of orebro's first 13 scans explained on its map drawn with
+three end points per cell: a patchy map, whose sound fits spread widely."""
+
+
+def on_a_patchy_map(plan: PlanMap, pose: Pose) -> Localizer:
+    """A default `Localizer` at `pose` that has recorded the sound fits' shares `PATCHY`: the gate's
+    and the lost rule's bars are relaxed below 0.2."""
+    loc = Localizer(plan, pose)
+    for share in PATCHY:
+        loc._recovery.observe_explained(share)
+    return loc
+
+
 def test_the_gate_and_the_lost_rule_relax_their_bars_on_what_a_fit_explains_to_what_sound_fits_teach(
     plan: PlanMap,
 ) -> None:
@@ -448,9 +462,7 @@ def test_the_gate_and_the_lost_rule_relax_their_bars_on_what_a_fit_explains_to_w
     assert loc._rules().gate == gate and loc._rules().lost == rule
     # A map that lacks many walls: sound fits explained 44-99 %, and a right fit may explain less
     # than the bars as set.
-    loc = Localizer(plan, (0.0, 0.0, 0.0))
-    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
-        loc._recovery.observe_explained(share)
+    loc = on_a_patchy_map(plan, (0.0, 0.0, 0.0))
     bar = loc._recovery.explained_seen
     assert 0.0 < bar < 0.15
     rules_now = loc._rules()
@@ -467,9 +479,7 @@ def test_the_gate_and_the_lost_rule_relax_their_bars_on_what_a_fit_explains_to_w
 def test_a_fit_only_the_relaxed_bars_pass_keeps_the_track_but_teaches_and_vouches_for_nothing(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
-    loc = Localizer(plan, path[0])
-    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
-        loc._recovery.observe_explained(share)
+    loc = on_a_patchy_map(plan, path[0])
     the_rules = loc._rules()
     recovery = loc._recovery
     result = localize(scans[0], plan, path[0], IcpConfig.for_tracking())
@@ -492,10 +502,7 @@ def test_a_track_kept_only_by_the_relaxed_lost_bar_is_doubted_and_a_better_place
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
     # Sound fits that spread widely (a patchy map): the lost rule's bar is relaxed below 0.2.
-    loc = Localizer(plan, path[0])
-    for share in (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44):
-        loc._recovery.observe_explained(share)
-    relaxed = loc._rules()
+    relaxed = on_a_patchy_map(plan, path[0])._rules()
     assert relaxed.lost.min_score < 0.2 < relaxed.lost_as_set.min_score
     score = ScoreDecision(0.2, False, None, "")
     prediction = prediction_at(path[0])
