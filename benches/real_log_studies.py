@@ -110,12 +110,12 @@ the margin past it beyond it), and gives the median and 90th percentile share of
 true pose a wall that stops every beam has neither but for clutter in front.
 
 `bars` tracks each log, from the odometry of each of `--seeds`, on the harness's plan drawn with
-`--min-hits` end points per cell, with the
-`Localizer`'s defaults (the gate's and the lost rule's bars on the share of a scan a fit explains
-relaxed to what the track's sound fits make likely, `Recovery.explained_bar`) and with them as set
-(`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`), and gives for each the ATE, the
-share of scans more than 0.3 m off and the fits refused, and for the defaults the bar learned
-(`Recovery.explained_seen`) from the 20th update on: its least value and its median, and the share
+`--min-hits` end points per cell of `--resolution` metres, with the `Localizer`'s defaults (the
+gate's and the lost rule's bars on the share of a scan a fit explains relaxed to what the track's
+sound fits make likely, `Recovery.explained_bar`) and with them as set (`AcceptanceGate(relaxes=
+False)`, `LostRule(relaxes=False)`), and gives for each the ATE, the share of scans more than
+0.3 m off, the fits refused and the 99th percentile of the time per update, and for the defaults
+the bar learned (`Recovery.explained_seen`) from the 20th update on: its least value and its median, and the share
 of updates whose bars were relaxed.
 
 `kidnap` tracks each log (harness odometry seed 7, plan drawn with `--min-hits` end points per cell)
@@ -479,30 +479,35 @@ def junk_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
 
 
-def bars_study(harness: Any, logs: list[str], out: str, min_hits: int, seeds: list[int]) -> None:
+def bars_study(
+    harness: Any, logs: list[str], out: str, min_hits: int, seeds: list[int], resolution: float = 0.05
+) -> None:
     print(
-        "| log | seed | relaxed (default): ATE, off, refused | as set: ATE, off, refused "
+        "| log | seed | relaxed (default): ATE, off, refused, p99 ms | as set: ATE, off, refused, p99 ms "
         "| bar learned: least, median | updates relaxed |"
     )
     print("|---|---|---|---|---|---|")
     for name in logs:
         for seed in seeds:
-            plan, scans, ref, odom = load(harness, name, out, seed, min_hits=min_hits)
+            plan, scans, ref, odom = load(harness, name, out, seed, resolution=resolution, min_hits=min_hits)
             cells, learned, relaxed = [], [], 0
             for relaxes in (True, False):
                 loc = localizer(plan, ref[0], relaxes)
                 loc.update(scans[0], tuple(map(float, odom[0])))
-                est, refused = [ref[0]], 0
+                est, refused, spent = [ref[0]], 0, []
                 for k in range(1, len(scans)):
                     bar = loc._recovery.explained_bar
+                    start = time.perf_counter()
                     e = loc.update(np.ascontiguousarray(scans[k]), tuple(map(float, odom[k])))
+                    spent.append(time.perf_counter() - start)
                     est.append(np.array(e.pose))
                     refused += not e.accepted
                     if relaxes and k >= 20 and bar is not None:
                         learned.append(bar)
                         relaxed += bar < max(AcceptanceGate().min_inlier_ratio, LostRule().min_score)
                 m = harness.error_metrics(np.array(est), ref, 0.3)
-                cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %, {refused}")
+                p99 = 1e3 * float(np.percentile(spent, 99))
+                cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %, {refused}, {p99:.1f}")
             a = np.array(learned) if learned else np.array([math.nan])
             share = 100 * relaxed / max(1, len(learned))
             print(
@@ -845,6 +850,9 @@ def main() -> None:
         help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
     )
     parser.add_argument(
+        "--resolution", type=float, default=0.05, help="bars study: the plan cells, metres (the harness: 0.05)"
+    )
+    parser.add_argument(
         "--bars-as-set",
         action="store_true",
         help="junk-draws study: AcceptanceGate(relaxes=False), LostRule(relaxes=False): the bars not learned",
@@ -875,7 +883,7 @@ def main() -> None:
         elif args.study == "kidnap":
             kidnap_study(harness, args.logs, out, args.min_hits, recovery)
         elif args.study == "bars":
-            bars_study(harness, args.logs, out, args.min_hits, args.seeds)
+            bars_study(harness, args.logs, out, args.min_hits, args.seeds, args.resolution)
         elif args.study == "reference":
             reference_study(harness, args.logs, out, args.filter_out, args.seed)
         elif args.study == "scan-sets":
