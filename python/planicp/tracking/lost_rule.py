@@ -89,8 +89,11 @@ class LostDetector:
 
     @property
     def lost(self) -> bool:
-        """Whether the rule says lost now."""
-        rule = self.rule if self.judged_by is None else self.judged_by
+        """Whether the rule says lost now (as the last update judged, `judged_by`)."""
+        return self.lost_by(self.rule if self.judged_by is None else self.judged_by)
+
+    def lost_by(self, rule: LostRule) -> bool:
+        """Whether `rule` says lost over the scores and rejections so far."""
         full = len(self.scores) >= rule.window
         return (full and self.score < rule.min_score) or self.rejections >= rule.max_rejections
 

@@ -249,6 +249,8 @@ class Recovery:
     hypotheses: list[Hypothesis] = field(default_factory=list)
     beyond_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
     explained_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
+    # `explained_seen` of the shares recorded so far (None: to be computed): every update reads it.
+    _explained_bound: float | None = None
     searches: int = 0
     # The search cycle in progress (see `_search`): the search near the last pose and the search
     # of the whole plan, each with the odometry motion since its scan and that motion's covariance.
@@ -739,6 +741,7 @@ class Recovery:
         """Records the share of a soundly tracked scan's returns its fit explained (inliers over
         the whole scan)."""
         self.explained_shares.append(inlier_ratio)
+        self._explained_bound = None
 
     @property
     def explained_seen(self) -> float:
@@ -753,8 +756,10 @@ class Recovery:
         scans at a mean of 0.81, where sound tracking of those scans explained 0.79. In the
         simulated office the bound is 0.48-0.86 after 10 s of tracking, and kidnapped robots are
         found again as with the percentile (docs/benchmarks.md)."""
-        interval = _prediction_interval(self.explained_shares)
-        return 0.0 if interval is None else max(0.0, interval[0] - interval[1])
+        if self._explained_bound is None:
+            interval = _prediction_interval(self.explained_shares)
+            self._explained_bound = 0.0 if interval is None else max(0.0, interval[0] - interval[1])
+        return self._explained_bound
 
     @property
     def explained_bar(self) -> float | None:

@@ -38,6 +38,4 @@ def judge_lost(
 def _doubted(detector: LostDetector, lost: bool, rules: Rules) -> bool:
     """Whether the track is kept only because the lost rule's bar is relaxed: the rule as set
     (`Rules.lost_as_set`) would say lost over the same window."""
-    as_set = rules.lost_as_set
-    full = len(detector.scores) >= as_set.window
-    return not lost and full and detector.score < as_set.min_score
+    return not lost and detector.lost_by(rules.lost_as_set)
