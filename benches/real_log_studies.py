@@ -18,6 +18,7 @@ scans draw the map_server plan, the odd-numbered ones are tracked from its synth
     python benches/real_log_studies.py beyond           # returns a cast from the reference puts beyond the walls
     python benches/real_log_studies.py bars             # the gate's and lost rule's bars: relaxed or as set
     python benches/real_log_studies.py kidnap           # a robot carried elsewhere: noticed, found again
+    python benches/real_log_studies.py catch-up         # a recovery's alignment against a search node, in time
 
 `search` runs `planicp.relocalize` (the whole plan, no guess) on 12 evenly spaced tracked scans of
 each log at the search settings compared in docs/benchmarks.md; a search is right when its best
@@ -125,7 +126,13 @@ carried there without telling the localizer), for 25 updates, with the `Localize
 (with `--no-spare-time`, the searches' spare time off: the same on any machine), with the bars
 learned and as set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`). It gives the updates until the
 localizer said lost and until its estimate was back within 0.3 m of the reference and not lost
-("-": not within the 25).
+("-": not within the 25; `--updates` feeds more).
+
+`catch-up` times what the recovery counts against an update's search budget on each log's plan:
+the alignment of a place (`Recovery._follow`: ICP from the odometry's prediction and the check
+against returns beyond the walls) of every 7th tracked scan from its reference pose, and a search
+node of `relocalize` of the whole plan (every 60th tracked scan), and gives their medians and how
+many nodes an alignment takes as long as (`ALIGNMENT_NODES` counts 2,000).
 
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
@@ -164,6 +171,7 @@ from planicp import (
 )
 from planicp.tracking.decisions import Prediction
 from planicp.tracking.odometry_fault import climb
+from planicp.tracking.recovery import Hypothesis
 
 SEARCH_SETTINGS = {
     "0.1 m, heading step from the scan, 200 points": RelocalizationConfig(
@@ -517,7 +525,7 @@ def bars_study(
 
 
 def kidnap_study(
-    harness: Any, logs: list[str], out: str, min_hits: int, recovery: RecoveryConfig | None = None
+    harness: Any, logs: list[str], out: str, min_hits: int, recovery: RecoveryConfig | None = None, updates: int = 25
 ) -> None:
     print("| log | K | J | learned: lost after, back after | as set: lost after, back after |")
     print("|---|---|---|---|---|")
@@ -525,7 +533,7 @@ def kidnap_study(
         plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
         n = len(scans)
         for k in np.linspace(30, n - 60, 6).astype(int):
-            j = next((j for j in range(k + 20, n - 25) if math.dist(ref[j][:2], ref[k][:2]) > 8.0), None)
+            j = next((j for j in range(k + 20, n - updates) if math.dist(ref[j][:2], ref[k][:2]) > 8.0), None)
             if j is None:
                 continue
             cells = []
@@ -535,7 +543,7 @@ def kidnap_study(
                     loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
                 last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
                 lost_at = back_at = None
-                for i in range(25):
+                for i in range(updates):
                     moved = se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
                     e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
                     if lost_at is None and e.lost:
@@ -544,6 +552,27 @@ def kidnap_study(
                         back_at = i + 1
                 cells.append(f"{'-' if lost_at is None else lost_at}, {'-' if back_at is None else back_at}")
             print(f"| {name} | {k} | {j} | " + " | ".join(cells) + " |", flush=True)
+
+
+def catch_up_study(harness: Any, logs: list[str], out: str) -> None:
+    print("| log | alignment ms (median) | node us (median) | nodes an alignment takes as long as |")
+    print("|---|---|---|---|")
+    for name in logs:
+        plan, scans, ref, odom = load(harness, name, out)
+        pm = PlanMap.from_ros_map(plan.yaml_path)
+        recovery = Localizer(pm, tuple(map(float, ref[0])))._recovery
+        recovery.new_update()
+        align: list[float] = []
+        for j in range(30, len(scans) - 1, 7):
+            here = tuple(map(float, ref[j]))
+            place = Hypothesis(here, localize(scans[j], pm, here, recovery.icp), 1, 0.9, False)
+            motion = se2.between(tuple(map(float, odom[j])), tuple(map(float, odom[j + 1])))
+            start = time.perf_counter()
+            recovery._follow(place, np.ascontiguousarray(scans[j + 1]), motion)
+            align.append(time.perf_counter() - start)
+        node = [r.seconds / r.nodes for r in (relocalize(scans[j], pm) for j in range(30, len(scans) - 30, 60))]
+        a, b = float(np.median(align)), float(np.median(node))
+        print(f"| {name} | {1e3 * a:.2f} | {1e6 * b:.2f} | {a / b:,.0f} |", flush=True)
 
 
 def junk_draws_study(
@@ -815,6 +844,7 @@ def main() -> None:
             "beyond",
             "bars",
             "kidnap",
+            "catch-up",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
@@ -863,6 +893,9 @@ def main() -> None:
         default=2,
         help="bars and kidnap studies: end points per cell of the plan (the harness's is 2)",
     )
+    parser.add_argument(
+        "--updates", type=int, default=25, help="kidnap study: updates fed after the kidnap (the default 25)"
+    )
     args = parser.parse_args()
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
     if spec is None or spec.loader is None or not os.path.exists(args.harness):
@@ -881,7 +914,9 @@ def main() -> None:
         elif args.study == "beyond":
             beyond_study(harness, args.logs, out)
         elif args.study == "kidnap":
-            kidnap_study(harness, args.logs, out, args.min_hits, recovery)
+            kidnap_study(harness, args.logs, out, args.min_hits, recovery, args.updates)
+        elif args.study == "catch-up":
+            catch_up_study(harness, args.logs, out)
         elif args.study == "bars":
             bars_study(harness, args.logs, out, args.min_hits, args.seeds, args.resolution)
         elif args.study == "reference":

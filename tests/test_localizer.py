@@ -562,7 +562,7 @@ def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
     for explained in (False, True):
         recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
         run = recovery._start(scans[20], SearchRegion(path[20], 0.5, math.radians(10.0)))
-        run.drive.add(se2.between(path[20], path[21]), recovery.motion_noise)
+        run.log.append((junk, se2.between(path[20], path[21])))
         recovery._follow_all(junk, se2.between(path[20], path[21]))  # no place followed yet
         recovery._explained = explained
         recovery.new_update()
@@ -576,6 +576,36 @@ def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
         assert recovery._follow_all(scans[22], se2.between(path[21], path[22]))
         [followed] = recovery.hypotheses
         assert not followed.missed and followed.streak == 2 and error(followed.pose, path[22])[0] < 0.03
+
+
+def test_a_search_that_ends_updates_after_its_scan_follows_its_places_through_the_scans_since(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A search that ends 25 updates after its scan, with odometry that turned 3 degrees too far
+    on every step, follows its place through the 25 scans since, as a hypothesis is followed: the
+    place is within 3 cm of the robot with a streak of 26 scans, where the place moved by the
+    odometry alone would be more than 0.4 m off. Within a budget of one alignment an update the
+    places catch up over several calls, each counted as `ALIGNMENT_NODES` nodes."""
+    from planicp.tracking.recovery import ALIGNMENT_NODES
+    from planicp.tracking.relocalize import SearchRegion
+
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    run = recovery._start(scans[10], SearchRegion(path[10], 0.3, math.radians(10.0)))
+    coasted = path[10]
+    for a, b, scan in zip(path[10:35], path[11:36], scans[11:36]):
+        x, y, yaw = se2.between(a, b)
+        run.log.append((scan, (x, y, yaw + math.radians(3.0))))
+        coasted = se2.compose(coasted, run.log[-1][1])
+    assert error(coasted, path[35])[0] > 0.4
+    recovery.new_update()
+    calls = 1
+    while not recovery._advance(run, scans[35], ALIGNMENT_NODES, whole_plan=False):
+        calls += 1
+        assert calls < 100
+    assert calls > 20
+    [place] = recovery.hypotheses
+    assert place.streak == 26 and not place.missed and error(place.pose, path[35])[0] < 0.03
+    assert run.log == [] and run.places == []
 
 
 def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(

@@ -10,10 +10,11 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    `search_nodes` of their branch and bound together (`SearchBudget`, half of it kept for the
    whole plan's search while it runs, `SearchInSteps`) and a search runs over as many updates as
    it needs: an update never stalls.
-   Every distinct candidate of a search that explains at least `min_inlier_ratio` of its scan,
-   moved with the odometry since that scan and aligned again, becomes a hypothesis when the
-   search ends (moved only, when the scan of that update is explained by none of them nor by any
-   place followed). The search near the pose starts again, around the pose and with the scan of
+   When a search ends, every distinct candidate that explains at least `min_inlier_ratio` of its
+   scan is followed through the scans of the updates since (kept while the search runs), as the
+   hypotheses are followed (step 2), within the updates' budgets (`_catch_up`), and joins the
+   hypotheses once it has caught up, each scan it explained counted in its streak. The search
+   near the pose starts again, around the pose and with the scan of
    that update, while none of its places is followed.
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
    prediction; for one that followed the odometry over scans it was not fitted to, a search
@@ -67,7 +68,7 @@ from .icp_result import IcpResult
 from .localize import localize
 from .motion_noise import MotionNoise, largest_position_std
 from .occlusion_rule import OcclusionFilter
-from .relocalize import Candidate, Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
+from .relocalize import Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
 from .student_t import student_t_quantile
 
 
@@ -101,8 +102,8 @@ class RecoveryConfig(Settings):
             that needs more goes on over the next updates (the recovery's), or finds nothing
             (the search around a prediction, whose fit's own place then waits for the next
             scan). A whole-plan search of a 100 x 120 m building scores 0.3-0.7 million: places
-            found with an older scan are moved by the odometry since and aligned again with the
-            current one (`_found_again`), and a place found near the last pose that explains the
+            found with an older scan are followed through the scans since (`_catch_up`, each
+            alignment counted as `ALIGNMENT_NODES` nodes), and a place found near the last pose that explains the
             scans as well as sound tracking did is adopted before it ends, on trial (`verify`).
             None: each search runs to its end within the update that starts it (seconds on a
             large plan).
@@ -354,29 +355,37 @@ class Recovery:
         that places the scans keep refuting do not linger. Returns whether the scan was weighed
         (False: the places followed the odometry over it); `_explained` says whether some place
         explained it (for the places a search that ends with this scan finds, `_advance`)."""
-        followed = [self._follow(h, scan, motion) for h in self.hypotheses]
-        self._explained = explained_elsewhere or any(f is not None for f in followed)
-        if self.hypotheses and not explained_elsewhere and all(f is None for f in followed):
-            self.hypotheses = [
-                dataclasses.replace(
-                    h,
-                    pose=compose(h.pose, motion),
-                    missed=True,
-                    spread=self.motion_noise.propagate_checked(h.spread, h.pose, motion),
-                )
-                for h in self.hypotheses
-                if not h.missed
-            ]
-            return False
-        self.hypotheses = [f for f in followed if f is not None]
-        return True
+        self.hypotheses, explained, weighed = self._weighed(
+            self.hypotheses, scan, motion, explained_elsewhere=explained_elsewhere
+        )
+        self._explained = explained_elsewhere or explained
+        return weighed
+
+    def _weighed(
+        self, places: list[Hypothesis], scan: NDArray[np.float64], motion: Pose, *, explained_elsewhere: bool
+    ) -> tuple[list[Hypothesis], bool, bool]:
+        """`places` followed to `scan` as `_follow_all` follows the hypotheses: (the places kept,
+        whether one of them explained the scan, whether the scan was weighed)."""
+        followed = [self._follow(h, scan, motion) for h in places]
+        explained = any(f is not None for f in followed)
+        if places and not explained_elsewhere and not explained:
+            return [self._coasted(h, motion, missed=True) for h in places if not h.missed], False, False
+        return [f for f in followed if f is not None], explained, True
+
+    def _coasted(self, hypothesis: Hypothesis, motion: Pose, *, missed: bool = False) -> Hypothesis:
+        """`hypothesis` moved by the odometry's `motion` alone, with that motion's covariance
+        added to its `spread` (`missed`: over a scan no place explained)."""
+        return dataclasses.replace(
+            hypothesis,
+            pose=compose(hypothesis.pose, motion),
+            missed=missed or hypothesis.missed,
+            spread=self.motion_noise.propagate_checked(hypothesis.spread, hypothesis.pose, motion),
+        )
 
     def _confirmed(self) -> Hypothesis | None:
         """Drops the hypotheses whose mean inlier ratio is more than `margin` below the best's;
         returns the one left when it is alone and has explained `confirmations` scans in a row."""
-        if self.hypotheses:
-            best = max(h.mean_inlier_ratio for h in self.hypotheses)
-            self.hypotheses = [h for h in self.hypotheses if h.mean_inlier_ratio >= best - self.config.margin]
+        self.hypotheses = _within_margin(self.hypotheses, self.config.margin)
         if len(self.hypotheses) == 1 and self.hypotheses[0].streak >= self.config.confirmations:
             return self.hypotheses[0]
         return None
@@ -430,19 +439,14 @@ class Recovery:
     def coast(self, motion: Pose) -> None:
         """A scan too small to align while lost: the hypotheses, and the odometry motion since
         the running search's scan, follow `motion` alone."""
-        self.hypotheses = [
-            dataclasses.replace(
-                h, pose=compose(h.pose, motion), spread=self.motion_noise.propagate_checked(h.spread, h.pose, motion)
-            )
-            for h in self.hypotheses
-        ]
+        self.hypotheses = [self._coasted(h, motion) for h in self.hypotheses]
         if self._lost_at is not None:
             self._drive.add(motion, self.motion_noise)
         elif self._vouched_at is not None:  # on trial: the drive since the last vouched pose
             self._since_vouched.add(motion, self.motion_noise)
         for run in (self._near, self._whole):
             if run is not None:
-                run.drive.add(motion, self.motion_noise)
+                run.log.append((None, motion))
 
     def clear(self) -> None:
         """Forgets every hypothesis and any search in progress (the pose was given or found)."""
@@ -479,8 +483,8 @@ class Recovery:
         the searches around the prediction cannot take either); when it ends and none of its places
         is followed, it starts again with the scan of that update, over the region the drive since
         gives (a search that ended updates after its scan may find nothing where the robot is now).
-        When the whole plan's search ends, the cycle ends. The places a search that ends found,
-        followed with the odometry since its scan, join the hypotheses. With `near=False` (a place
+        When the whole plan's search ends and its places have caught up (`_catch_up`), the cycle
+        ends; the places of a search join the hypotheses when they have. With `near=False` (a place
         on trial) only the whole plan's search goes on."""
         if not self._cycle:
             self._cycle = True
@@ -488,9 +492,14 @@ class Recovery:
         else:
             for run in (self._near, self._whole):
                 if run is not None:
-                    run.drive.add(motion, self.motion_noise)
+                    run.log.append((scan, motion))
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
             self._near = self._start(scan, self._near_region(last_pose if self._lost_at is None else self._lost_at))
+        # The whole plan's search, once it has ended, catches its places up first: its costly part
+        # is done, and at one step an update behind five places they would never catch up.
+        if self._whole is not None and self._whole.places is not None:
+            if self._advance(self._whole, scan, self.budget.left, whole_plan=True):
+                self._end_cycle()
         if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
             self._near = None
         if self._whole is not None and self._advance(self._whole, scan, self.budget.left, whole_plan=True):
@@ -562,79 +571,75 @@ class Recovery:
     ) -> bool:
         """Scores up to `nodes` (None: no limit) of `run`, within the update's time for it
         (`SearchBudget.seconds`, or `seconds` of the update's spare time), drawn from the update's
-        budget; when the search ends, its places, found again with the current `scan`
-        (`_found_again`), join the hypotheses. Returns whether it ended.
-
-        A scan that none of the places explains, nor any place followed (`_explained`), tells
-        them not apart, as `_follow_all` weighs it: the places then join the hypotheses moved by
-        the odometry since the search's scan, having missed this one (`Hypothesis.missed`, with
-        that motion's covariance as their `spread`), rather than end the search's work on one
-        scan's word (on fhw with one scan in five turned by 30 degrees, a search near the lost
-        robot ended on a turned scan; its places were dropped and the search started again over
-        a region grown by 9 m of driving)."""
+        budget; once the search has ended, its places that explain at least `min_inlier_ratio`
+        of its scan, without more returns beyond their walls than `beyond_limit` allows, are
+        followed through the updates since its scan within what is left (`_catch_up`), and join
+        the hypotheses when they have caught up with `scan`. Returns whether they have."""
         if seconds is None:
             seconds = self.budget.seconds(whole_plan=whole_plan)
         if (nodes is not None and nodes <= 0) or seconds == 0.0:
             return False
-        before = run.steps.nodes
-        search = run.steps.advance(_WHOLE_SEARCH if nodes is None else nodes, seconds)
-        self.budget.spend(run.steps.nodes - before)
-        if search is None:
-            return False
-        near = run.steps.region is not None
-        unexplained: list[Hypothesis] = []
-        for c in search.candidates:
-            if c.inlier_ratio < self.config.min_inlier_ratio:
-                continue
-            beyond = self._beyond_share(run.steps.scan, c.pose)
-            if beyond > self.beyond_limit:
-                continue
-            since, spread = run.drive.motion, run.drive.spread
-            found = self._found_again(scan, c, since, spread, near=near)
-            if found is None:
-                here = compose(c.pose, since)
-                unexplained.append(
-                    Hypothesis(here, c.result, 1, c.inlier_ratio, near, beyond, missed=True, spread=spread.copy())
-                )
-                continue
-            found = dataclasses.replace(found, beyond=beyond)
-            self._explained = True
-            if not any(_same(found.pose, h.pose) for h in self.hypotheses):
-                self.hypotheses.append(found)
-        if not self._explained:
-            for h in unexplained:
-                if not any(_same(h.pose, other.pose) for other in self.hypotheses):
-                    self.hypotheses.append(h)
+        deadline = None if seconds is None else time.perf_counter() + seconds
+        if run.places is None:
+            before = run.steps.nodes
+            search = run.steps.advance(_WHOLE_SEARCH if nodes is None else nodes, seconds)
+            scored = run.steps.nodes - before
+            self.budget.spend(scored)
+            if search is None:
+                return False
+            if nodes is not None:
+                nodes -= scored
+            near = run.steps.region is not None
+            run.places = []
+            for c in search.candidates:
+                if c.inlier_ratio < self.config.min_inlier_ratio:
+                    continue
+                beyond = self._beyond_share(run.steps.scan, c.pose)
+                if beyond <= self.beyond_limit:
+                    run.places.append(Hypothesis(c.pose, c.result, 1, c.inlier_ratio, near, beyond))
+        return self._catch_up(run, nodes, deadline)
+
+    def _catch_up(self, run: _Run, nodes: int | None, deadline: float | None) -> bool:
+        """Follows the places of `run`'s ended search through the updates since its scan
+        (`_Run.log`), as the hypotheses are followed (`_weighed`), each alignment counted as
+        `ALIGNMENT_NODES` of `nodes` (None: no limit) and of the update's budget, until
+        `deadline` (`time.perf_counter()`; None: none); returns whether they have caught up with
+        the current update's scan, and then they join the hypotheses. A search spread over
+        updates ends after the robot drove on, on a large plan tens of metres: a place moved by
+        the odometry alone over that drive lands metres from where the place is now, beyond the
+        reach of ICP and of a search within the drive's spread (on acapulco a kidnapped robot's
+        true place, found 32 updates after its scan, came out 14.6 m off), while followed scan
+        by scan it stays within ICP's reach of each, and each scan it explains is one more in
+        its streak: confirmed by the scans it explained while its search ran, a place alone is
+        adopted as soon as its search ends. The last update's scan, when a followed place or
+        the tracked one explained it (`_explained`), is weighed with that (`_follow_all`)."""
+        places = run.places
+        assert places is not None
+        while places and run.caught < len(run.log):
+            cost = ALIGNMENT_NODES * len(places)
+            if (nodes is not None and nodes < cost) or (deadline is not None and time.perf_counter() >= deadline):
+                run.places = places
+                return False
+            scan, motion = run.log[run.caught]
+            last = run.caught == len(run.log) - 1
+            if scan is None:
+                places = [self._coasted(h, motion) for h in places]
+            else:
+                # What the step scored: its alignments, and the searches within a place's spread
+                # where ICP failed (`_follow`), which draw on the update's budget themselves.
+                left = self.budget.left
+                places, explained, _ = self._weighed(places, scan, motion, explained_elsewhere=last and self._explained)
+                self._explained = self._explained or (last and explained)
+                places = _within_margin(places, self.config.margin)
+                self.budget.spend(cost)
+                if nodes is not None:
+                    nodes -= cost if left is None or self.budget.left is None else max(cost, left - self.budget.left)
+            run.caught += 1
+        run.places, run.log = [], []
+        for h in places:
+            if not any(_same(h.pose, other.pose) for other in self.hypotheses):
+                self.hypotheses.append(h)
         return True
-
-    def _found_again(
-        self, scan: NDArray[np.float64], candidate: Candidate, since: Pose, spread: NDArray[np.float64], near: bool
-    ) -> Hypothesis | None:
-        """The hypothesis a search's candidate gives now: at once when the search ended with the
-        scan it started with (`since` the identity); otherwise the odometry moved the robot by
-        `since` in the meantime, with the covariance `spread`, which over many updates outgrows
-        ICP's basin: the candidate moved by `since` is found with this `scan` within that spread
-        (`_aligned_within`). (The candidate passed the check against returns through its walls on
-        its own scan; the hypothesis meets it again when followed.)"""
-        if since == (0.0, 0.0, 0.0):
-            return Hypothesis(candidate.pose, candidate.result, 1, candidate.inlier_ratio, near)
-        fit = self._aligned_within(scan, compose(candidate.pose, since), spread, near)
-        return None if fit is None else Hypothesis(fit.pose, fit, 1, fit.inlier_ratio, near)
-
-    def _aligned_within(
-        self, scan: NDArray[np.float64], here: Pose, spread: NDArray[np.float64], near: bool
-    ) -> IcpResult | None:
-        """The fit of `scan` at a place the odometry puts at `here` (T_map_base) with the
-        covariance `spread`, or None: ICP from `here`, and where that fit explains less than
-        `min_inlier_ratio` of the scan or lands beyond the spread's bound (`_region`), the
-        search of that region (`_searched_within`); the fit, if it explains at least
-        `min_inlier_ratio` of the scan."""
-        fit = localize(scan, self.plan, here, self.icp)
-        region = self._region(here, spread)
-        metres, radians = _moved(fit.pose, here)
-        if fit.inlier_ratio < self.config.min_inlier_ratio or metres > region.radius or radians > region.yaw_tolerance:
-            return self._searched_within(scan, region, near)
-        return fit
 
     def _region(self, here: Pose, spread: NDArray[np.float64]) -> SearchRegion:
         """Where a place the odometry puts at `here` with the covariance `spread` may be: within
@@ -810,11 +815,15 @@ class _Drive:
 
 @dataclass
 class _Run:
-    """A search spread over updates: its steps, and the odometry's drive since its scan (none
-    while it is scored within the update that started it)."""
+    """A search spread over updates: its steps; the updates since its scan, each the scan (None:
+    one too small to align) and the odometry motion since the update before (`log`, the last
+    one the current update's); and once the search has ended, its places (`places`) followed
+    through the first `caught` of those updates (`Recovery._catch_up`)."""
 
     steps: SearchInSteps
-    drive: _Drive = field(default_factory=lambda: _Drive())
+    log: list[tuple[NDArray[np.float64] | None, Pose]] = field(default_factory=list)
+    places: list[Hypothesis] | None = None
+    caught: int = 0
 
 
 BEYOND_WINDOW = 50
@@ -841,6 +850,20 @@ def _prediction_interval(values: deque[float]) -> tuple[float, float] | None:
 
 _WHOLE_SEARCH = 2**62
 """A node budget no search reaches: `search_nodes=None` runs each search within one update."""
+
+
+ALIGNMENT_NODES = 2_000
+"""Search nodes an alignment of a search's place is counted as, against an update's budget
+(`Recovery._catch_up`): an alignment of a real log's scan, with its check against returns beyond
+the walls, took as long as 1,350-4,150 nodes of a search of its plan (docs/design.md)."""
+
+
+def _within_margin(places: list[Hypothesis], margin: float) -> list[Hypothesis]:
+    """`places` but those whose mean inlier ratio is more than `margin` below the best's."""
+    if not places:
+        return places
+    best = max(h.mean_inlier_ratio for h in places)
+    return [h for h in places if h.mean_inlier_ratio >= best - margin]
 
 
 def _moved(a: Pose, b: Pose) -> tuple[float, float]:
