@@ -100,6 +100,7 @@ def test_nav2_names_and_defaults_become_node_settings() -> None:
             "resolution": 0.0,
             "icp.max_iterations": 12,
             "gate.min_inliers": 40,
+            "lost.window": 7,
             "alpha1": 0.2,
             "max_particles": 2000,
             "use_sim_time": False,
@@ -110,6 +111,7 @@ def test_nav2_names_and_defaults_become_node_settings() -> None:
     assert settings.initial_pose == (1.5, -2.0, 0.5) and settings.wait_for_initial_pose is False
     assert settings.plan == "default" and settings.map_topic == "" and settings.resolution is None
     assert settings.icp_config().max_iterations == 12 and settings.acceptance_gate().min_inliers == 40
+    assert settings.lost_rule().window == 7
     assert ignored == ["alpha1", "max_particles"]
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planicp import IcpConfig, _core
+from planicp import IcpConfig, LostRule, _core
 from planicp.plans.default_plan import load_default_plan
 from planicp.plans.plan_map import PlanMap
 from planicp.ros import (
@@ -386,6 +386,7 @@ def test_settings_from_parameters() -> None:
             "initial_pose": [1, 2, 0.5],
             "icp": {"subsample": 2},
             "gate": {"min_inlier_ratio": 0.3},
+            "lost": {"min_score": 0.3, "relaxes": False},
             "laser_pose": [0.1, 0.0, 0.0],
         }
     )
@@ -397,12 +398,18 @@ def test_settings_from_parameters() -> None:
     assert s.icp_config(slam).correspondence_search == "wall_index"
     assert s.icp_config(load_default_plan()).correspondence_search == "kd_tree"
     assert s.acceptance_gate().min_inlier_ratio == 0.3
+    assert s.lost_rule() == LostRule(min_score=0.3, relaxes=False)
+    assert PlanicpNodeCore(load_default_plan(), s).localizer._detector.rule == s.lost_rule()
     with pytest.raises(ValueError, match=r"unknown planicp_node parameters \['scan_toppic'\]"):
         NodeSettings.from_params({"scan_toppic": "scan"})
     with pytest.raises(ValueError, match="unknown IcpConfig keys"):
         NodeSettings(icp={"max_corr": 1.0})
     with pytest.raises(ValueError, match="unknown gate fields"):
         NodeSettings(gate={"min_inliers_ratio": 1.0})
+    with pytest.raises(ValueError, match="unknown lost rule fields"):
+        NodeSettings(lost={"min_scores": 0.3})
+    with pytest.raises(ValueError, match="lost: min_score"):
+        NodeSettings(lost={"min_score": 1.5})
     with pytest.raises(ValueError, match="must differ"):
         NodeSettings(odom_frame="map")
     with pytest.raises(ValueError, match="eog_rate must be >= 0"):

@@ -75,6 +75,7 @@ class PlanicpNodeCore:
             s.initial_pose,
             s.icp_config(plan),
             gate=s.acceptance_gate(),
+            lost_rule=s.lost_rule(),
             initial_covariance=s.initial_covariance(),
         )
         self._odometry = OdometryBuffer(s.odometry_span)

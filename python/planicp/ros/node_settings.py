@@ -16,6 +16,7 @@ from ..plans.plan_loading import load_plan
 from ..plans.plan_map import PlanMap
 from ..tracking.acceptance_gate import AcceptanceGate
 from ..tracking.icp_config import IcpConfig
+from ..tracking.lost_rule import LostRule
 
 OCCUPIED = 65
 """Cells of an occupancy grid from `map_topic` at or above this value are walls (map_server's
@@ -65,6 +66,14 @@ def _gate(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
     return overrides
 
 
+def _lost(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
+    try:
+        _lost_rule(overrides)
+    except ValueError as exc:
+        refuse_value(str(exc))
+    return overrides
+
+
 Name = Annotated[str, BeforeValidator(_name)]
 """A topic or frame name: a non-empty string."""
 Topic = Annotated[str, BeforeValidator(_topic)]
@@ -107,6 +116,7 @@ class NodeSettings(Settings):
         diagnostics_rate: publications of the diagnostic status per second.
         icp: `IcpConfig` fields that differ from `IcpConfig.for_tracking()`.
         gate: `AcceptanceGate` fields that differ from its defaults.
+        lost: `LostRule` fields that differ from its defaults (when the node says it is lost).
         laser_min_range, laser_max_range: metres, in place of each scan's own `range_min` and
             `range_max` when > 0 (nav2_amcl's parameters of these names; <= 0: the scan's).
         map_topic: take the plan from this `nav_msgs/OccupancyGrid` topic (transient local, as
@@ -141,6 +151,7 @@ class NodeSettings(Settings):
     diagnostics_rate: Rate = 1.0
     icp: Annotated[Mapping[str, Any], AfterValidator(_icp)] = field(default_factory=dict)
     gate: Annotated[Mapping[str, Any], AfterValidator(_gate)] = field(default_factory=dict)
+    lost: Annotated[Mapping[str, Any], AfterValidator(_lost)] = field(default_factory=dict)
     laser_min_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_min)")] = -1.0
     laser_max_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_max)")] = -1.0
     map_topic: Topic = ""
@@ -184,6 +195,10 @@ class NodeSettings(Settings):
         """`AcceptanceGate()` with the `gate` overrides (unknown fields: ValueError)."""
         return _acceptance_gate(self.gate)
 
+    def lost_rule(self) -> LostRule:
+        """`LostRule()` with the `lost` overrides (unknown fields: ValueError)."""
+        return _lost_rule(self.lost)
+
     def initial_covariance(self) -> list[list[float]]:
         """3x3 covariance of `initial_pose` from `initial_std`."""
         sx, sy, syaw = self.initial_std
@@ -210,3 +225,10 @@ def _acceptance_gate(overrides: Mapping[str, Any]) -> AcceptanceGate:
         return read(AcceptanceGate, overrides, what="gate fields")
     except ValidationError as exc:
         raise ValueError(f"gate: {first_error(exc)}") from None
+
+
+def _lost_rule(overrides: Mapping[str, Any]) -> LostRule:
+    try:
+        return read(LostRule, overrides, what="lost rule fields")
+    except ValidationError as exc:
+        raise ValueError(f"lost: {first_error(exc)}") from None

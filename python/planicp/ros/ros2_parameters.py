@@ -9,8 +9,8 @@ sensor model parameters (`alpha1`, `max_particles`, `z_hit`, ...) mean nothing t
 accepted and listed as ignored. planicp's own (`NodeSettings` fields): `plan` ("" takes the plan from
 `map_topic`), `resolution` (0: none), `origin`, `pose_topic`, `initial_pose_topic`, `plan_topic`,
 `eog_topic`, `initial_std`, `laser_pose` ([]: from tf), `odometry_span`, `eog_rate`, `eog_resolution`,
-`plan_resolution`, `diagnostics_rate`, `icp.<IcpConfig field>`, `gate.<AcceptanceGate field>`; and
-`autostart` (configure and activate at start, without a lifecycle manager).
+`plan_resolution`, `diagnostics_rate`, `icp.<IcpConfig field>`, `gate.<AcceptanceGate field>`,
+`lost.<LostRule field>`; and `autostart` (configure and activate at start, without a lifecycle manager).
 """
 
 from __future__ import annotations
@@ -76,8 +76,9 @@ where ROS 2 or Nav2 asks it: the plan comes from `map_topic` (map_server's) unle
 the pose goes out on nav2_amcl's `amcl_pose`, and the plan is not published again (map_server does);
 0 and [] stand for "none", which a ROS 2 parameter cannot hold."""
 
-NESTED = ("icp", "gate")
-"""Groups of parameters (`icp.max_iterations`, `gate.min_inliers`) that fill a `NodeSettings` mapping."""
+NESTED = ("icp", "gate", "lost")
+"""Groups of parameters (`icp.max_iterations`, `gate.min_inliers`, `lost.min_score`) that fill a
+`NodeSettings` mapping."""
 
 NAV2_IGNORED = frozenset(
     {
@@ -154,8 +155,8 @@ def settings_from_ros2(values: Mapping[str, Any]) -> tuple[NodeSettings, list[st
             unknown.append(name)
     if unknown:
         raise ValueError(
-            f"unknown parameters {sorted(unknown)}; known: {sorted(known)}, and icp.<field>, gate.<field> "
-            "(nav2_amcl's particle filter parameters are accepted and ignored)"
+            f"unknown parameters {sorted(unknown)}; known: {sorted(known)}, and icp.<field>, gate.<field>, "
+            "lost.<field> (nav2_amcl's particle filter parameters are accepted and ignored)"
         )
     for nav2, field in NAV2_NAMES.items():
         params[field] = merged[nav2]
@@ -194,5 +195,5 @@ def settings_from_ros2(values: Mapping[str, Any]) -> tuple[NodeSettings, list[st
         raise ValueError(f"set_initial_pose must be true or false, got {set_pose!r}")
     params["wait_for_initial_pose"] = not set_pose
     params["initial_pose"] = (merged["initial_pose.x"], merged["initial_pose.y"], merged["initial_pose.yaw"])
-    params["icp"], params["gate"] = nested["icp"], nested["gate"]
+    params["icp"], params["gate"], params["lost"] = nested["icp"], nested["gate"], nested["lost"]
     return NodeSettings.from_params(params), sorted(ignored)
