@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import field
 from typing import Annotated, Any
 
@@ -50,28 +50,18 @@ def _std(value: tuple[float, float, float]) -> tuple[float, float, float]:
     return value
 
 
-def _icp(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
-    try:
-        _icp_config(overrides)
-    except ValueError as exc:  # an unknown field, or a value refused
-        refuse_value(str(exc))
-    return overrides
+def _overrides(group: str) -> Callable[[Mapping[str, Any]], Mapping[str, Any]]:
+    """A validator of the overrides of one settings group ("icp", "gate", "lost"): they must make
+    the settings object (`NodeSettings.icp_config`, `acceptance_gate`, `lost_rule`)."""
 
+    def check(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
+        try:
+            _GROUPS[group](overrides)
+        except ValueError as exc:  # an unknown field, or a value refused
+            refuse_value(str(exc))
+        return overrides
 
-def _gate(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
-    try:
-        _acceptance_gate(overrides)
-    except ValueError as exc:
-        refuse_value(str(exc))
-    return overrides
-
-
-def _lost(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
-    try:
-        _lost_rule(overrides)
-    except ValueError as exc:
-        refuse_value(str(exc))
-    return overrides
+    return check
 
 
 Name = Annotated[str, BeforeValidator(_name)]
@@ -149,9 +139,9 @@ class NodeSettings(Settings):
     eog_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
     plan_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
     diagnostics_rate: Rate = 1.0
-    icp: Annotated[Mapping[str, Any], AfterValidator(_icp)] = field(default_factory=dict)
-    gate: Annotated[Mapping[str, Any], AfterValidator(_gate)] = field(default_factory=dict)
-    lost: Annotated[Mapping[str, Any], AfterValidator(_lost)] = field(default_factory=dict)
+    icp: Annotated[Mapping[str, Any], AfterValidator(_overrides("icp"))] = field(default_factory=dict)
+    gate: Annotated[Mapping[str, Any], AfterValidator(_overrides("gate"))] = field(default_factory=dict)
+    lost: Annotated[Mapping[str, Any], AfterValidator(_overrides("lost"))] = field(default_factory=dict)
     laser_min_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_min)")] = -1.0
     laser_max_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_max)")] = -1.0
     map_topic: Topic = ""
@@ -232,3 +222,11 @@ def _lost_rule(overrides: Mapping[str, Any]) -> LostRule:
         return read(LostRule, overrides, what="lost rule fields")
     except ValidationError as exc:
         raise ValueError(f"lost: {first_error(exc)}") from None
+
+
+_GROUPS: dict[str, Callable[[Mapping[str, Any]], Any]] = {
+    "icp": _icp_config,
+    "gate": _acceptance_gate,
+    "lost": _lost_rule,
+}
+"""What each group of overrides makes (see `_overrides`)."""
