@@ -855,7 +855,7 @@ _WHOLE_SEARCH = 2**62
 ALIGNMENT_NODES = 2_000
 """Search nodes an alignment of a search's place is counted as, against an update's budget
 (`Recovery._catch_up`): an alignment of a real log's scan, with its check against returns beyond
-the walls, took as long as 1,350-4,150 nodes of a search of its plan (docs/design.md)."""
+the walls, took as long as 1,600-3,700 nodes of a search of its plan (docs/benchmarks.md)."""
 
 
 def _within_margin(places: list[Hypothesis], margin: float) -> list[Hypothesis]:
