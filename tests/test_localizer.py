@@ -608,6 +608,24 @@ def test_a_search_that_ends_updates_after_its_scan_follows_its_places_through_th
     assert run.log == [] and run.places == []
 
 
+def test_a_running_search_keeps_its_own_copy_of_each_scan(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A caller that fills one buffer with every scan (a ROS callback's array, reused) does not
+    change the scans a running search's places are to be followed through."""
+    recovery = Recovery(plan, RecoveryConfig(search_nodes=100), IcpConfig.for_tracking(), AcceptanceGate())
+    buffer = scans[10].copy()
+    recovery.new_update()
+    recovery.step(buffer, (0.0, 0.0, 0.0), path[10])
+    buffer[:] = scans[11]
+    recovery.new_update()
+    recovery.step(buffer, se2.between(path[10], path[11]), path[10])
+    assert recovery._whole is not None and recovery._whole.places is None
+    buffer[:] = 0.0
+    [(kept, _)] = recovery._whole.log
+    assert np.array_equal(kept, scans[11])
+
+
 def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
