@@ -50,13 +50,34 @@ def _std(value: tuple[float, float, float]) -> tuple[float, float, float]:
     return value
 
 
-def _overrides(group: str) -> Callable[[Mapping[str, Any]], Mapping[str, Any]]:
-    """A validator of the overrides of one settings group ("icp", "gate", "lost"): they must make
-    the settings object (`NodeSettings.icp_config`, `acceptance_gate`, `lost_rule`)."""
+def _icp_config(overrides: Mapping[str, Any], plan: PlanMap | None = None) -> IcpConfig:
+    try:
+        return IcpConfig.from_dict({**IcpConfig.for_tracking(plan).to_dict(), **overrides})
+    except ValidationError as exc:
+        raise ValueError(f"icp: {first_error(exc)}") from None
+
+
+def _acceptance_gate(overrides: Mapping[str, Any]) -> AcceptanceGate:
+    try:
+        return read(AcceptanceGate, overrides, what="gate fields")
+    except ValidationError as exc:
+        raise ValueError(f"gate: {first_error(exc)}") from None
+
+
+def _lost_rule(overrides: Mapping[str, Any]) -> LostRule:
+    try:
+        return read(LostRule, overrides, what="lost rule fields")
+    except ValidationError as exc:
+        raise ValueError(f"lost: {first_error(exc)}") from None
+
+
+def _overrides(make: Callable[[Mapping[str, Any]], Any]) -> Callable[[Mapping[str, Any]], Mapping[str, Any]]:
+    """A validator of a group of overrides ("icp", "gate", "lost"): `make` must make its settings
+    object from them (`_icp_config`, `_acceptance_gate`, `_lost_rule`)."""
 
     def check(overrides: Mapping[str, Any]) -> Mapping[str, Any]:
         try:
-            _GROUPS[group](overrides)
+            make(overrides)
         except ValueError as exc:  # an unknown field, or a value refused
             refuse_value(str(exc))
         return overrides
@@ -139,9 +160,9 @@ class NodeSettings(Settings):
     eog_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
     plan_resolution: Annotated[float, Real(gt=0.0, unit="metres")] = 0.05
     diagnostics_rate: Rate = 1.0
-    icp: Annotated[Mapping[str, Any], AfterValidator(_overrides("icp"))] = field(default_factory=dict)
-    gate: Annotated[Mapping[str, Any], AfterValidator(_overrides("gate"))] = field(default_factory=dict)
-    lost: Annotated[Mapping[str, Any], AfterValidator(_overrides("lost"))] = field(default_factory=dict)
+    icp: Annotated[Mapping[str, Any], AfterValidator(_overrides(_icp_config))] = field(default_factory=dict)
+    gate: Annotated[Mapping[str, Any], AfterValidator(_overrides(_acceptance_gate))] = field(default_factory=dict)
+    lost: Annotated[Mapping[str, Any], AfterValidator(_overrides(_lost_rule))] = field(default_factory=dict)
     laser_min_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_min)")] = -1.0
     laser_max_range: Annotated[float, Real(says="a number of metres (<= 0: each scan's range_max)")] = -1.0
     map_topic: Topic = ""
@@ -201,32 +222,3 @@ class NodeSettings(Settings):
 
             return load_default_plan()
         return load_plan(self.plan, resolution=self.resolution, origin=self.origin)
-
-
-def _icp_config(overrides: Mapping[str, Any], plan: PlanMap | None = None) -> IcpConfig:
-    try:
-        return IcpConfig.from_dict({**IcpConfig.for_tracking(plan).to_dict(), **overrides})
-    except ValidationError as exc:
-        raise ValueError(f"icp: {first_error(exc)}") from None
-
-
-def _acceptance_gate(overrides: Mapping[str, Any]) -> AcceptanceGate:
-    try:
-        return read(AcceptanceGate, overrides, what="gate fields")
-    except ValidationError as exc:
-        raise ValueError(f"gate: {first_error(exc)}") from None
-
-
-def _lost_rule(overrides: Mapping[str, Any]) -> LostRule:
-    try:
-        return read(LostRule, overrides, what="lost rule fields")
-    except ValidationError as exc:
-        raise ValueError(f"lost: {first_error(exc)}") from None
-
-
-_GROUPS: dict[str, Callable[[Mapping[str, Any]], Any]] = {
-    "icp": _icp_config,
-    "gate": _acceptance_gate,
-    "lost": _lost_rule,
-}
-"""What each group of overrides makes (see `_overrides`)."""
