@@ -626,6 +626,54 @@ def test_a_running_search_keeps_its_own_copy_of_each_scan(
     assert np.array_equal(kept, scans[11])
 
 
+def test_a_search_near_the_pose_that_starts_again_begins_on_a_sound_scan(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A search near the pose where track was lost begins on the latest of the last lost scans
+    that continues a scan before it, not on a corrupted one: after a random cloud it begins on
+    the scan before the cloud, over the region of that update's drive, and follows its place
+    over the cloud to the robot; a sound scan after a cloud continues the one before the cloud
+    and is begun on; with every scan sound, the latest is."""
+    from planicp.tracking.recovery import NEAR_CHOICES
+
+    assert NEAR_CHOICES == 2
+    cloud = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[12].shape)
+
+    def lost_through(updates: list[np.ndarray]) -> Recovery:
+        recovery = Recovery(
+            plan, RecoveryConfig(search_nodes=1, search_spare_time=None), IcpConfig.for_tracking(), AcceptanceGate()
+        )
+        for i, scan in enumerate(updates, start=10):
+            recovery.new_update()
+            recovery.step(scan, se2.between(path[i - 1], path[i]), path[i - 1])
+        return recovery
+
+    # The latest scan is a cloud: the search begins on the one before it.
+    recovery = lost_through([scans[10], scans[11], cloud])
+    assert recovery._lost_at is not None
+    run = recovery._start_near(cloud, recovery._lost_at)
+    assert np.array_equal(run.steps.scan, scans[11])
+    assert run.steps.region == recovery._near_region(recovery._lost_at, recovery._recent[1].drive)
+    assert run.steps.region != recovery._near_region(recovery._lost_at, recovery._drive)
+    [(logged, motion)] = run.log
+    assert np.array_equal(logged, cloud) and motion == se2.between(path[11], path[12])
+    recovery.hypotheses = []
+    recovery.new_update()
+    assert recovery._advance(run, cloud, None, whole_plan=False)
+    [place] = recovery.hypotheses
+    assert place.near and place.missed and error(place.pose, path[12])[0] < 0.03
+    # A cloud between two sound scans: the latest continues the one before the cloud.
+    recovery = lost_through([scans[10], cloud, scans[12]])
+    assert recovery._lost_at is not None
+    run = recovery._start_near(scans[12], recovery._lost_at)
+    assert np.array_equal(run.steps.scan, scans[12]) and run.log == []
+    # Every scan sound: the latest.
+    recovery = lost_through([scans[10], scans[11], scans[12]])
+    assert recovery._lost_at is not None
+    run = recovery._start_near(scans[12], recovery._lost_at)
+    assert np.array_equal(run.steps.scan, scans[12]) and run.log == []
+
+
 def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
@@ -643,7 +691,7 @@ def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drov
         recovery._drive.add(se2.between(a, b), recovery.motion_noise)
     coasted = se2.compose(lost_at, recovery._drive.motion)
     assert error(coasted, path[40])[0] > 2.0
-    region = recovery._near_region(lost_at)
+    region = recovery._near_region(lost_at, recovery._drive)
     assert region.lever != (0.0, 0.0) and region.radius < 0.5 + recovery._drive.path - 2.0
     ring = relocalize(scans[40], plan, region=region, config=recovery.config.search)
     assert ring.best is not None and error(ring.best.pose, path[40])[0] < 0.05, ring.best
@@ -655,7 +703,7 @@ def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drov
     recovery.clear()
     recovery._lost_at = lost_at
     recovery._drive.add((0.0, 0.0, 1.0), recovery.motion_noise)
-    near = recovery._near_region(lost_at)
+    near = recovery._near_region(lost_at, recovery._drive)
     assert near.lever == (0.0, 0.0) and near.radius == 0.5 and near.center == lost_at
 
 

@@ -44,12 +44,20 @@ class ContinuityRule(Settings):
     def continues(self, scan: NDArray[np.float64], previous: NDArray[np.float64], motion: Pose) -> bool:
         """Whether `scan` (base frame now) continues `previous` (base frame then), `motion` being
         the odometry motion between the two (the current base pose in the previous base frame)."""
+        return self.overlap(scan, previous, motion) >= self.min_overlap
+
+    def overlap(self, scan: NDArray[np.float64], previous: NDArray[np.float64], motion: Pose) -> float:
+        """The share of `scan`'s points (base frame now) within `max_distance` of `previous`'s
+        (base frame then) once aligned to them from `motion` (the odometry motion between the two:
+        the current base pose in the previous base frame), in [0, 1]; 0.0 when the alignment
+        corrects the motion by more than `max_correction` (what overlaps there is not the scan
+        the odometry predicts) or either scan has fewer than 3 points."""
         if len(scan) < 3 or len(previous) < 3:
-            return False
+            return 0.0
         reference = PlanMap.from_points(previous)
         result = localize(scan, reference, motion, _alignment(self.max_distance))
         dx, dy, _ = between(motion, result.pose)
-        return result.inlier_ratio >= self.min_overlap and math.hypot(dx, dy) <= self.max_correction
+        return result.inlier_ratio if math.hypot(dx, dy) <= self.max_correction else 0.0
 
 
 @functools.lru_cache(maxsize=8)

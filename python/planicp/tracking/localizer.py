@@ -276,6 +276,7 @@ class Localizer:
             self.gate,
             self._occlusion,
             self.motion_noise,
+            self.continuity,
         )
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.

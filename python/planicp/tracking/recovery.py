@@ -14,8 +14,9 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    scan is followed through the scans of the updates since (kept while the search runs), as the
    hypotheses are followed (step 2), within the updates' budgets (`_catch_up`), and joins the
    hypotheses once it has caught up, each scan it explained counted in its streak. The search
-   near the pose starts again, around the pose and with the scan of
-   that update, while none of its places is followed.
+   near the pose starts again while none of its places is followed, around the pose, on the
+   latest of the last two lost scans that continues a scan before it (`_start_near`: not on a
+   corrupted one, which no place explains).
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
    prediction; for one that followed the odometry over scans it was not fitted to, a search
    within the odometry's spread since where ICP fails). A hypothesis whose fit explains less than
@@ -62,6 +63,7 @@ from .._validation import Pose
 from ..plans.plan_map import PlanMap
 from ..se2 import compose, wrap_angle
 from .acceptance_gate import AcceptanceGate
+from .continuity_rule import ContinuityRule
 from .fusion_rule import CHI2_3_999
 from .icp_config import IcpConfig
 from .icp_result import IcpResult
@@ -248,6 +250,7 @@ class Recovery:
     gate: AcceptanceGate
     occlusion: OcclusionFilter | None = None
     motion_noise: MotionNoise = field(default_factory=MotionNoise)
+    continuity: ContinuityRule = field(default_factory=ContinuityRule)
     hypotheses: list[Hypothesis] = field(default_factory=list)
     beyond_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
     explained_shares: deque[float] = field(default_factory=lambda: deque(maxlen=BEYOND_WINDOW))
@@ -267,6 +270,9 @@ class Recovery:
     # Where the localizer lost track (T_map_base), and the odometry's drive since.
     _lost_at: Pose | None = None
     _drive: _Drive = field(default_factory=lambda: _Drive())
+    # The last lost updates, the latest last, for a search near the pose that starts again
+    # (`_start_near`).
+    _recent: deque[_Lost] = field(default_factory=lambda: deque(maxlen=NEAR_CHOICES + 1))
     # The last pose a tracked scan vouched for (`note_tracked`), and the odometry's drive since;
     # kept across `clear`.
     _vouched_at: Pose | None = None
@@ -301,6 +307,7 @@ class Recovery:
                 self._lost_at, self._drive = last_pose, _Drive()
         else:
             self._drive.add(motion, self.motion_noise)
+        self._recent.append(_Lost(scan.copy(), motion, self._drive.copy()))
         followed = bool(self.hypotheses)
         self._follow_all(scan, motion)
         # When the last hypotheses are dropped, the next scan searches again.
@@ -443,6 +450,7 @@ class Recovery:
         self.hypotheses = [self._coasted(h, motion) for h in self.hypotheses]
         if self._lost_at is not None:
             self._drive.add(motion, self.motion_noise)
+            self._recent.append(_Lost(None, motion, self._drive.copy()))
         elif self._vouched_at is not None:  # on trial: the drive since the last vouched pose
             self._since_vouched.add(motion, self.motion_noise)
         for run in (self._near, self._whole):
@@ -454,6 +462,7 @@ class Recovery:
         self.hypotheses = []
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
         self._lost_at, self._drive = None, _Drive()
+        self._recent.clear()
 
     def note_tracked(self, motion: Pose, pose: Pose, *, vouched: bool) -> None:
         """An update tracked (not lost) to `pose` (T_map_base) after the odometry moved the robot
@@ -482,8 +491,9 @@ class Recovery:
         instead of 4). The search near the pose has the first claim on the update's budget but for
         the half reserved to the whole plan's search while that runs (`SearchBudget.reserved`, which
         the searches around the prediction cannot take either); when it ends and none of its places
-        is followed, it starts again with the scan of that update, over the region the drive since
-        gives (a search that ended updates after its scan may find nothing where the robot is now).
+        is followed, it starts again on the soundest of the last lost scans (`_start_near`), over
+        the region the drive up to that scan gives (a search that ended updates after its scan may
+        find nothing where the robot is now).
         When the whole plan's search ends and its places have caught up (`_catch_up`), the cycle
         ends; the places of a search join the hypotheses when they have. With `near=False` (a place
         on trial) only the whole plan's search goes on."""
@@ -496,7 +506,7 @@ class Recovery:
                 if run is not None:
                     run.log.append((kept, motion))
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
-            self._near = self._start(scan, self._near_region(last_pose if self._lost_at is None else self._lost_at))
+            self._near = self._start_near(scan, last_pose if self._lost_at is None else self._lost_at)
         # The whole plan's search, once it has ended, catches its places up first: its costly part
         # is done, and at one step an update behind five places they would never catch up.
         if self._whole is not None and self._whole.places is not None:
@@ -523,18 +533,65 @@ class Recovery:
         ):
             self._end_cycle()
 
-    def _near_region(self, lost_at: Pose) -> SearchRegion:
-        """Where the robot may be now, lost at `lost_at` (T_map_base, see `step`) and driven by
-        the odometry since (`_drive`), when what broke is the odometry's heading (a slip, a bad
-        step) at or after that pose: any heading, and at each the drive turned by the heading's
-        error, within `local_radius` (the slip's own displacement) plus `sqrt(CHI2_3_999)`
-        standard deviations of the drive's position spread at that heading
-        (`_Drive.spread_given_heading`); or anywhere within `local_radius` plus the path length
+    def _start_near(self, scan: NDArray[np.float64], lost_at: Pose) -> _Run:
+        """The search near `lost_at` (T_map_base, see `step`), begun on the scan of one of the
+        last `NEAR_CHOICES` lost updates that is likeliest sound (`_soundest`), over the region
+        where the robot may have been then (`_near_region` with the drive up to that update); the
+        updates after it go into the search's log, and its places are followed through them when
+        it ends (`_catch_up`). A corrupted scan (a random cloud, a scan turned) continues nothing,
+        and a search begun on one finds no place, or a wrong one, and starts again only when it
+        ends: on fhw with one scan in five a random cloud, a search that started again on a cloud
+        ended as the next cloud came and began on that one, and the robot stayed lost to the end
+        of the log in 2 of 10 runs (docs/design.md). Without kept scans (a first update), the
+        search begins on `scan`, the current update's."""
+        recent = list(self._recent)
+        chosen = self._soundest(recent)
+        start = recent[chosen] if recent else None
+        if start is None or start.scan is None:
+            return self._start(scan, self._near_region(lost_at, self._drive))
+        run = self._start(start.scan, self._near_region(lost_at, start.drive))
+        run.log.extend((later.scan, later.motion) for later in recent[chosen + 1 :])
+        return run
+
+    def _soundest(self, recent: list[_Lost]) -> int:
+        """The index in `recent` (the last lost updates, the latest last) of the scan a search is
+        likeliest to find the robot with: among the last `NEAR_CHOICES`, the latest that
+        continues a scan kept before it (`ContinuityRule.continues`, from the odometry's motion
+        between the two: over a corrupted scan between them too), else the one that overlaps an
+        earlier scan most (`ContinuityRule.overlap`; the latest on a tie, or with none kept
+        before). A sound scan continues its neighbours; a random cloud or a turned scan
+        continues none."""
+        latest = len(recent) - 1
+        best, chosen = 0.0, latest
+        for k in range(latest, max(latest - NEAR_CHOICES, 0), -1):
+            scan = recent[k].scan
+            if scan is None:
+                continue
+            motion: Pose = (0.0, 0.0, 0.0)
+            overlap = 0.0
+            for j in range(k - 1, -1, -1):
+                motion = compose(recent[j + 1].motion, motion)
+                earlier = recent[j].scan
+                if earlier is not None:
+                    overlap = max(overlap, self.continuity.overlap(scan, earlier, motion))
+            if overlap >= self.continuity.min_overlap:
+                return k
+            if overlap > best:
+                best, chosen = overlap, k
+        return chosen
+
+    def _near_region(self, lost_at: Pose, drive: _Drive) -> SearchRegion:
+        """Where the robot may be, lost at `lost_at` (T_map_base, see `step`) and driven by the
+        odometry since by `drive` (`_drive` for the current update), when what broke is the
+        odometry's heading (a slip, a bad step) at or after that pose: any heading, and at each
+        the drive turned by the heading's error, within `local_radius` (the slip's own
+        displacement) plus `sqrt(CHI2_3_999)` standard deviations of the drive's position spread
+        at that heading (`_Drive.spread_given_heading`); or anywhere within `local_radius` plus the path length
         since, when that is the smaller reach (a turn in place). A heading fault moves the robot
         along a ring around the lost pose, not anywhere within the disk of its path length: on
         fhw after 29 m of driving the squares had a half-width of 12.8 m where the disk's radius
         would have been 32 m."""
-        base, drive = self.config.local_radius, self._drive
+        base = self.config.local_radius
         reach = math.sqrt(CHI2_3_999) * largest_position_std(drive.spread_given_heading())
         if reach >= drive.path:
             return SearchRegion(lost_at, base + drive.path, math.pi)
@@ -816,6 +873,17 @@ class _Drive:
 
 
 @dataclass
+class _Lost:
+    """A lost update, for a search near the pose that starts again (`Recovery._start_near`): its
+    scan (a copy; None: one too small to align), the odometry motion since the update before,
+    and the drive from where the localizer lost track to it."""
+
+    scan: NDArray[np.float64] | None
+    motion: Pose
+    drive: _Drive
+
+
+@dataclass
 class _Run:
     """A search spread over updates: its steps; the updates since its scan, each the scan (None:
     one too small to align) and the odometry motion since the update before (`log`, the last
@@ -853,6 +921,10 @@ def _prediction_interval(values: deque[float]) -> tuple[float, float] | None:
 _WHOLE_SEARCH = 2**62
 """A node budget no search reaches: `search_nodes=None` runs each search within one update."""
 
+
+NEAR_CHOICES = 2
+"""The last lost updates whose scan a search near the pose that starts again may begin on
+(`Recovery._start_near`): one corrupted scan among them leaves a sound one to begin on."""
 
 ALIGNMENT_NODES = 2_000
 """Search nodes an alignment of a search's place is counted as, against an update's budget
