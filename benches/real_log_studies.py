@@ -89,6 +89,10 @@ draw's outcome turns on a few scans, the mean says more), and the largest over t
 rule's bars on the share of a scan a fit explains as set, not learned. With `--no-spare-time` the
 recovery's searches score only the nodes of each update (`RecoveryConfig(search_spare_time=None)`):
 what it finds, and when, is then the same on any machine and under any load (`faults --no-spare-time` likewise).
+`junk-repeats` tracks each odometry draw of `--seeds` with one scan in five random clouds
+`--repeats` times in one process (the plan loaded once): with the spare time a run depends on how
+far each update's searches get, and one run of a draw says little of the next. Per draw, the share
+of the scans more than 0.3 m off in each run, their range and their mean.
 
 `reference` asks, at every tracked scan planicp's default `Localizer` leaves more than 0.3 m off
 the reference pose (from the harness's odometry, `--seed`, default 7), whether the reference
@@ -602,6 +606,26 @@ def junk_draws_study(
             print(f"| {name} | {kind} | {cells} | {np.mean(lost[kind]):.1f} % | {max(p99[kind]):.1f} |", flush=True)
 
 
+def junk_repeats_study(
+    harness: Any, logs: list[str], out: str, seeds: list[int], repeats: int, recovery: RecoveryConfig | None = None
+) -> None:
+    kind = "random clouds"
+    print("| log | seed | runs | range | mean |")
+    print("|---|---|---|---|---|")
+    for name in logs:
+        for seed in seeds:
+            plan, scans, ref, odom = load(harness, name, out, seed)
+            junk = corrupted(scans, kind, np.random.default_rng(seed))
+            lost = []
+            for _ in range(repeats):
+                est, _ = tracked(plan, junk, ref, odom, None, recovery)
+                lost.append(100 * harness.error_metrics(est, ref, 0.3)["lost_frac"])
+            runs = ", ".join(f"{v:.1f}" for v in lost)
+            print(
+                f"| {name} | {seed} | {runs} | {min(lost):.1f}-{max(lost):.1f} % | {np.mean(lost):.1f} % |", flush=True
+            )
+
+
 def refinement_study(
     harness: Any,
     logs: list[str],
@@ -837,6 +861,7 @@ def main() -> None:
             "scan-sets",
             "junk",
             "junk-draws",
+            "junk-repeats",
             "faults",
             "slam-visibility",
             "log-odometry",
@@ -854,7 +879,7 @@ def main() -> None:
         nargs="+",
         type=int,
         default=[1, 2, 3, 4, 5, 6, 7],
-        help="odometry seeds of the seeds, junk-draws and bars studies",
+        help="odometry seeds of the seeds, junk-draws, junk-repeats and bars studies",
     )
     parser.add_argument(
         "--search",
@@ -872,7 +897,8 @@ def main() -> None:
     parser.add_argument(
         "--no-spare-time",
         action="store_true",
-        help="junk-draws, faults and kidnap studies: RecoveryConfig(search_spare_time=None), the same on any machine",
+        help="junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_spare_time=None), "
+        "the same on any machine",
     )
     parser.add_argument(
         "--filter-out",
@@ -893,6 +919,7 @@ def main() -> None:
         default=2,
         help="bars and kidnap studies: end points per cell of the plan (the harness's is 2)",
     )
+    parser.add_argument("--repeats", type=int, default=10, help="junk-repeats study: runs of each draw")
     parser.add_argument(
         "--updates", type=int, default=25, help="kidnap study: updates fed after the kidnap (the default 25)"
     )
@@ -927,6 +954,8 @@ def main() -> None:
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":
             junk_draws_study(harness, args.logs, out, args.seeds, recovery, args.bars_as_set)
+        elif args.study == "junk-repeats":
+            junk_repeats_study(harness, args.logs, out, args.seeds, args.repeats, recovery)
         elif args.study == "field":
             field_study(harness, args.logs, out, args.seeds)
         elif args.study == "refinement":
