@@ -626,17 +626,18 @@ def test_a_running_search_keeps_its_own_copy_of_each_scan(
     assert np.array_equal(kept, scans[11])
 
 
-def test_a_search_near_the_pose_that_starts_again_begins_on_a_sound_scan(
+def test_a_search_that_starts_while_lost_begins_on_a_sound_scan(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
-    """A search near the pose where track was lost begins on the latest of the last lost scans
-    that continues a scan before it, not on a corrupted one: after a random cloud it begins on
-    the scan before the cloud, over the region of that update's drive, and follows its place
-    over the cloud to the robot; a sound scan after a cloud continues the one before the cloud
-    and is begun on; with every scan sound, the latest is."""
-    from planicp.tracking.recovery import NEAR_CHOICES
+    """A search that starts while the robot is lost begins on the latest of the last lost scans
+    that continues a scan before it, not on a corrupted one: after a random cloud the search near
+    the pose begins on the scan before the cloud, over the region of that update's drive, and
+    follows its place over the cloud to the robot, and so does a search of the whole plan; a
+    sound scan after a cloud continues the one before the cloud and is begun on; with every
+    scan sound, the latest is."""
+    from planicp.tracking.recovery import START_CHOICES
 
-    assert NEAR_CHOICES == 2
+    assert START_CHOICES == 2
     cloud = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[12].shape)
 
     def lost_through(updates: list[np.ndarray]) -> Recovery:
@@ -651,7 +652,7 @@ def test_a_search_near_the_pose_that_starts_again_begins_on_a_sound_scan(
     # The latest scan is a cloud: the search begins on the one before it.
     recovery = lost_through([scans[10], scans[11], cloud])
     assert recovery._lost_at is not None
-    run = recovery._start_near(cloud, recovery._lost_at)
+    run = recovery._start_sound(cloud, recovery._lost_at)
     assert np.array_equal(run.steps.scan, scans[11])
     assert run.steps.region == recovery._near_region(recovery._lost_at, recovery._recent[1].drive)
     assert run.steps.region != recovery._near_region(recovery._lost_at, recovery._drive)
@@ -662,15 +663,18 @@ def test_a_search_near_the_pose_that_starts_again_begins_on_a_sound_scan(
     assert recovery._advance(run, cloud, None, whole_plan=False)
     [place] = recovery.hypotheses
     assert place.near and place.missed and error(place.pose, path[12])[0] < 0.03
+    whole = recovery._start_sound(cloud, None)
+    assert np.array_equal(whole.steps.scan, scans[11]) and whole.steps.region is None
+    assert [(np.array_equal(s, cloud), m) for s, m in whole.log] == [(True, se2.between(path[11], path[12]))]
     # A cloud between two sound scans: the latest continues the one before the cloud.
     recovery = lost_through([scans[10], cloud, scans[12]])
     assert recovery._lost_at is not None
-    run = recovery._start_near(scans[12], recovery._lost_at)
+    run = recovery._start_sound(scans[12], recovery._lost_at)
     assert np.array_equal(run.steps.scan, scans[12]) and run.log == []
     # Every scan sound: the latest.
     recovery = lost_through([scans[10], scans[11], scans[12]])
     assert recovery._lost_at is not None
-    run = recovery._start_near(scans[12], recovery._lost_at)
+    run = recovery._start_sound(scans[12], recovery._lost_at)
     assert np.array_equal(run.steps.scan, scans[12]) and run.log == []
 
 

@@ -14,9 +14,9 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    scan is followed through the scans of the updates since (kept while the search runs), as the
    hypotheses are followed (step 2), within the updates' budgets (`_catch_up`), and joins the
    hypotheses once it has caught up, each scan it explained counted in its streak. The search
-   near the pose starts again while none of its places is followed, around the pose, on the
-   latest of the last two lost scans that continues a scan before it (`_start_near`: not on a
-   corrupted one, which no place explains).
+   near the pose starts again while none of its places is followed. A search begins on the
+   latest of the last two lost scans that continues a scan before it (`_start_sound`: not on a
+   corrupted one, which no place explains), the later scans in its log.
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
    prediction; for one that followed the odometry over scans it was not fitted to, a search
    within the odometry's spread since where ICP fails). A hypothesis whose fit explains less than
@@ -270,9 +270,9 @@ class Recovery:
     # Where the localizer lost track (T_map_base), and the odometry's drive since.
     _lost_at: Pose | None = None
     _drive: _Drive = field(default_factory=lambda: _Drive())
-    # The last lost updates, the latest last, for a search near the pose that starts again
-    # (`_start_near`).
-    _recent: deque[_Lost] = field(default_factory=lambda: deque(maxlen=NEAR_CHOICES + 1))
+    # The last lost updates, the latest last, for a search that starts (`_start_sound`).
+    _recent: deque[_Lost] = field(default_factory=lambda: deque(maxlen=START_CHOICES + 1))
+    _chosen: tuple[_Lost, int] | None = None  # `_soundest` of the latest of `_recent`
     # The last pose a tracked scan vouched for (`note_tracked`), and the odometry's drive since;
     # kept across `clear`.
     _vouched_at: Pose | None = None
@@ -463,6 +463,7 @@ class Recovery:
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
         self._lost_at, self._drive = None, _Drive()
         self._recent.clear()
+        self._chosen = None
 
     def note_tracked(self, motion: Pose, pose: Pose, *, vouched: bool) -> None:
         """An update tracked (not lost) to `pose` (T_map_base) after the odometry moved the robot
@@ -491,7 +492,7 @@ class Recovery:
         instead of 4). The search near the pose has the first claim on the update's budget but for
         the half reserved to the whole plan's search while that runs (`SearchBudget.reserved`, which
         the searches around the prediction cannot take either); when it ends and none of its places
-        is followed, it starts again on the soundest of the last lost scans (`_start_near`), over
+        is followed, it starts again on the soundest of the last lost scans (`_start_sound`), over
         the region the drive up to that scan gives (a search that ended updates after its scan may
         find nothing where the robot is now).
         When the whole plan's search ends and its places have caught up (`_catch_up`), the cycle
@@ -499,14 +500,14 @@ class Recovery:
         on trial) only the whole plan's search goes on."""
         if not self._cycle:
             self._cycle = True
-            self._whole = self._start(scan, None)
+            self._whole = self._start_sound(scan, None) if near else self._start(scan, None)
         else:
             kept = scan.copy()  # the caller may reuse its buffer for the next scan
             for run in (self._near, self._whole):
                 if run is not None:
                     run.log.append((kept, motion))
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
-            self._near = self._start_near(scan, last_pose if self._lost_at is None else self._lost_at)
+            self._near = self._start_sound(scan, last_pose if self._lost_at is None else self._lost_at)
         # The whole plan's search, once it has ended, catches its places up first: its costly part
         # is done, and at one step an update behind five places they would never catch up.
         if self._whole is not None and self._whole.places is not None:
@@ -533,37 +534,50 @@ class Recovery:
         ):
             self._end_cycle()
 
-    def _start_near(self, scan: NDArray[np.float64], lost_at: Pose) -> _Run:
-        """The search near `lost_at` (T_map_base, see `step`), begun on the scan of one of the
-        last `NEAR_CHOICES` lost updates that is likeliest sound (`_soundest`), over the region
-        where the robot may have been then (`_near_region` with the drive up to that update); the
-        updates after it go into the search's log, and its places are followed through them when
-        it ends (`_catch_up`). A corrupted scan (a random cloud, a scan turned) continues nothing,
-        and a search begun on one finds no place, or a wrong one, and starts again only when it
-        ends: on fhw with one scan in five a random cloud, a search that started again on a cloud
-        ended as the next cloud came and began on that one, and the robot stayed lost to the end
-        of the log in 2 of 10 runs (docs/design.md). Without kept scans (a first update), the
+    def _start_sound(self, scan: NDArray[np.float64], lost_at: Pose | None) -> _Run:
+        """A search near `lost_at` (T_map_base, see `step`; None: of the whole plan), begun on
+        the scan of one of the last `START_CHOICES` lost updates that is likeliest sound
+        (`_soundest`), over the region where the robot may have been then (`_near_region` with
+        the drive up to that update); the updates after it go into the search's log, and its
+        places are followed through them when it ends (`_catch_up`). A corrupted scan (a random
+        cloud, a scan turned) continues nothing, and a search begun on one finds no place, or a
+        wrong one: on fhw with one scan in five a random cloud, a search near the pose that
+        started again on a cloud ended as the next cloud came and began on that one, and the
+        robot stayed lost to the end of the log in 2 of 10 runs, and a search of the whole plan
+        begun on a cloud ran for 35 updates and over a million nodes where one begun on a sound
+        scan scores about 0.3 million (docs/design.md). Without kept scans (a first update), the
         search begins on `scan`, the current update's."""
         recent = list(self._recent)
         chosen = self._soundest(recent)
         start = recent[chosen] if recent else None
         if start is None or start.scan is None:
-            return self._start(scan, self._near_region(lost_at, self._drive))
-        run = self._start(start.scan, self._near_region(lost_at, start.drive))
+            region = None if lost_at is None else self._near_region(lost_at, self._drive)
+            return self._start(scan, region)
+        region = None if lost_at is None else self._near_region(lost_at, start.drive)
+        run = self._start(start.scan, region)
         run.log.extend((later.scan, later.motion) for later in recent[chosen + 1 :])
         return run
 
     def _soundest(self, recent: list[_Lost]) -> int:
         """The index in `recent` (the last lost updates, the latest last) of the scan a search is
-        likeliest to find the robot with: among the last `NEAR_CHOICES`, the latest that
+        likeliest to find the robot with: among the last `START_CHOICES`, the latest that
         continues a scan kept before it (`ContinuityRule.continues`, from the odometry's motion
         between the two: over a corrupted scan between them too), else the one that overlaps an
         earlier scan most (`ContinuityRule.overlap`; the latest on a tie, or with none kept
         before). A sound scan continues its neighbours; a random cloud or a turned scan
-        continues none."""
+        continues none. (Chosen once an update: both searches may start in one.)"""
+        if self._chosen is not None and recent and self._chosen[0] is recent[-1]:
+            return self._chosen[1]
+        chosen = self._soundest_of(recent)
+        if recent:
+            self._chosen = (recent[-1], chosen)
+        return chosen
+
+    def _soundest_of(self, recent: list[_Lost]) -> int:
+        """`_soundest`, worked out."""
         latest = len(recent) - 1
         best, chosen = 0.0, latest
-        for k in range(latest, max(latest - NEAR_CHOICES, 0), -1):
+        for k in range(latest, max(latest - START_CHOICES, 0), -1):
             scan = recent[k].scan
             if scan is None:
                 continue
@@ -874,9 +888,9 @@ class _Drive:
 
 @dataclass
 class _Lost:
-    """A lost update, for a search near the pose that starts again (`Recovery._start_near`): its
-    scan (a copy; None: one too small to align), the odometry motion since the update before,
-    and the drive from where the localizer lost track to it."""
+    """A lost update, for a search that starts (`Recovery._start_sound`): its scan (a copy;
+    None: one too small to align), the odometry motion since the update before, and the drive
+    from where the localizer lost track to it."""
 
     scan: NDArray[np.float64] | None
     motion: Pose
@@ -922,9 +936,9 @@ _WHOLE_SEARCH = 2**62
 """A node budget no search reaches: `search_nodes=None` runs each search within one update."""
 
 
-NEAR_CHOICES = 2
-"""The last lost updates whose scan a search near the pose that starts again may begin on
-(`Recovery._start_near`): one corrupted scan among them leaves a sound one to begin on."""
+START_CHOICES = 2
+"""The last lost updates whose scan a search may begin on (`Recovery._start_sound`): one
+corrupted scan among them leaves a sound one to begin on."""
 
 ALIGNMENT_NODES = 2_000
 """Search nodes an alignment of a search's place is counted as, against an update's budget
