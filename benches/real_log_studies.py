@@ -138,6 +138,12 @@ against returns beyond the walls) of every 7th tracked scan from its reference p
 node of `relocalize` of the whole plan (every 60th tracked scan), and gives their medians and how
 many nodes an alignment takes as long as (`ALIGNMENT_NODES` counts 2,000).
 
+`overlaps` gives, per log, how much of each tracked scan lies on the scan before it and on the
+one two before (`ContinuityRule.overlap`: placed by the harness's odometry motion, aligned with a
+small correction), and how much of a random cloud put in its place (`junk`'s, one scan in five)
+lies on the scan before it: quantiles over the log, what `Recovery._soundest` tells a sound scan
+from a corrupted one by (`SOUND_OVERLAP`).
+
 The harness (`real_logs.py`) and the logs live in the team's shared benchmarks, outside this
 repository: `--harness` gives its path (default `../shared/bench/real_logs.py`).
 """
@@ -173,6 +179,7 @@ from planicp import (
     relocalize,
     se2,
 )
+from planicp.tracking.continuity_rule import ContinuityRule
 from planicp.tracking.decisions import Prediction
 from planicp.tracking.odometry_fault import climb
 from planicp.tracking.recovery import Hypothesis
@@ -579,6 +586,29 @@ def catch_up_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | {1e3 * a:.2f} | {1e6 * b:.2f} | {a / b:,.0f} |", flush=True)
 
 
+def overlaps_study(harness: Any, logs: list[str], out: str) -> None:
+    rule = ContinuityRule()
+    print(
+        "| log | on the scan before: 5th percentile, quartiles | on the one two before: the same "
+        "| a random cloud on the scan before: median, 95th percentile, largest |"
+    )
+    print("|---|---|---|---|")
+    for name in logs:
+        _, scans, _, odom = load(harness, name, out)
+        clouds = corrupted(scans, "random clouds", np.random.default_rng(7))
+        pose = [tuple(map(float, o)) for o in odom]
+        before, two_before, cloud = [], [], []
+        for i in range(2, len(scans)):
+            before.append(rule.overlap(scans[i], scans[i - 1], se2.between(pose[i - 1], pose[i])))
+            two_before.append(rule.overlap(scans[i], scans[i - 2], se2.between(pose[i - 2], pose[i])))
+            if clouds[i] is not scans[i]:
+                cloud.append(rule.overlap(clouds[i], scans[i - 1], se2.between(pose[i - 1], pose[i])))
+        sound = [np.quantile(v, [0.05, 0.25, 0.5, 0.75]) for v in (before, two_before)]
+        cells = [", ".join(f"{q:.2f}" for q in qs) for qs in sound]
+        junk = np.quantile(cloud, [0.5, 0.95])
+        print(f"| {name} | {cells[0]} | {cells[1]} | {junk[0]:.2f}, {junk[1]:.2f}, {max(cloud):.2f} |", flush=True)
+
+
 def junk_draws_study(
     harness: Any,
     logs: list[str],
@@ -870,6 +900,7 @@ def main() -> None:
             "bars",
             "kidnap",
             "catch-up",
+            "overlaps",
         ),
     )
     parser.add_argument("--harness", default=os.path.join("..", "shared", "bench", "real_logs.py"))
@@ -944,6 +975,8 @@ def main() -> None:
             kidnap_study(harness, args.logs, out, args.min_hits, recovery, args.updates)
         elif args.study == "catch-up":
             catch_up_study(harness, args.logs, out)
+        elif args.study == "overlaps":
+            overlaps_study(harness, args.logs, out)
         elif args.study == "bars":
             bars_study(harness, args.logs, out, args.min_hits, args.seeds, args.resolution)
         elif args.study == "reference":

@@ -630,11 +630,11 @@ def test_a_search_that_starts_while_lost_begins_on_a_sound_scan(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
     """A search that starts while the robot is lost begins on the latest of the last lost scans
-    that continues a scan before it, not on a corrupted one: after a random cloud the search near
-    the pose begins on the scan before the cloud, over the region of that update's drive, and
-    follows its place over the cloud to the robot, and so does a search of the whole plan; a
-    sound scan after a cloud continues the one before the cloud and is begun on; with every
-    scan sound, the latest is."""
+    that overlaps a scan before it (`SOUND_OVERLAP`), not on a corrupted one: after a random
+    cloud the search near the pose begins on the scan before the cloud, over the region of that
+    update's drive, and follows its place over the cloud to the robot, and so does a search of
+    the whole plan; a sound scan after a cloud overlaps the one before the cloud and is begun
+    on; with every scan sound, the latest is."""
     from planicp.tracking.recovery import START_CHOICES
 
     assert START_CHOICES == 2
