@@ -676,6 +676,15 @@ def test_a_search_that_starts_while_lost_begins_on_a_sound_scan(
     assert recovery._lost_at is not None
     run = recovery._start_sound(scans[12], recovery._lost_at)
     assert np.array_equal(run.steps.scan, scans[12]) and run.log == []
+    # A scan too small to align between (followed by the odometry alone): the latest scan
+    # overlaps the one before it across the motions of both updates.
+    recovery = lost_through([scans[10], scans[11]])
+    recovery.coast(se2.between(path[11], path[12]))
+    recovery.new_update()
+    recovery.step(scans[13], se2.between(path[12], path[13]), path[12])
+    assert recovery._lost_at is not None and [e.scan is None for e in recovery._recent] == [False, True, False]
+    run = recovery._start_sound(scans[13], recovery._lost_at)
+    assert np.array_equal(run.steps.scan, scans[13]) and run.log == []
 
 
 def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(
