@@ -540,13 +540,13 @@ class Recovery:
         (`_soundest`), over the region where the robot may have been then (`_near_region` with
         the drive up to that update); the updates after it go into the search's log, and its
         places are followed through them when it ends (`_catch_up`). A corrupted scan (a random
-        cloud, a scan turned) continues nothing, and a search begun on one finds no place, or a
+        cloud, a scan turned) overlaps nothing, and a search begun on one finds no place, or a
         wrong one: on fhw with one scan in five a random cloud, a search near the pose that
         started again on a cloud ended as the next cloud came and began on that one, and the
-        robot stayed lost to the end of the log in 2 of 10 runs, and a search of the whole plan
-        begun on a cloud ran for 35 updates and over a million nodes where one begun on a sound
-        scan scores about 0.3 million (docs/design.md). Without kept scans (a first update), the
-        search begins on `scan`, the current update's."""
+        robot stayed lost to the end of the log in 1 of 10 runs of a draw; a search of the whole
+        plan begun on a cloud ran for 35 updates and over a million nodes where one begun on a
+        sound scan scores about 0.3 million (docs/design.md). Without kept scans (a first
+        update), the search begins on `scan`, the current update's."""
         recent = list(self._recent)
         chosen = self._soundest(recent)
         start = recent[chosen] if recent else None
@@ -593,11 +593,11 @@ class Recovery:
         odometry's heading (a slip, a bad step) at or after that pose: any heading, and at each
         the drive turned by the heading's error, within `local_radius` (the slip's own
         displacement) plus `sqrt(CHI2_3_999)` standard deviations of the drive's position spread
-        at that heading (`_Drive.spread_given_heading`); or anywhere within `local_radius` plus the path length
-        since, when that is the smaller reach (a turn in place). A heading fault moves the robot
-        along a ring around the lost pose, not anywhere within the disk of its path length: on
-        fhw after 29 m of driving the squares had a half-width of 12.8 m where the disk's radius
-        would have been 32 m."""
+        at that heading (`_Drive.spread_given_heading`); or anywhere within `local_radius` plus
+        the path length since, when that is the smaller reach (a turn in place). A heading fault
+        moves the robot along a ring around the lost pose, not anywhere within the disk of its
+        path length: on fhw after 29 m of driving the squares had a half-width of 12.8 m where
+        the disk's radius would have been 32 m."""
         base = self.config.local_radius
         reach = math.sqrt(CHI2_3_999) * largest_position_std(drive.spread_given_heading())
         if reach >= drive.path:
