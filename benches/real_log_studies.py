@@ -132,6 +132,11 @@ learned and as set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`).
 localizer said lost and until its estimate was back within 0.3 m of the reference and not lost
 ("-": not within the 25; `--updates` feeds more).
 
+`kidnap-trace` follows one kidnap of `kidnap` (`--kidnap`: which of the six K, from 0; `--updates`
+fed after it) update by update: how far the estimate is from the reference, whether the localizer
+says lost, and the nodes each of the recovery's searches has scored (the one near the lost pose,
+the whole plan's; a new search near the pose when the count restarts), and when each ends.
+
 `catch-up` times what the recovery counts against an update's search budget on each log's plan:
 the alignment of a place (`Recovery._follow`: ICP from the odometry's prediction and the check
 against returns beyond the walls) of every 7th tracked scan from its reference pose, and a search
@@ -565,6 +570,36 @@ def kidnap_study(
             print(f"| {name} | {k} | {j} | " + " | ".join(cells) + " |", flush=True)
 
 
+def kidnap_trace_study(
+    harness: Any, name: str, out: str, kidnap: int, recovery: RecoveryConfig | None = None, updates: int = 25
+) -> None:
+    plan, scans, ref, odom = load(harness, name, out)
+    n = len(scans)
+    k = int(np.linspace(30, n - 60, 6).astype(int)[kidnap])
+    j = next(j for j in range(k + 20, n - updates) if math.dist(ref[j][:2], ref[k][:2]) > 8.0)
+    loc = localizer(plan, ref[0], True, recovery)
+    for i in range(k + 1):
+        loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
+    last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
+    print(f"{name}: kidnapped after scan {k}, fed from scan {j}")
+    print("| update | off, m | lost | near the pose: nodes | whole plan: nodes | ended |")
+    print("|---|---|---|---|---|---|")
+    rec = loc._recovery
+    for i in range(updates):
+        runs = (rec._near, rec._whole)
+        searching = [r is not None and r.places is None for r in runs]
+        moved = se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
+        e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
+        ended = [
+            what
+            for what, run, was in zip(("near the pose", "whole plan"), runs, searching)
+            if was and run is not None and run.places is not None
+        ]
+        nodes = ["-" if r is None else f"{r.steps.nodes:,}" for r in (rec._near, rec._whole)]
+        off = math.dist(e.pose[:2], ref[j + i][:2])
+        print(f"| {i + 1} | {off:.1f} | {'yes' if e.lost else 'no'} | {nodes[0]} | {nodes[1]} | {', '.join(ended)} |")
+
+
 def catch_up_study(harness: Any, logs: list[str], out: str) -> None:
     print("| log | alignment ms (median) | node us (median) | nodes an alignment takes as long as |")
     print("|---|---|---|---|")
@@ -900,6 +935,7 @@ def main() -> None:
             "bars",
             "kidnap",
             "catch-up",
+            "kidnap-trace",
             "overlaps",
         ),
     )
@@ -951,6 +987,7 @@ def main() -> None:
         help="bars and kidnap studies: end points per cell of the plan (the harness's is 2)",
     )
     parser.add_argument("--repeats", type=int, default=10, help="junk-repeats study: runs of each draw")
+    parser.add_argument("--kidnap", type=int, default=0, help="kidnap-trace study: which of the six K (0-5)")
     parser.add_argument(
         "--updates", type=int, default=25, help="kidnap study: updates fed after the kidnap (the default 25)"
     )
@@ -973,6 +1010,8 @@ def main() -> None:
             beyond_study(harness, args.logs, out)
         elif args.study == "kidnap":
             kidnap_study(harness, args.logs, out, args.min_hits, recovery, args.updates)
+        elif args.study == "kidnap-trace":
+            kidnap_trace_study(harness, args.logs[0], out, args.kidnap, recovery, args.updates)
         elif args.study == "catch-up":
             catch_up_study(harness, args.logs, out)
         elif args.study == "overlaps":
