@@ -547,20 +547,12 @@ def kidnap_study(
     print("|---|---|---|---|---|")
     for name in logs:
         plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
-        n = len(scans)
-        for k in np.linspace(30, n - 60, 6).astype(int):
-            j = next((j for j in range(k + 20, n - updates) if math.dist(ref[j][:2], ref[k][:2]) > 8.0), None)
-            if j is None:
-                continue
+        for k, j in kidnaps(ref, updates):
             cells = []
             for relaxes in (True, False):
                 loc = localizer(plan, ref[0], relaxes, recovery)
-                for i in range(k + 1):
-                    loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
-                last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
                 lost_at = back_at = None
-                for i in range(updates):
-                    moved = se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
+                for i, moved in enumerate(kidnapped(loc, scans, odom, k, j, updates)):
                     e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
                     if lost_at is None and e.lost:
                         lost_at = i + 1
@@ -570,25 +562,40 @@ def kidnap_study(
             print(f"| {name} | {k} | {j} | " + " | ".join(cells) + " |", flush=True)
 
 
+def kidnaps(ref: np.ndarray, updates: int) -> list[tuple[int, int]]:
+    """The kidnaps of the `kidnap` study: (K, J) at six evenly spaced K, J the first scan at least
+    20 after K and more than 8 m from its reference pose with `updates` scans left after it."""
+    n, pairs = len(ref), []
+    for k in np.linspace(30, n - 60, 6).astype(int):
+        j = next((j for j in range(k + 20, n - updates) if math.dist(ref[j][:2], ref[k][:2]) > 8.0), None)
+        if j is not None:
+            pairs.append((int(k), j))
+    return pairs
+
+
+def kidnapped(loc: Localizer, scans: list[np.ndarray], odom: np.ndarray, k: int, j: int, updates: int) -> Any:
+    """Tracks scans 0..K with `loc`, then yields for each of the `updates` scans from J the
+    odometry pose that goes on smoothly from K's (the caller updates `loc` with it)."""
+    for i in range(k + 1):
+        loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
+    last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
+    for i in range(updates):
+        yield se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
+
+
 def kidnap_trace_study(
     harness: Any, name: str, out: str, kidnap: int, recovery: RecoveryConfig | None = None, updates: int = 25
 ) -> None:
     plan, scans, ref, odom = load(harness, name, out)
-    n = len(scans)
-    k = int(np.linspace(30, n - 60, 6).astype(int)[kidnap])
-    j = next(j for j in range(k + 20, n - updates) if math.dist(ref[j][:2], ref[k][:2]) > 8.0)
+    k, j = kidnaps(ref, updates)[kidnap]
     loc = localizer(plan, ref[0], True, recovery)
-    for i in range(k + 1):
-        loc.update(np.ascontiguousarray(scans[i]), tuple(map(float, odom[i])))
-    last, origin = tuple(map(float, odom[k])), tuple(map(float, odom[j - 1]))
     print(f"{name}: kidnapped after scan {k}, fed from scan {j}")
     print("| update | off, m | lost | near the pose: nodes | whole plan: nodes | ended |")
     print("|---|---|---|---|---|---|")
     rec = loc._recovery
-    for i in range(updates):
+    for i, moved in enumerate(kidnapped(loc, scans, odom, k, j, updates)):
         runs = (rec._near, rec._whole)
         searching = [r is not None and r.places is None for r in runs]
-        moved = se2.compose(last, se2.between(origin, tuple(map(float, odom[j + i]))))
         e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
         ended = [
             what
