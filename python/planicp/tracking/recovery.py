@@ -582,10 +582,9 @@ class Recovery:
         cloud, a scan turned) overlaps nothing, and a search begun on one finds no place, or a
         wrong one: on fhw with one scan in five a random cloud, a search near the pose that
         started again on a cloud ended as the next cloud came and began on that one, and the
-        robot stayed lost to the end of the log in 1 of 10 runs of a draw; a search of the whole
-        plan begun on a cloud ran for 35 updates and over a million nodes where one begun on a
-        sound scan scores about 0.3 million (docs/design.md). Without kept scans (a first
-        update), the search begins on `scan`, the current update's."""
+        robot stayed lost to the end of the log in 1 of 10 runs of a draw (docs/design.md); no
+        place explains a cloud, so a search's bounds prune little on one. Without kept scans (a
+        first update), the search begins on `scan`, the current update's."""
         recent = list(self._recent)
         chosen, sound = self._soundest(recent)
         start = recent[chosen] if recent else None
