@@ -687,39 +687,6 @@ def test_a_search_that_starts_while_lost_begins_on_a_sound_scan(
     assert np.array_equal(run.steps.scan, scans[13]) and run.log == []
 
 
-def test_a_search_near_the_pose_that_refuted_its_places_yields_to_the_whole_plans_search(
-    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
-) -> None:
-    """A search near the lost pose that began on a sound scan and ended refuted its places: the
-    next one looks for the same places moved by the drive, so until the cycle ends the whole
-    plan's search scores the update's budget first and the search near the pose gets what is
-    left. One that began on a scan not known to be sound (the first lost update's) refutes
-    nothing, and the next search near the pose has the first claim on the unreserved half."""
-    config = RecoveryConfig(search_nodes=2_000, search_spare_time=None)
-    for sound in (False, True):
-        recovery = Recovery(plan, config, IcpConfig.for_tracking(), AcceptanceGate())
-        for i in (10, 11, 12):
-            recovery.new_update()
-            recovery.step(scans[i], se2.between(path[i - 1], path[i]), path[i - 1])
-        near, whole = recovery._near, recovery._whole
-        assert near is not None and whole is not None and whole.places is None
-        near.sound = sound
-        recovery._near_ended()  # as if it had ended and its places had been dropped
-        assert recovery._refuted is sound
-        recovery.new_update()
-        recovery.step(scans[13], se2.between(path[12], path[13]), path[12])
-        restarted = recovery._near
-        assert restarted is not None and restarted is not near and recovery._whole is whole
-        before = whole.steps.nodes
-        recovery.new_update()
-        recovery.step(scans[14], se2.between(path[13], path[14]), path[13])
-        assert recovery._whole is whole and recovery._near is restarted
-        if sound:
-            assert whole.steps.nodes - before >= 1_900 and restarted.steps.nodes <= 3
-        else:
-            assert 900 <= whole.steps.nodes - before <= 1_100 and restarted.steps.nodes >= 900
-
-
 def test_the_search_near_a_robot_lost_by_a_heading_fault_covers_the_ring_it_drove_to(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

@@ -274,10 +274,7 @@ class Recovery:
     _drive: _Drive = field(default_factory=lambda: _Drive())
     # The last lost updates, the latest last, for a search that starts (`_start_sound`).
     _recent: deque[_Lost] = field(default_factory=lambda: deque(maxlen=START_CHOICES + 1))
-    _chosen: tuple[_Lost, int, bool] | None = None  # `_soundest` of the latest of `_recent`
-    # Whether the last search near the pose began on a sound scan and ended (see `_search`): the
-    # next one yields to the whole plan's search until the cycle ends.
-    _refuted: bool = False
+    _chosen: tuple[_Lost, int] | None = None  # `_soundest` of the latest of `_recent`
     # The last pose a tracked scan vouched for (`note_tracked`), and the odometry's drive since;
     # kept across `clear`.
     _vouched_at: Pose | None = None
@@ -468,7 +465,7 @@ class Recovery:
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
         self._lost_at, self._drive = None, _Drive()
         self._recent.clear()
-        self._chosen, self._refuted = None, False
+        self._chosen = None
 
     def note_tracked(self, motion: Pose, pose: Pose, *, vouched: bool) -> None:
         """An update tracked (not lost) to `pose` (T_map_base) after the odometry moved the robot
@@ -499,18 +496,7 @@ class Recovery:
         the searches around the prediction cannot take either); when it ends and none of its places
         is followed, it starts again on the soundest of the last lost scans (`_start_sound`), over
         the region the drive up to that scan gives (a search that ended updates after its scan may
-        find nothing where the robot is now). But a search near the pose that began on a sound
-        scan and ended refuted what it searched for: the robot was not where a heading fault at the
-        lost pose would have put it then (a search scores every place of its region; the true one
-        among its best `max_hypotheses`, the scan explaining it, unless the scan was corrupted).
-        Its next search looks for the same places, moved by the drive since, and finds the robot
-        only where a fault came since or where the region has grown, while the whole plan's search
-        has refuted nothing yet: until the cycle ends, the whole plan's search comes first, with
-        the update's whole budget and spare time, and the search near the pose gets what is left
-        (`_refuted`; the rule that orders searches by their chance of success per node puts the
-        one whose places are the likelier first). On intel, acapulco and freiburg-campus a
-        kidnapped robot was then found within 25 updates in 5 of 18 runs instead of 1
-        (docs/design.md).
+        find nothing where the robot is now).
         When the whole plan's search ends and its places have caught up (`_catch_up`), the cycle
         ends; the places of a search join the hypotheses when they have. With `near=False` (a place
         on trial) only the whole plan's search goes on."""
@@ -529,26 +515,19 @@ class Recovery:
         if self._whole is not None and self._whole.places is not None:
             if self._advance(self._whole, scan, self.budget.left, whole_plan=True):
                 self._end_cycle()
-        # A search near the pose that refuted its places yields to the whole plan's (see above).
-        near_first = not self._refuted or self._whole is None
-        if not near_first and self._whole is not None:
-            if self._advance(self._whole, scan, self.budget.left, whole_plan=True):
-                self._end_cycle()
         if self._near is not None and self._advance(self._near, scan, self.budget.free, whole_plan=False):
-            self._near_ended()
+            self._near = None
         if self._whole is not None and self._advance(self._whole, scan, self.budget.left, whole_plan=True):
             self._end_cycle()
         # The update's spare time (`RecoveryConfig.search_spare_time`): the search near the pose
-        # first, with half of it, then the whole plan's (the whole plan's first, with all of it,
-        # when the search near the pose yields to it).
+        # first, with half of it, then the whole plan's.
         spare = self.budget.spare_seconds()
         if (
             self._near is not None
-            and near_first
             and spare > 0.0
             and self._advance(self._near, scan, None, whole_plan=False, seconds=spare / 2)
         ):
-            self._near_ended()
+            self._near = None
         spare = self.budget.spare_seconds()
         if (
             self._whole is not None
@@ -556,22 +535,6 @@ class Recovery:
             and self._advance(self._whole, scan, None, whole_plan=True, seconds=spare)
         ):
             self._end_cycle()
-        spare = self.budget.spare_seconds()
-        if (
-            self._near is not None
-            and not near_first
-            and spare > 0.0
-            and self._advance(self._near, scan, None, whole_plan=False, seconds=spare)
-        ):
-            self._near_ended()
-
-    def _near_ended(self) -> None:
-        """The search near the pose has ended and its places have caught up: the next one yields
-        to the whole plan's search when this one began on a sound scan (`_refuted`, see
-        `_search`)."""
-        assert self._near is not None
-        self._refuted = self._near.sound
-        self._near = None
 
     def _start_sound(self, scan: NDArray[np.float64], lost_at: Pose | None) -> _Run:
         """A search near `lost_at` (T_map_base, see `step`; None: of the whole plan), begun on
@@ -586,7 +549,7 @@ class Recovery:
         place explains a cloud, so a search's bounds prune little on one. Without kept scans (a
         first update), the search begins on `scan`, the current update's."""
         recent = list(self._recent)
-        chosen, sound = self._soundest(recent)
+        chosen = self._soundest(recent)
         start = recent[chosen] if recent else None
         if start is None or start.scan is None:
             region = None if lost_at is None else self._near_region(lost_at, self._drive)
@@ -594,25 +557,23 @@ class Recovery:
         region = None if lost_at is None else self._near_region(lost_at, start.drive)
         run = self._start(start.scan, region)
         run.log.extend((later.scan, later.motion) for later in recent[chosen + 1 :])
-        run.sound = sound
         return run
 
-    def _soundest(self, recent: list[_Lost]) -> tuple[int, bool]:
+    def _soundest(self, recent: list[_Lost]) -> int:
         """The index in `recent` (the last lost updates, the latest last) of the scan a search is
         likeliest to find the robot with: the latest of the last `START_CHOICES` that overlaps a
         scan kept before it by at least `SOUND_OVERLAP` (`ContinuityRule.overlap`, from the
         odometry's motion between the two: over a corrupted scan between them too), else the
-        latest; and whether it overlapped one (False: the latest, not known to be sound). A sound
-        scan overlaps its neighbours; a random cloud or a turned scan overlaps none. (Chosen once
-        an update: both searches may start in one.)"""
+        latest. A sound scan overlaps its neighbours; a random cloud or a turned scan overlaps
+        none. (Chosen once an update: both searches may start in one.)"""
         if self._chosen is not None and recent and self._chosen[0] is recent[-1]:
-            return self._chosen[1], self._chosen[2]
-        chosen, sound = self._soundest_of(recent)
+            return self._chosen[1]
+        chosen = self._soundest_of(recent)
         if recent:
-            self._chosen = (recent[-1], chosen, sound)
-        return chosen, sound
+            self._chosen = (recent[-1], chosen)
+        return chosen
 
-    def _soundest_of(self, recent: list[_Lost]) -> tuple[int, bool]:
+    def _soundest_of(self, recent: list[_Lost]) -> int:
         """`_soundest`, worked out."""
         latest = len(recent) - 1
         for k in range(latest, max(latest - START_CHOICES, 0), -1):
@@ -624,8 +585,8 @@ class Recovery:
                 motion = compose(recent[j + 1].motion, motion)
                 earlier = recent[j].scan
                 if earlier is not None and self.continuity.overlap(scan, earlier, motion) >= SOUND_OVERLAP:
-                    return k, True
-        return latest, False
+                    return k
+        return latest
 
     def _near_region(self, lost_at: Pose, drive: _Drive) -> SearchRegion:
         """Where the robot may be, lost at `lost_at` (T_map_base, see `step`) and driven by the
@@ -653,7 +614,7 @@ class Recovery:
         """The whole plan's search has ended: so has the cycle; the best `max_hypotheses` places
         are followed."""
         self._whole = None
-        self._cycle, self._near, self._refuted = False, None, False
+        self._cycle, self._near = False, None
         self.hypotheses.sort(key=lambda h: (-h.streak, -h.mean_inlier_ratio))
         self.hypotheses = self.hypotheses[: self.config.max_hypotheses]
 
@@ -941,8 +902,6 @@ class _Run:
     log: list[tuple[NDArray[np.float64] | None, Pose]] = field(default_factory=list)
     places: list[Hypothesis] | None = None
     caught: int = 0
-    sound: bool = False
-    """Whether its scan overlapped a scan kept before it (`Recovery._soundest`)."""
 
 
 BEYOND_WINDOW = 50
