@@ -14,11 +14,9 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    scan is followed through the scans of the updates since (kept while the search runs), as the
    hypotheses are followed (step 2), within the updates' budgets (`_catch_up`), and joins the
    hypotheses once it has caught up, each scan it explained counted in its streak. The search
-   near the pose starts again while none of its places is followed; once one begun on a sound
-   scan has ended, the next yields the updates' budget to the whole plan's search (it looks for
-   places that one refuted, moved by the drive). A search begins on the latest of the last two
-   lost scans that overlaps a scan before it (`_start_sound`: not on a corrupted one, which no
-   place explains), the later scans in its log.
+   near the pose starts again while none of its places is followed. A search begins on the
+   latest of the last two lost scans that overlaps a scan before it (`_start_sound`: not on a
+   corrupted one, which no place explains), the later scans in its log.
 2. On each next scan every hypothesis moves with the odometry and is aligned again (ICP from its
    prediction; for one that followed the odometry over scans it was not fitted to, a search
    within the odometry's spread since where ICP fails). A hypothesis whose fit explains less than
