@@ -272,7 +272,6 @@ class Recovery:
     _drive: _Drive = field(default_factory=lambda: _Drive())
     # The last lost updates, the latest last, for a search that starts (`_start_sound`).
     _recent: deque[_Lost] = field(default_factory=lambda: deque(maxlen=START_CHOICES + 1))
-    _chosen: tuple[_Lost, int] | None = None  # `_soundest` of the latest of `_recent`
     # The last pose a tracked scan vouched for (`note_tracked`), and the odometry's drive since;
     # kept across `clear`.
     _vouched_at: Pose | None = None
@@ -307,12 +306,13 @@ class Recovery:
                 self._lost_at, self._drive = last_pose, _Drive()
         else:
             self._drive.add(motion, self.motion_noise)
-        self._recent.append(_Lost(scan.copy(), motion, self._drive.copy()))
+        kept = scan.copy()  # the caller may reuse its buffer for the next scan
+        self._recent.append(_Lost(kept, motion, self._drive.copy()))
         followed = bool(self.hypotheses)
         self._follow_all(scan, motion)
         # When the last hypotheses are dropped, the next scan searches again.
         if self.searching or not followed:
-            self._search(scan, motion, last_pose)
+            self._search(kept, motion, last_pose)
         found = self._confirmed()
         if found is not None:
             if not self.searching:
@@ -340,7 +340,7 @@ class Recovery:
         if self._follow_all(scan, motion, explained_elsewhere=incumbent >= self.config.min_inlier_ratio):
             self._incumbent.append(incumbent)
         if self.searching or begin:
-            self._search(scan, motion, pose, near=False)
+            self._search(scan.copy(), motion, pose, near=False)  # the caller may reuse its buffer
         self.hypotheses = [h for h in self.hypotheses if not _same(h.pose, pose)]
         rival = self._confirmed()
         if rival is not None:
@@ -463,7 +463,6 @@ class Recovery:
         self._cycle, self._near, self._whole, self._trial = False, None, None, False
         self._lost_at, self._drive = None, _Drive()
         self._recent.clear()
-        self._chosen = None
 
     def note_tracked(self, motion: Pose, pose: Pose, *, vouched: bool) -> None:
         """An update tracked (not lost) to `pose` (T_map_base) after the odometry moved the robot
@@ -481,7 +480,8 @@ class Recovery:
         return self._cycle
 
     def _search(self, scan: NDArray[np.float64], motion: Pose, last_pose: Pose, near: bool = True) -> None:
-        """One update's share of the search cycle: two searches run side by side, one around the
+        """One update's share of the search cycle, for `scan` (a copy the recovery keeps: the
+        searches and their logs hold it): two searches run side by side, one around the
         pose where the localizer lost track (`_lost_at`, see `step`), any heading, at each the
         odometry's drive since turned by the heading's error, within `local_radius` plus the drive's
         spread (a slip or a bad odometry step, `_near_region`), and one of the whole plan (the robot
@@ -502,10 +502,9 @@ class Recovery:
             self._cycle = True
             self._whole = self._start_sound(scan, None) if near else self._start(scan, None)
         else:
-            kept = scan.copy()  # the caller may reuse its buffer for the next scan
             for run in (self._near, self._whole):
                 if run is not None:
-                    run.log.append((kept, motion))
+                    run.log.append((scan, motion))
         if near and self._near is None and self.config.local_radius > 0.0 and not any(h.near for h in self.hypotheses):
             self._near = self._start_sound(scan, last_pose if self._lost_at is None else self._lost_at)
         # The whole plan's search, once it has ended, catches its places up first: its costly part
@@ -563,16 +562,7 @@ class Recovery:
         scan kept before it by at least `SOUND_OVERLAP` (`ContinuityRule.overlap`, from the
         odometry's motion between the two: over a corrupted scan between them too), else the
         latest. A sound scan overlaps its neighbours; a random cloud or a turned scan overlaps
-        none. (Chosen once an update: both searches may start in one.)"""
-        if self._chosen is not None and recent and self._chosen[0] is recent[-1]:
-            return self._chosen[1]
-        chosen = self._soundest_of(recent)
-        if recent:
-            self._chosen = (recent[-1], chosen)
-        return chosen
-
-    def _soundest_of(self, recent: list[_Lost]) -> int:
-        """`_soundest`, worked out."""
+        none."""
         latest = len(recent) - 1
         for k in range(latest, max(latest - START_CHOICES, 0), -1):
             scan = recent[k].scan
