@@ -551,6 +551,15 @@ def test_continuity_rule() -> None:
     moved = between(tuple(recording.odometry_in_odom[far]), tuple(recording.odometry_in_odom[far]))
     assert not rule.continues(recording.scans[far], recording.scans[10], moved)  # as if nothing moved
     assert not rule.continues(np.zeros((2, 2)), recording.scans[10], motion)
+    # The share itself (`overlap`, what a lost robot's search is begun by): most of a
+    # continuation, none of a scan too small to align, and none of one whose alignment had to
+    # correct the odometry's motion by more than `max_correction`, however well it overlaps then.
+    assert rule.overlap(recording.scans[12], recording.scans[10], motion) >= rule.min_overlap
+    assert rule.overlap(np.zeros((2, 2)), recording.scans[10], motion) == 0.0
+    wide = ContinuityRule(max_distance=0.2)
+    scan = recording.scans[10]
+    assert wide.overlap(scan, scan, (0.3, 0.0, 0.0)) == 0.0
+    assert ContinuityRule(max_distance=0.2, max_correction=0.5).overlap(scan, scan, (0.3, 0.0, 0.0)) > 0.9
     with pytest.raises(ValueError, match="min_overlap"):
         ContinuityRule(min_overlap=0.0)
     with pytest.raises(ValueError, match="max_correction"):
