@@ -65,7 +65,8 @@ drawn plan gets), on the harness's plan and on two noisier ones drawn from the s
 cell one end point falls in; 10 cm cells), and gives the mean ATE, the mean share of scans more
 than 0.3 m off and the worst draw's. `seeds --search kd_tree` tracks with the cast too;
 `seeds --odometry-noise 3` from odometry whose Gaussian noise (not its drift) is three times the
-harness's.
+harness's; `seeds --stride 2` on every other one of the harness's tracked scans (with the odometry
+drawn for all of them): steps twice as long between scans, as a log that keeps fewer scans gives.
 `log-odometry` tracks each log from its own odometry (the robot's wheels, not the harness's
 synthetic drift), as `planicp evaluate-log --odometry log` does, on the harness's scan sets and the
 swapped and reversed ones, with the masks and with the cast.
@@ -340,7 +341,13 @@ def field_study(harness: Any, logs: list[str], out: str, seeds: list[int]) -> No
 
 
 def seeds_study(
-    harness: Any, logs: list[str], out: str, seeds: list[int], search: str | None = None, noise_scale: float = 1.0
+    harness: Any,
+    logs: list[str],
+    out: str,
+    seeds: list[int],
+    search: str | None = None,
+    noise_scale: float = 1.0,
+    stride: int = 1,
 ) -> None:
     print("| log | " + " | ".join(f"seed {s}" for s in seeds) + " | mean lost |")
     print("|---|" + "---|" * (len(seeds) + 1))
@@ -348,7 +355,8 @@ def seeds_study(
     for name in logs:
         cells, lost = [], []
         for seed in seeds:
-            m, _ = track(harness, *load(harness, name, out, seed, noise_scale=noise_scale), config)
+            plan, scans, ref, odom = load(harness, name, out, seed, noise_scale=noise_scale)
+            m, _ = track(harness, plan, scans[::stride], ref[::stride], odom[::stride], config)
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
@@ -969,6 +977,9 @@ def main() -> None:
         help="seeds study: the harness's odometry noise (not its drift) times this",
     )
     parser.add_argument(
+        "--stride", type=int, default=1, help="seeds study: track every Nth of the harness's tracked scans"
+    )
+    parser.add_argument(
         "--no-spare-time",
         action="store_true",
         help="junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_spare_time=None), "
@@ -999,6 +1010,8 @@ def main() -> None:
         "--updates", type=int, default=25, help="kidnap study: updates fed after the kidnap (the default 25)"
     )
     args = parser.parse_args()
+    if args.stride < 1:
+        parser.error("--stride must be 1 or more")
     spec = importlib.util.spec_from_file_location("real_logs", args.harness)
     if spec is None or spec.loader is None or not os.path.exists(args.harness):
         sys.exit(f"no harness at {args.harness}: give its path with --harness")
@@ -1008,7 +1021,7 @@ def main() -> None:
     recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
-            seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise)
+            seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise, args.stride)
         elif args.study == "slam-visibility":
             slam_visibility_study(harness, args.logs, out, args.seeds)
         elif args.study == "log-odometry":

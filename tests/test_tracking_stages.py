@@ -430,6 +430,31 @@ def test_a_scan_vouches_for_the_pose_when_its_fit_explains_as_much_as_the_tracks
     assert not relocalized.vouched and relocalized.explained_share is None
 
 
+def test_a_sound_scan_whose_prediction_was_too_uncertain_to_classify_records_its_beyond_share_at_its_fit(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # A scan a step of metres away: the occlusion rule classified nothing (`fit.beyond` None). Its
+    # returns, and as many again pushed half as far again along their beams (beyond the walls they
+    # hit), seen from the fit's pose: about half of them beyond the walls.
+    the_rules = rules(plan)
+    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    result = localize(scans[0], plan, path[0], IcpConfig.for_tracking())
+    points = np.vstack([scans[0], 1.5 * scans[0]])
+    fit = FitDecision(result, None, None, False, "", usable=True)
+    score = ScoreDecision(0.9, False, None, "")
+    n = len(points)
+    records = stages.keep_records(recovery, fit, score, result, n, True, False, False, the_rules, points=points)
+    assert records.beyond_share is not None and 0.4 < records.beyond_share < 0.55
+    assert list(recovery.beyond_shares) == [records.beyond_share]
+    assert the_rules.occlusion is not None
+    expected = float(np.mean(the_rules.occlusion.classify(points, result.pose)[1]))
+    assert records.beyond_share == pytest.approx(expected)
+    # Without the points (or for a scan not soundly tracked) nothing is recorded.
+    assert stages.keep_records(recovery, fit, score, result, n, True, False, False, the_rules).beyond_share is None
+    lost = stages.keep_records(recovery, fit, score, result, n, True, False, True, the_rules, points=points)
+    assert lost.beyond_share is None and len(recovery.beyond_shares) == 1
+
+
 PATCHY = (0.79, 0.71, 0.81, 0.98, 0.93, 0.64, 0.57, 0.73, 0.71, 0.83, 0.64, 0.48, 0.44)
 """Shares of their scans the sound fits of orebro's first 13 scans explained on its map drawn with
 three end points per cell: a patchy map, whose sound fits spread widely."""

@@ -512,8 +512,9 @@ class Bookkeeping:
     Attributes:
         anchored: the scan becomes the one later scans are checked against for continuity (an
             accepted fit the plan explains well, or clutter that continues the last one).
-        beyond_share: the share of the scan's returns beyond the walls seen from the prediction,
-            recorded for `Recovery.beyond_limit` (a soundly tracked scan); None when not recorded.
+        beyond_share: the share of the scan's returns beyond the walls seen from the prediction
+            (from the fit's pose when the prediction was too uncertain to classify them), recorded
+            for `Recovery.beyond_limit` (a soundly tracked scan); None when not recorded.
         explained_share: the share of the scan's returns its fit explained, recorded for
             `Recovery.explained_seen` (a soundly tracked scan); None when not recorded.
         vouched: the scan vouches for the pose: soundly tracked, and its fit explained at least

@@ -444,7 +444,7 @@ class Localizer:
             relocalized = search.searched or adopted is not None or returned
             # 10. What the next updates need.
             records = keep_records(
-                self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost, rules
+                self._recovery, fit, score, result, len(points), accepted, relocalized, now_lost, rules, points=points
             )
             if not now_lost:
                 self._recovery.note_tracked(prediction.motion, pose, vouched=records.vouched or adopted is not None)
