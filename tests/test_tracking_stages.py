@@ -820,6 +820,14 @@ def test_the_place_left_behind_is_taken_back_kept_or_forgotten_by_the_fault_cost
     refused = Correction(elsewhere, SMALL, False, None, "prediction")
     found = stages.weigh_left_place(points, left, odom, refused, the_rules, False)
     assert found.returned is not None and error(truth, found.returned.pose)[0] < 0.03
+    # Weighed against the places the scan offered the track (a fit the gate refused only for
+    # the size of its correction, a place left pending), not the prediction alone: where one of
+    # them explains the scan as well as the place left behind does, the scan prefers neither.
+    offered = (elsewhere, se2.compose(truth, (0.005, 0.0, 0.0)))
+    held = stages.weigh_left_place(points, left, odom, refused, the_rules, False, offered=offered)
+    assert held.returned is None and held.kept is not None and abs(held.evidence) < 0.5 * threshold
+    assert held.current_cost == pytest.approx(scan_cost(points, offered[1], plan, the_rules.refinement))
+    assert held.current_cost < scan_cost(points, elsewhere, plan, the_rules.refinement) - threshold
     unsure = Correction(truth, SMALL, False, None, "prediction")
     waiting = stages.weigh_left_place(points, LeftPlace(elsewhere, odom), odom, unsure, the_rules, False)
     assert waiting.evidence < -threshold and waiting.kept is not None and waiting.kept.pose == elsewhere

@@ -375,8 +375,9 @@ class LeftPlaceDecision:
         place: the place left behind, followed to this scan and climbed (T_map_base); None when
             none is followed (or while lost).
         cost: the scan's cost at `place` (no prior); NaN when `place` is None.
-        current_cost: the scan's cost at the corrected pose (the prediction, without an accepted
-            fit); NaN when `place` is None.
+        current_cost: the scan's cost at the corrected pose; without an accepted fit, the lowest
+            of the prediction's and those of the places the scan offered the track (the fit from
+            the prediction, a place left pending); NaN when `place` is None.
         returned: ICP from `place` when the scans since it was left prefer it by more than the
             fault cost (and, without an accepted fit, ICP from it passes the gate): the update
             takes `place`, and follows the pose it leaves instead. None otherwise.

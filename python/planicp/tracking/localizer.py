@@ -398,8 +398,11 @@ class Localizer:
             correction = correct(points, prediction, search, score, rules)
             # 7. The place an adopted jump left behind, taken back if this scan prefers it.
             faulted = search.left is not None  # this update took a place an odometry fault explains
+            offered = tuple(r.pose for r in (fit.result,) if r is not None) + tuple(
+                p.pose for p in (search.pending,) if p is not None
+            )
             left = weigh_left_place(
-                points, self._left, odom, correction, rules, was_lost, faulted, prediction.covariance
+                points, self._left, odom, correction, rules, was_lost, faulted, prediction.covariance, offered
             )
             # 8. Lost or not. 9. While lost, the recovery, which may adopt a place.
             lost = judge_lost(self._detector, score, correction, search, was_lost, rules, left)

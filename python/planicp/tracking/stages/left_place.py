@@ -41,6 +41,7 @@ def weigh_left_place(
     lost: bool,
     faulted: bool = False,
     motion_covariance: NDArray[np.float64] | None = None,
+    offered: tuple[Pose, ...] = (),
 ) -> LeftPlaceDecision:
     """The place left behind (`left`) followed to this scan's odometry pose `odom`, climbed in the
     plan's likelihood field (no prior), and weighed against the corrected pose (see the module):
@@ -66,7 +67,16 @@ def weigh_left_place(
     A place whose mode is the corrected pose's, within the 99.9 % bound of its covariance, is the
     track's own again and is forgotten (`merged`): kept, it had gathered the track's own scans'
     evidence for as long as the two coincided, and on seattle a scan turned by 90 degrees later
-    took it "back", 0.8 m off, on that evidence."""
+    took it "back", 0.8 m off, on that evidence.
+
+    Without an accepted fit, the track's cost is the lowest of the corrected pose's (the
+    prediction) and those of the places this scan `offered` the track (T_map_base: the fit from
+    the prediction, a place left pending for the next scan to confirm): a scan the gate refused
+    only for the size of its correction still says where the track is. Weighed against the
+    prediction alone, a place left behind that explains the scan less well than the refused fit
+    was taken "back" (seattle, every third scan tracked, odometry seed 3: the fit explained all of
+    the scan, refused for a correction of 12 degrees, and the place left behind, 2.5 m off, cost
+    73.5 against the prediction's 89.9)."""
     if left is None or lost or not rules.refinement.weighs_faults:
         return LeftPlaceDecision(None)
     there = compose(left.pose, between(left.odom, odom))
@@ -78,6 +88,8 @@ def weigh_left_place(
     start = aligned.pose if rules.gate.fit_rejection(aligned) == "" else there
     place, cost = climb(points, start, rules.plan, rules.refinement)
     current = scan_cost(points, correction.pose, rules.plan, rules.refinement)
+    if not correction.accepted:
+        current = min([current, *(scan_cost(points, p, rules.plan, rules.refinement) for p in offered)])
     threshold = fault_cost(rules.refinement.fault_probability)
     if correction.accepted and _within_motion(place, correction.pose, correction.covariance):
         return LeftPlaceDecision(place, cost, current, evidence=left.evidence + current - cost, merged=True)
