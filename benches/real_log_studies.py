@@ -89,7 +89,8 @@ draw's outcome turns on a few scans, the mean says more), and the largest over t
 99th percentile of the time per update; with `--bars-as-set`, with the gate's and the lost
 rule's bars on the share of a scan a fit explains as set, not learned. With `--no-spare-time` the
 recovery's searches score only the nodes of each update (`RecoveryConfig(search_spare_time=None)`):
-what it finds, and when, is then the same on any machine and under any load (`faults --no-spare-time` likewise).
+what it finds, and when, is then the same on any machine and under any load (`faults --no-spare-time` and
+`seeds --no-spare-time` likewise).
 `junk-repeats` tracks each odometry draw of `--seeds` with one scan in five random clouds
 `--repeats` times in one process (the plan loaded once): with the spare time a run depends on how
 far each update's searches get, and one run of a draw says little of the next. Per draw, the share
@@ -348,6 +349,7 @@ def seeds_study(
     search: str | None = None,
     noise_scale: float = 1.0,
     stride: int = 1,
+    recovery: RecoveryConfig | None = None,
 ) -> None:
     print("| log | " + " | ".join(f"seed {s}" for s in seeds) + " | mean lost |")
     print("|---|" + "---|" * (len(seeds) + 1))
@@ -356,7 +358,7 @@ def seeds_study(
         cells, lost = [], []
         for seed in seeds:
             plan, scans, ref, odom = load(harness, name, out, seed, noise_scale=noise_scale)
-            m, _ = track(harness, plan, scans[::stride], ref[::stride], odom[::stride], config)
+            m, _ = track(harness, plan, scans[::stride], ref[::stride], odom[::stride], config, recovery=recovery)
             cells.append(f"{100 * m['ate_rmse_m']:.1f} cm, {100 * m['lost_frac']:.1f} %")
             lost.append(100 * m["lost_frac"])
         print(f"| {name} | " + " | ".join(cells) + f" | {np.mean(lost):.1f} % |", flush=True)
@@ -982,7 +984,7 @@ def main() -> None:
     parser.add_argument(
         "--no-spare-time",
         action="store_true",
-        help="junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_spare_time=None), "
+        help="seeds, junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_spare_time=None), "
         "the same on any machine",
     )
     parser.add_argument(
@@ -1021,7 +1023,7 @@ def main() -> None:
     recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
-            seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise, args.stride)
+            seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise, args.stride, recovery)
         elif args.study == "slam-visibility":
             slam_visibility_study(harness, args.logs, out, args.seeds)
         elif args.study == "log-odometry":
