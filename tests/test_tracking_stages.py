@@ -940,6 +940,39 @@ def test_a_jump_an_odometry_fault_explains_is_taken_at_once_and_a_jump_beyond_it
     assert search_stage(scans[20], slipped, fit, the_rules).pending is not None
 
 
+def test_a_correction_beyond_the_gate_that_an_uncertain_prediction_allows_is_no_jump(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # A step of 5 m turning 50 degrees: the motion noise's deviations are 0.26 m and 7.6 degrees.
+    # The odometry's heading is 12 degrees off; ICP from the prediction finds the truth, beyond
+    # the gate's 10 degrees but within the prediction's own 99.9 % bound: the search within that
+    # bound confirms the place, taken at once.
+    the_rules = rules(plan)
+    truth = path[20]
+    predicted = se2.compose(truth, (0.1, 0.0, 12 * DEG))
+    wide = np.diag([0.26**2, 0.26**2, (7.6 * DEG) ** 2])
+    uncertain = Prediction((0.0, 0.0, 0.0), (5.0, 0.0, 50 * DEG), predicted, wide, False)
+    fit = stages.fit_from_prediction(scans[20], uncertain, the_rules, False)
+    assert fit.result is not None and error(truth, fit.result.pose)[0] < 0.02
+    assert fit.reason.startswith("correction of 1") and fit.reason.endswith("exceeds 10.00 deg"), fit.reason
+    allowed = search_stage(scans[20], uncertain, fit, the_rules)
+    assert allowed.cause == "uncertain" and allowed.searched and allowed.pending is None
+    assert allowed.result is not None and error(truth, allowed.result.pose)[0] < 0.02
+    # The same correction after a step the odometry is sure of is a jump: it waits for the next scan.
+    sure = Prediction((0.0, 0.0, 0.0), (0.5, 0.0, 0.0), predicted, SMALL, False)
+    waits = search_stage(scans[20], sure, stages.fit_from_prediction(scans[20], sure, the_rules, False), the_rules)
+    assert waits.cause == "jump" and not waits.searched and waits.pending is not None
+    # And after one uncertain in position only (0.2 m; 2.6 degrees): 12 degrees lies beyond its bound.
+    along = np.diag([0.2**2, 0.2**2, (2.6 * DEG) ** 2])
+    narrow = Prediction((0.0, 0.0, 0.0), (2.0, 0.0, 0.0), predicted, along, False)
+    beyond = search_stage(scans[20], narrow, stages.fit_from_prediction(scans[20], narrow, the_rules, False), the_rules)
+    assert beyond.cause == "jump" and beyond.pending is not None
+    # A fit refused for what it explains, not for its jump, is no jump either way: nothing waits.
+    few = scans[20][::8][:25]
+    poor = stages.fit_from_prediction(few, uncertain, the_rules, False)
+    assert poor.reason.startswith("only ") and search_stage(few, uncertain, poor, the_rules).pending is None
+
+
 def test_a_pending_place_the_scan_prefers_as_a_fault_would_is_confirmed(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
