@@ -207,6 +207,18 @@ def test_a_fit_beyond_the_prediction_is_used_alone_unless_the_scan_is_far_worse_
     alone = stages.correct(scans[20], prediction, search, score, the_rules)
     assert alone.accepted and alone.kind == "fit" and alone.refused == ""
     assert error(truth, alone.pose)[0] < 0.01
+    # On a plan whose fits explain little (the bars relaxed below 0.2), the same fit with a scan
+    # the plan explains 20 % of passes the relaxed bars only: it keeps a track, but is no
+    # evidence that the odometry faulted, and the prediction stays.
+    relaxed = on_a_patchy_map(plan, path[0])._rules()
+    assert relaxed.lost.min_score < 0.2 < relaxed.lost_as_set.min_score
+    little = ScoreDecision(0.2, False, None, "")
+    kept = stages.correct(scans[20], prediction, search, little, relaxed)
+    assert not kept.accepted and kept.kind == "prediction" and kept.pose == prediction.pose
+    assert kept.refused.endswith(
+        "passes only the bars relaxed to what this plan's fits explain: no evidence of an odometry fault"
+    )
+    assert stages.correct(scans[20], prediction, search, score, relaxed).kind == "fit"  # a sound scan: the fault
     # The same fit when the scan's cost there exceeds the track's typical cost by the fault cost
     # and the sweep found no place that explains it as usual: a corrupted scan is the likelier
     # cause, and the update keeps the prediction.
