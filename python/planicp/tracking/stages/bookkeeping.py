@@ -47,7 +47,7 @@ def keep_records(
         # Where each step moves the robot metres (one scan a metre or two, a noisy odometry) the
         # prediction is never trusted enough for the occlusion rule; a bar learned from no scan
         # stays at `max_beyond`, which a SLAM map's true places exceed (fhw with every other
-        # scan: 29-63 %, and the robot, lost at its 8th scan, was never found again).
+        # scan: 29-63 %, and the robot, lost at its 15th update, was never found again).
         beyond = rules.occlusion.classify(points, result.pose)[1]
     if sound and beyond is not None and len(beyond):
         share = float(np.mean(beyond))

@@ -36,7 +36,8 @@ def search_near_prediction(
     vouch for it (`search_cause`; not while `lost`, nor after a confirmed pending place, which the
     update goes on with).
 
-    A place found for an uncertain prediction agrees with it and is taken at once. After a fit
+    A place found for an uncertain prediction agrees with it and is taken at once (so is one
+    found for a fit rejected for a jump that prediction allows, `search_cause`). After a fit
     rejected for its jump, odometry may have faulted and the prediction says nothing; but a
     corrupted scan (turned, shifted) fits some place beyond the gate too. So the place (the
     search's, or the sound fit's where the search finds none) is taken at once only where the
