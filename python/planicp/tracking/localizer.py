@@ -398,9 +398,7 @@ class Localizer:
             correction = correct(points, prediction, search, score, rules)
             # 7. The place an adopted jump left behind, taken back if this scan prefers it.
             faulted = search.left is not None  # this update took a place an odometry fault explains
-            offered = tuple(r.pose for r in (fit.result,) if r is not None) + tuple(
-                p.pose for p in (search.pending,) if p is not None
-            )
+            offered = tuple(x.pose for x in (fit.result, search.pending) if x is not None)
             left = weigh_left_place(
                 points, self._left, odom, correction, rules, was_lost, faulted, prediction.covariance, offered
             )

@@ -41,7 +41,7 @@ def keep_records(
     share = explained = None
     sound = accepted and not score.poor and not relocalized and not lost
     if sound and result is not None:
-        sound = rules.gate_as_set.fit_rejection(result) == "" and score.score >= rules.lost_as_set.min_score
+        sound = rules.passes_as_set(result, score.score)
     beyond = fit.beyond
     if sound and beyond is None and result is not None and points is not None and rules.occlusion is not None:
         # Where each step moves the robot metres (one scan a metre or two, a noisy odometry) the

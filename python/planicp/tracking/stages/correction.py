@@ -79,7 +79,7 @@ def _fault_or_prediction(
     explained 29 % of its scan was taken alone for two scans)."""
     refinement = rules.refinement
     if not refinement.weighs_faults:
-        if rules.gate_as_set.fit_rejection(result) != "" or score.score < rules.lost_as_set.min_score:
+        if not rules.passes_as_set(result, score.score):
             return Correction(
                 prediction.pose,
                 prediction.covariance,

@@ -10,6 +10,7 @@ from ..continuity_rule import ContinuityRule
 from ..degeneracy_rule import DegeneracyRule
 from ..fusion_rule import FusionRule
 from ..icp_config import IcpConfig
+from ..icp_result import IcpResult
 from ..lost_rule import LostRule
 from ..motion_noise import MotionNoise
 from ..occlusion_rule import OcclusionFilter
@@ -52,3 +53,9 @@ class Rules:
     refinement: PosteriorRefinement
     gate_as_set: AcceptanceGate
     lost_as_set: LostRule
+
+    def passes_as_set(self, result: IcpResult, score: float) -> bool:
+        """Whether the fit `result`, whose scan the plan explains `score` of, passes the gate's and
+        the lost rule's bars as set, not only as relaxed (`gate_as_set`, `lost_as_set`): a sound
+        fit, which teaches what the plan explains and may claim an odometry fault."""
+        return self.gate_as_set.fit_rejection(result) == "" and score >= self.lost_as_set.min_score

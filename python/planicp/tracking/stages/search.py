@@ -69,7 +69,7 @@ def search_near_prediction(
     if cause == "uncertain":
         if found is not None:
             return SearchDecision(cause, found, found, "", True)
-        if reason != "" and rules.gate.fit_rejection(result) == "":
+        if _only_jump(result, reason, rules):
             # A jump the prediction allows that no place within its bound confirms: searched as
             # any jump is (after fhw's 24-degree heading fault, the fit 0.58 m off explained 48 %
             # of the scan, the place the fault put the robot lay beyond the bound).
@@ -200,10 +200,15 @@ def search_cause(result: IcpResult, reason: str, prediction: Prediction, rules: 
     uncertain = 3.0 * largest_position_std(covariance) > rules.gate.max_translation_jump or (
         3.0 * math.sqrt(max(float(covariance[2, 2]), 0.0)) > rules.gate.max_rotation_jump
     )
-    if reason != "" and rules.gate.fit_rejection(result) == "":
+    if _only_jump(result, reason, rules):
         allowed = uncertain and rules.fusion.innovation(result, prediction.pose, covariance) <= CHI2_3_999
         return "uncertain" if allowed else "jump"
     return "uncertain" if uncertain else None
+
+
+def _only_jump(result: IcpResult, reason: str, rules: Rules) -> bool:
+    """Whether the gate refused `result` (for `reason`) only for the size of its correction."""
+    return reason != "" and rules.gate.fit_rejection(result) == ""
 
 
 def _search_near(
