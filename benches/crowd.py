@@ -14,7 +14,7 @@ and over all of them.
     python benches/crowd.py [--seeds 1 2 3 4 5] [--people 0 10 20 25 30 40] [--workers 2]
 
 With `--no-spare-time` every variant's recovery scores only the nodes of each update
-(`RecoveryConfig(search_spare_time=None)`): where a variant loses track, what it ends at is then
+(`RecoveryConfig(search_time=None, search_spare_time=None)`): where a variant loses track, what it ends at is then
 the same on any machine and under any load.
 """
 
@@ -54,7 +54,7 @@ def errors_of(seed: int, people: int, no_spare_time: bool = False) -> tuple[floa
     scans, blocked = crowded_scans(recording, world.floor, config.lidar, Crowd(people), seed=seed)
     out = {}
     for name, options in VARIANTS.items():
-        recovery = RecoveryConfig(search_spare_time=None) if no_spare_time else None
+        recovery = RecoveryConfig(search_time=None, search_spare_time=None) if no_spare_time else None
         localizer = Localizer(plan, tuple(recording.truth[0]), recovery=recovery, **options)
         poses = np.array([localizer.update(s, tuple(o)).pose for s, o in zip(scans, recording.odometry_in_odom)])
         out[name] = np.hypot(*(poses[:, :2] - recording.truth[:, :2]).T)
@@ -67,7 +67,9 @@ def main() -> None:
     parser.add_argument("--people", type=int, nargs="+", default=[0, 10, 20, 25, 30, 40])
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     parser.add_argument(
-        "--no-spare-time", action="store_true", help="RecoveryConfig(search_spare_time=None): the same on any machine"
+        "--no-spare-time",
+        action="store_true",
+        help="RecoveryConfig(search_time=None, search_spare_time=None): the same on any machine",
     )
     args = parser.parse_args()
     jobs = [(seed, people) for people in args.people for seed in args.seeds]

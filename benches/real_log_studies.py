@@ -88,7 +88,7 @@ seed), per kind of corruption that recurs (one scan in five), its mean over the 
 draw's outcome turns on a few scans, the mean says more), and the largest over the draws of the
 99th percentile of the time per update; with `--bars-as-set`, with the gate's and the lost
 rule's bars on the share of a scan a fit explains as set, not learned. With `--no-spare-time` the
-recovery's searches score only the nodes of each update (`RecoveryConfig(search_spare_time=None)`):
+recovery's searches score only the nodes of each update (`RecoveryConfig(search_time=None, search_spare_time=None)`):
 what it finds, and when, is then the same on any machine and under any load (`faults --no-spare-time` and
 `seeds --no-spare-time` likewise).
 `junk-repeats` tracks each odometry draw of `--seeds` with one scan in five random clouds
@@ -984,8 +984,8 @@ def main() -> None:
     parser.add_argument(
         "--no-spare-time",
         action="store_true",
-        help="seeds, junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_spare_time=None), "
-        "the same on any machine",
+        help="seeds, junk-draws, junk-repeats, faults and kidnap studies: "
+        "RecoveryConfig(search_time=None, search_spare_time=None), the same on any machine",
     )
     parser.add_argument(
         "--filter-out",
@@ -1020,7 +1020,7 @@ def main() -> None:
     harness = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(harness)
     print(f"planicp {planicp.__version__}")
-    recovery = RecoveryConfig(search_spare_time=None) if args.no_spare_time else None
+    recovery = RecoveryConfig(search_time=None, search_spare_time=None) if args.no_spare_time else None
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise, args.stride, recovery)

@@ -589,7 +589,7 @@ def test_a_search_that_ends_updates_after_its_scan_follows_its_places_through_th
     from planicp.tracking.recovery import ALIGNMENT_NODES
     from planicp.tracking.relocalize import SearchRegion
 
-    recovery = Recovery(plan, RecoveryConfig(), IcpConfig.for_tracking(), AcceptanceGate())
+    recovery = Recovery(plan, RecoveryConfig(search_time=None), IcpConfig.for_tracking(), AcceptanceGate())
     run = recovery._start(scans[10], SearchRegion(path[10], 0.3, math.radians(10.0)))
     coasted = path[10]
     for a, b, scan in zip(path[10:35], path[11:36], scans[11:36]):
@@ -641,9 +641,8 @@ def test_a_search_that_starts_while_lost_begins_on_a_sound_scan(
     cloud = np.random.default_rng(4).uniform(-8.0, 8.0, size=scans[12].shape)
 
     def lost_through(updates: list[np.ndarray]) -> Recovery:
-        recovery = Recovery(
-            plan, RecoveryConfig(search_nodes=1, search_spare_time=None), IcpConfig.for_tracking(), AcceptanceGate()
-        )
+        config = RecoveryConfig(search_nodes=1, search_time=None, search_spare_time=None)
+        recovery = Recovery(plan, config, IcpConfig.for_tracking(), AcceptanceGate())
         for i, scan in enumerate(updates, start=10):
             recovery.new_update()
             recovery.step(scan, se2.between(path[i - 1], path[i]), path[i - 1])
@@ -786,14 +785,35 @@ def test_the_recovery_searches_on_in_the_update_s_spare_time(
         recovery.step(scans[20], (0.0, 0.0, 0.0), path[20])
         return recovery
 
-    spread = first_update(RecoveryConfig(search_nodes=1_000, search_spare_time=None))
+    spread = first_update(RecoveryConfig(search_nodes=1_000, search_time=None, search_spare_time=None))
     assert spread.searching and not spread.hypotheses
-    spared = first_update(RecoveryConfig(search_nodes=1_000, search_spare_time=30.0))
+    spared = first_update(RecoveryConfig(search_nodes=1_000, search_time=None, search_spare_time=30.0))
     assert not spared.searching  # the whole plan's search ended in the update that began it
     assert min(error(h.pose, path[20])[0] for h in spared.hypotheses) < 0.05
     now = time.perf_counter()
     assert SearchBudget(1_000, until=now + 0.001, spare_until=now + 10.0).spare_seconds() <= 0.001
     assert SearchBudget(1_000).spare_seconds() == 0.0
+
+
+def test_an_update_s_searches_stop_at_its_time_ceiling_whatever_nodes_are_left(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """`search_time` (15 ms by default): the searches of an update stop that long after it began,
+    with nodes left, and go on in the next update. An update whose ceiling has passed before its
+    searches begin scores none of its 5,000 nodes, where without a ceiling it scores them all."""
+    assert RecoveryConfig().search_time == 0.015
+
+    def scored(config: RecoveryConfig) -> tuple[Recovery, int]:
+        recovery = Recovery(plan, config, IcpConfig.for_tracking(), AcceptanceGate())
+        budget = recovery.new_update()
+        recovery.step(scans[20], (0.0, 0.0, 0.0), path[20])
+        assert budget.left is not None
+        return recovery, 5_000 - budget.left
+
+    recovery, nodes = scored(RecoveryConfig(search_nodes=5_000, search_time=None, search_spare_time=None))
+    assert recovery.searching and nodes >= 5_000
+    recovery, nodes = scored(RecoveryConfig(search_nodes=5_000, search_time=1e-9, search_spare_time=None))
+    assert recovery.searching and nodes == 0
 
 
 def test_a_place_nearby_must_explain_scans_as_sound_tracking_does(plan: PlanMap) -> None:

@@ -160,10 +160,10 @@ def test_kidnapped_robot_is_found_again() -> None:
 
 
 def test_a_kidnap_is_found_again_with_each_search_within_one_update() -> None:
-    """`search_nodes=None`: every search runs to its end in the update that starts it, so the
+    """`search_nodes=None, search_time=None`: every search runs to its end in the update that starts it, so the
     place is confirmed on the next scans, sooner than with the default's searches spread over
     updates (docs/benchmarks.md, "Kidnapped robot")."""
-    outcomes = [_kidnap(seed, recovery=RecoveryConfig(search_nodes=None)) for seed in range(5)]
+    outcomes = [_kidnap(seed, recovery=RecoveryConfig(search_nodes=None, search_time=None)) for seed in range(5)]
     good = [lost is not None and lost < 5 and back is not None and back < 8 for lost, back in outcomes]
     assert sum(good) >= 4, outcomes
 
@@ -191,7 +191,7 @@ def test_no_update_scores_more_search_nodes_than_its_budget(monkeypatch: pytest.
 
     monkeypatch.setattr(SearchBudget, "spend", counting)
     monkeypatch.setattr(Recovery, "new_update", per_update)
-    lost, back = _kidnap(3, recovery=RecoveryConfig(search_nodes=10_000, search_spare_time=None))
+    lost, back = _kidnap(3, recovery=RecoveryConfig(search_nodes=10_000, search_time=None, search_spare_time=None))
     assert lost is not None and back is not None, (lost, back)
     searching = [n for n in spent if n > 0]
     # A search may score three nodes past its share (an expansion scores four children), and an
@@ -218,9 +218,8 @@ def test_a_place_adopted_before_the_whole_plan_was_searched_stays_on_trial() -> 
     # 15,000 nodes an update and no spare time: the whole plan's search ends three updates after the
     # place nearby is adopted (at the default 20,000 the two searches end together and the right
     # place is found).
-    localizer = Localizer(
-        plan, tuple(before.truth[0]), recovery=RecoveryConfig(search_nodes=15_000, search_spare_time=None)
-    )
+    recovery = RecoveryConfig(search_nodes=15_000, search_time=None, search_spare_time=None)
+    localizer = Localizer(plan, tuple(before.truth[0]), recovery=recovery)
     for scan, odom in zip(before.scans, before.odometry_in_odom):
         localizer.update(scan, tuple(odom))
     last, origin = tuple(before.odometry_in_odom[-1]), tuple(after.odometry_in_odom[start - 1])

@@ -304,7 +304,7 @@ def idle_pose(prediction: Prediction) -> Correction:
 def test_the_recovery_stage_reports_the_place_it_adopts(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:
-    config = RecoveryConfig(confirmations=2, search_nodes=None)  # each search within its update
+    config = RecoveryConfig(confirmations=2, search_nodes=None, search_time=None)  # each search within its update
     icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
     recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
     detector = LostDetector(LostRule())
@@ -348,7 +348,7 @@ def test_a_track_lost_where_the_scans_preferred_the_place_left_behind_is_searche
     # The track is 5 m off (a turned scan taken as a fault, then scans that fit nothing soundly);
     # the place it left behind is where the robot is. The search near the last pose (3 m) is
     # centred on that place, and finds the robot there.
-    config = RecoveryConfig(search_nodes=None)
+    config = RecoveryConfig(search_nodes=None, search_time=None)
     icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
     lost = LostDecision(True, False, False, math.nan, 3)
     fit = FitDecision(None, None, None, False, "", usable=True)
@@ -377,7 +377,7 @@ def test_the_search_near_a_lost_robot_covers_the_path_the_odometry_drove_from_wh
     # The robot then drives 4 m to path[40] while the pose coasting on a faulted odometry runs 9 m
     # off. The search near the robot, started again, covers 3 m plus the path driven around where
     # track was lost, and finds it; around the coasting pose it would not.
-    config = RecoveryConfig(search_nodes=None)  # each search within its update
+    config = RecoveryConfig(search_nodes=None, search_time=None)  # each search within its update
     icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
     recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
     cloud = np.random.default_rng(3).uniform(-10.0, 10.0, size=(360, 2))
@@ -400,7 +400,7 @@ def test_a_track_lost_after_scans_that_vouched_for_nothing_is_searched_for_from_
     # explained too little to vouch (a broken odometry step followed), and the track ended 5 m
     # off. Lost at the 21st, the search near the robot pivots on path[0] with the odometry's drive
     # since, and finds it; from the pose the track reached (a fresh recovery), it does not.
-    config = RecoveryConfig(search_nodes=None)  # each search within its update
+    config = RecoveryConfig(search_nodes=None, search_time=None)  # each search within its update
     icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
     lost = LostDecision(True, False, False, math.nan, 3)
     fit = FitDecision(None, None, None, False, "", usable=True)
@@ -555,7 +555,7 @@ def test_a_track_kept_only_by_the_relaxed_lost_bar_is_doubted_and_a_better_place
     assert verdicts[-1].lost and not verdicts[-1].doubted
     # In doubt, the whole plan is searched beside the track (here a place 5 m and 115 degrees
     # off, which the scans do not fit): the place the scans fit replaces it.
-    config = RecoveryConfig(confirmations=2, search_nodes=None)  # each search within its update
+    config = RecoveryConfig(confirmations=2, search_nodes=None, search_time=None)  # each search within its update
     icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
     recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
     doubted = LostDecision(False, False, True, 0.2, 0, doubted=True)

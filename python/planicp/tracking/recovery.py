@@ -108,27 +108,32 @@ class RecoveryConfig(Settings):
             alignment counted as `ALIGNMENT_NODES` nodes), and a place found near the last pose
             that explains the scans as well as sound tracking did is adopted before it ends, on
             trial (`verify`).
-            None: each search runs to its end within the update that starts it (seconds on a
-            large plan).
-        search_time: most seconds all the searches of one update spend scoring nodes together
-            (`SearchBudget`): they stop where they are at the first check (every 1024 nodes)
-            after it, and go on in the next update: an update kept to a period whatever a node
-            costs on the plan, at the price of a track that depends on the machine's speed and
-            load. None (the default): `search_nodes` alone bounds them, and a run is the same on
-            any machine. (0.008 s kept freiburg-campus's updates within 13 ms, and, with two
-            runs sharing the machine, lost fhw for good on three of eight odometry draws and
-            campus on one, their recoveries' searches spread over more updates.)
+            None: no node limit; with `search_time` None as well, each search runs to its end
+            within the update that starts it (seconds on a large plan).
+        search_time: seconds from the start of an update after which all its searches stop
+            where they are, at their first check (every 1024 nodes) past it, and go on in the
+            next update: the update's ceiling, whatever a node costs. A node's cost grows with
+            the plan and with the machine's load, from memory: late in a search of
+            freiburg-campus's 280 x 270 m plan 20,000 nodes took 9-15 ms on an idle machine, and
+            without the ceiling the updates of a place's trial there made a 99th percentile of
+            25-27 ms (18 ms with it; docs/benchmarks.md, "Other scan sets"). 15 ms leaves the
+            work after the searches (alignments, records: 3-5 ms there) within a 25 ms period.
+            On the real logs' building plans the nodes end first (20,000 take 2-5 ms): the
+            ceiling binds on a large plan or a slow or loaded machine, where a search then
+            spreads over more updates. None: the nodes alone bound the searches, and a run with
+            `search_spare_time` None as well is the same on any machine.
         search_spare_time: seconds from the start of an update within which the recovery's
-            searches go on past `search_nodes` (None: never). They score their `search_nodes`
-            whatever the time, so a slow or loaded machine searches as with `search_nodes` alone;
-            where nodes are cheap (a smaller plan, a faster machine) the update's spare time
-            ends a search of the whole plan in fewer updates, before the odometry has carried its
-            places beyond finding again. The update then takes up to this long (plus the
-            alignments after the searches), and how soon the robot is found depends on the
-            machine; None keeps a run the same on any machine. Only the recovery's searches
-            (while lost, or while a place is on trial) use it, not the searches around a
-            prediction. (On fhw with one scan in five corrupted, 10 ms took the share of scans
-            lost from about two thirds to a sixth, docs/design.md.)
+            searches go on past `search_nodes` (None: never), within `search_time`. They score
+            their `search_nodes` whatever the spare time, so a slow or loaded machine searches
+            as with `search_nodes` alone; where nodes are cheap (a smaller plan, a faster
+            machine) the update's spare time ends a search of the whole plan in fewer updates,
+            before the odometry has carried its places beyond finding again. The update then
+            takes up to this long (plus the alignments after the searches), and how soon the
+            robot is found depends on the machine; None, with `search_time` None, keeps a run
+            the same on any machine. Only the recovery's searches (while lost, or while a place
+            is on trial) use it, not the searches around a prediction. (On fhw with one scan in
+            five corrupted, 10 ms took the share of scans lost from about two thirds to a sixth,
+            docs/design.md.)
     """
 
     search: Annotated[RelocalizationConfig, instance_of(RelocalizationConfig)] = field(
@@ -141,7 +146,7 @@ class RecoveryConfig(Settings):
     local_radius: Annotated[float, Real(ge=0.0, unit="metres")] = 3.0
     max_beyond: Annotated[float, Real(gt=0.0, le=1.0)] = 0.15
     search_nodes: Annotated[int, Whole(ge=1)] | None = 20_000
-    search_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = None
+    search_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = 0.015
     search_spare_time: Annotated[float, Real(gt=0.0, le=3600.0, unit="seconds")] | None = 0.010
 
 
