@@ -56,7 +56,10 @@ harness does not use, so that what is tuned on its eight runs is checked on othe
 plan drawn from the odd-numbered scans and the even-numbered ones tracked; "reversed", the
 harness's plan and its tracked scans in reverse order (the robot driving the log backwards, its
 odometry drawn anew for that drive). It gives ATE, the share of scans more than 0.3 m off, the
-first of them, and the 99th percentile of the time per update.
+first of them, and the 99th percentile of the time per update. With `--no-ceiling` the searches
+have no ceiling in time (`RecoveryConfig(search_time=None)`): only their nodes and the update's
+spare time bound them. With `--memory-load` a second process streams through 512 MiB of memory
+while the study runs, as another job on the machine does: a search node's cost grows with it.
 
 `slam-visibility` tracks each log from the odometry of each of `--seeds` with the `Localizer`'s
 defaults (on these map_server maps: pairs through the nearest-wall index's masks) and with the
@@ -161,6 +164,7 @@ import argparse
 import importlib.util
 import inspect
 import math
+import multiprocessing
 import os
 import sys
 import tempfile
@@ -416,12 +420,12 @@ def log_odometry_study(harness: Any, logs: list[str]) -> None:
                 )
 
 
-def scan_sets_study(harness: Any, logs: list[str], out: str) -> None:
+def scan_sets_study(harness: Any, logs: list[str], out: str, recovery: RecoveryConfig | None = None) -> None:
     print("| log | scan set | ATE | lost (> 0.3 m) | first off | p99 ms/update |")
     print("|---|---|---|---|---|---|")
     for scan_set in ("swapped", "reversed"):
         for name in logs:
-            m, spent = track(harness, *load(harness, name, out, scan_set=scan_set))
+            m, spent = track(harness, *load(harness, name, out, scan_set=scan_set), recovery=recovery)
             first = "-" if m["first_lost_scan"] is None else str(m["first_lost_scan"])
             print(
                 f"| {name} | {scan_set} | {100 * m['ate_rmse_m']:.1f} cm | {100 * m['lost_frac']:.1f} % | {first} | "
@@ -927,6 +931,16 @@ def beyond_study(harness: Any, logs: list[str], out: str) -> None:
         print(f"| {name} | {cells[0]} | {cells[1]} |", flush=True)
 
 
+def _stream_memory() -> None:
+    """Copies 256 MiB back and forth until the process is ended: another job on the machine that
+    takes one core and the memory bandwidth and caches."""
+    a = np.ones(2**25)
+    b = np.empty_like(a)
+    while True:
+        np.copyto(b, a)
+        np.copyto(a, b)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
@@ -988,6 +1002,17 @@ def main() -> None:
         "RecoveryConfig(search_time=None, search_spare_time=None), the same on any machine",
     )
     parser.add_argument(
+        "--no-ceiling",
+        action="store_true",
+        help="scan-sets, seeds, junk-draws and kidnap studies: RecoveryConfig(search_time=None), the searches "
+        "bounded by their nodes and the update's spare time only",
+    )
+    parser.add_argument(
+        "--memory-load",
+        action="store_true",
+        help="a second process streams through 512 MiB of memory while the study runs (a loaded machine)",
+    )
+    parser.add_argument(
         "--filter-out",
         default=None,
         help="reference study: a harness output folder (--out) whose MRPT filter's estimates to check too",
@@ -1020,7 +1045,13 @@ def main() -> None:
     harness = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(harness)
     print(f"planicp {planicp.__version__}")
-    recovery = RecoveryConfig(search_time=None, search_spare_time=None) if args.no_spare_time else None
+    recovery = None
+    if args.no_spare_time:
+        recovery = RecoveryConfig(search_time=None, search_spare_time=None)
+    elif args.no_ceiling:
+        recovery = RecoveryConfig(search_time=None)
+    if args.memory_load:
+        multiprocessing.Process(target=_stream_memory, daemon=True).start()
     with tempfile.TemporaryDirectory() as out:
         if args.study == "seeds":
             seeds_study(harness, args.logs, out, args.seeds, args.search, args.odometry_noise, args.stride, recovery)
@@ -1043,7 +1074,7 @@ def main() -> None:
         elif args.study == "reference":
             reference_study(harness, args.logs, out, args.filter_out, args.seed)
         elif args.study == "scan-sets":
-            scan_sets_study(harness, args.logs, out)
+            scan_sets_study(harness, args.logs, out, recovery)
         elif args.study == "junk":
             junk_study(harness, args.logs, out)
         elif args.study == "junk-draws":

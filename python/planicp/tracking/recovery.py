@@ -113,9 +113,8 @@ class RecoveryConfig(Settings):
         search_time: seconds from the start of an update after which all its searches stop
             where they are, at their first check (every 1024 nodes) past it, and go on in the
             next update: the update's ceiling, whatever a node costs. A node's cost grows with
-            the plan and with the machine's load, from memory: late in a search of
-            freiburg-campus's 280 x 270 m plan 20,000 nodes took 9-15 ms on an idle machine, and
-            without the ceiling the updates of a place's trial there made a 99th percentile of
+            the plan and with the machine's load, from memory: on freiburg-campus's 280 x 270 m
+            plan, without the ceiling, the updates of a place's trial made a 99th percentile of
             25-27 ms (18 ms with it; docs/benchmarks.md, "Other scan sets"). 15 ms leaves the
             work after the searches (alignments, records: 3-5 ms there) within a 25 ms period.
             On the real logs' building plans the nodes end first (20,000 take 2-5 ms): the
