@@ -66,8 +66,11 @@ SWEEP_ITERATIONS = 10
 HISTORY = 20
 """Accepted updates whose costs make the track's typical cost (their median)."""
 
-MIN_HISTORY = 5
-"""Accepted updates needed before a typical cost is known (before, no sweep runs)."""
+MIN_HISTORY = 3
+"""Accepted updates needed before a typical cost is known (before, no sweep runs): the fewest
+whose median one outlier cannot carry beyond the range of the others. (With every other of fhw's
+scans tracked, a 33-degree fault at the fifth update, before a fifth cost, went unswept on every
+odometry draw: 25 to 116 updates off; docs/benchmarks.md, "Sparser scans".)"""
 
 _NO_PRIOR = (np.eye(3) * NO_PRIOR_VARIANCE).tolist()
 
@@ -196,10 +199,8 @@ def sweep_for_fault(
     field = plan.likelihood_field()
     step = max(1, -(-len(points) // SWEEP_POINTS))
     sparse = np.ascontiguousarray(points[::step])
-    turns = int(rule.fault_heading_window // FAULT_HEADING_STEP)
     best: tuple[float, tuple[float, float, float]] | None = None
-    for k in range(-turns, turns + 1):
-        start = (float(predicted[0]), float(predicted[1]), float(predicted[2]) + k * FAULT_HEADING_STEP)
+    for start in fault_starts(predicted, motion, rule.fault_heading_window, tolerance):
         end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
         if within_fault(end, predicted, motion, rule, tolerance) and (best is None or cost < best[0]):
             best = (cost, end)
@@ -210,6 +211,32 @@ def sweep_for_fault(
         pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
         cost = scan_cost(points, pose, plan, rule)
     return FaultSweep(pose, cost, current_cost, typical, threshold)
+
+
+def fault_starts(predicted: Pose, motion: Pose, window: float, reach: float) -> list[Pose]:
+    """Where the sweep's climbs start (T_map_base): at every `FAULT_HEADING_STEP` of heading error
+    within `window` radians either way, the places the robot is at when the odometry's heading
+    went wrong by that much at the end of `motion` (the predicted position), halfway through it,
+    or at its start (the whole drive turned about the last pose, `predicted` composed with the
+    inverse of `motion`): a climb reaches a mode only from within a few tenths of a metre, and a
+    fault early in a long step leaves the robot metres from the predicted position (on fhw with
+    every third scan tracked, a 39-degree fault over a 1.9 m step, 1.7 m). A start within `reach`
+    metres of one already made at its heading is left out."""
+    last = compose(predicted, inverse(motion))
+    dx, dy = float(predicted[0]) - last[0], float(predicted[1]) - last[1]
+    turns = int(window // FAULT_HEADING_STEP)
+    starts: list[Pose] = []
+    for k in range(-turns, turns + 1):
+        turn = k * FAULT_HEADING_STEP
+        c, s = math.cos(turn), math.sin(turn)
+        made: list[tuple[float, float]] = []
+        for share in (1.0, 0.5, 0.0):  # of the drive before the heading went wrong
+            x = last[0] + share * dx + (1.0 - share) * (c * dx - s * dy)
+            y = last[1] + share * dy + (1.0 - share) * (s * dx + c * dy)
+            if all(math.hypot(x - a, y - b) > reach for a, b in made):
+                made.append((x, y))
+                starts.append((x, y, float(predicted[2]) + turn))
+    return starts
 
 
 @dataclass(frozen=True)
