@@ -578,6 +578,37 @@ def test_a_search_that_ends_on_a_scan_no_place_explains_keeps_its_places(
         assert not followed.missed and followed.streak == 2 and error(followed.pose, path[22])[0] < 0.03
 
 
+def test_a_followed_place_whose_odometry_step_faulted_is_found_by_the_fault_sweep(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A place the recovery follows, moved by an odometry step that turned 30 degrees too far at
+    its start (1 m of driving), is found where the fault left the robot when the localizer's
+    refinement weighs faults (`Recovery._faulted`, the tracking's sweep within the fault model,
+    whose place the scan prefers to the fit from the odometry's by more than the fault costs),
+    and dropped without it, as is one whose step turned 60 degrees too far (beyond the model's
+    44-degree window) either way."""
+    from planicp import PosteriorRefinement
+    from planicp.tracking.recovery import Hypothesis
+
+    def followed(turn: float, refinement: PosteriorRefinement | None) -> Hypothesis | None:
+        icp = IcpConfig.for_tracking(correspondence_search="wall_index")
+        recovery = Recovery(plan, RecoveryConfig(), icp, AcceptanceGate(), refinement=refinement)
+        place = Hypothesis(path[10], localize(scans[10], plan, path[10], icp), 1, 0.9, False)
+        motion = se2.compose((0.0, 0.0, turn), se2.between(path[10], path[20]))
+        return recovery._follow(place, scans[20], motion)
+
+    faults = PosteriorRefinement(enabled=True)
+    for turn in (30 * DEG, -30 * DEG):
+        place = followed(turn, faults)
+        assert place is not None and place.streak == 2
+        assert error(place.pose, path[20])[0] < 0.01 and error(place.pose, path[20])[1] < 0.5 * DEG
+        assert followed(turn, None) is None
+        assert followed(turn, PosteriorRefinement(enabled=True, fault_probability=0.0)) is None
+        # A fault so improbable that no scan can pay for it: the held place is kept to (dropped).
+        assert followed(turn, PosteriorRefinement(enabled=True, fault_probability=1e-300)) is None
+    assert followed(60 * DEG, faults) is None and followed(-60 * DEG, faults) is None
+
+
 def test_a_search_that_ends_updates_after_its_scan_follows_its_places_through_the_scans_since(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

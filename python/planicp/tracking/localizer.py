@@ -277,6 +277,7 @@ class Localizer:
             self._occlusion,
             self.motion_noise,
             self.continuity,
+            self.refinement,
         )
         # The searches' likelihood pyramid is part of preparing the plan, not of the first update
         # that needs a search.

@@ -196,6 +196,26 @@ def sweep_for_fault(
     current_cost = scan_cost(points, current, plan, rule)
     if current_cost <= typical + threshold:
         return None
+    found = fault_place(points, predicted, plan, rule, motion, tolerance)
+    if found is None:  # every climb turned or slid out of reach: no fault the model allows
+        return FaultSweep(current, current_cost, current_cost, typical, threshold)
+    pose, cost = found
+    return FaultSweep(pose, cost, current_cost, typical, threshold)
+
+
+def fault_place(
+    points: NDArray[np.float64],
+    predicted: Pose,
+    plan: PlanMap,
+    rule: PosteriorRefinement,
+    motion: Pose,
+    tolerance: float,
+) -> tuple[Pose, float] | None:
+    """The place of lowest cost (T_map_base) the climbs of the sweep reach within the fault
+    model, and the scan's cost there: the climbs from `fault_starts` on `SWEEP_POINTS` of the
+    returns, and the best end climbed again with all of them (that end itself when the full
+    climb leaves the model). None when every climb ends beyond it (`within_fault`). Arguments as
+    for `sweep_for_fault`."""
     field = plan.likelihood_field()
     step = max(1, -(-len(points) // SWEEP_POINTS))
     sparse = np.ascontiguousarray(points[::step])
@@ -204,13 +224,13 @@ def sweep_for_fault(
         end, cost, _, _, _ = field.refine(sparse, start, start, _NO_PRIOR, rule.return_weight, SWEEP_ITERATIONS)
         if within_fault(end, predicted, motion, rule, tolerance) and (best is None or cost < best[0]):
             best = (cost, end)
-    if best is None:  # every climb turned or slid out of reach: no fault the model allows
-        return FaultSweep(current, current_cost, current_cost, typical, threshold)
+    if best is None:
+        return None
     pose, cost = climb(points, best[1], plan, rule)
     if not within_fault(pose, predicted, motion, rule, tolerance):
         pose = (float(best[1][0]), float(best[1][1]), wrap_angle(float(best[1][2])))
         cost = scan_cost(points, pose, plan, rule)
-    return FaultSweep(pose, cost, current_cost, typical, threshold)
+    return pose, cost
 
 
 def fault_starts(predicted: Pose, motion: Pose, window: float, reach: float) -> list[Pose]:
