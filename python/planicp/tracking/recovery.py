@@ -724,22 +724,22 @@ class Recovery:
         return best.result
 
     def _follow(self, hypothesis: Hypothesis, scan: NDArray[np.float64], motion: Pose) -> Hypothesis | None:
-        """The hypothesis moved by `motion` and aligned with `scan`, or None when it is dropped:
-        the fit from the moved place explains less than `min_inlier_ratio` of the scan or needs a
-        correction beyond the gate, or the scans it has explained, this one included, show more of
-        their returns beyond its walls on average than `beyond_limit` allows. The gate bounds what
-        one odometry step may need corrected; a place that followed the odometry over scans it was
-        not fitted to (`Hypothesis.spread`: a scan no place explained, or one too small to align)
-        carries the error of every step since, and where ICP from it fails it is searched for
-        within that spread moved by `motion` (`_searched_within`), as a search's candidate is
-        found again after updates (on fhw with one scan in five a random cloud, the true place,
-        followed over a cloud, came out 14 degrees off; ICP from there explained 40 % of the next
-        scan, the place was dropped, and the recovery searched on for 20 more scans). The evidence
-        of returns through walls is pooled over the scans that are to confirm the place, as its
-        inlier ratios are: in a SLAM map beams pass sparse cells at the true place too, by an
-        amount that varies from scan to scan (on freiburg-campus one scan in a run of well
-        explained ones put the true place over the limit, and the recovery dropped it three
-        times before it held)."""
+        """The hypothesis moved by `motion` and aligned with `scan`, or None when it is dropped: the
+        fit from the moved place explains less than `min_inlier_ratio` of the scan or needs a
+        correction beyond the gate, and no odometry fault explains the step (`_faulted`), or the
+        scans it has explained, this one included, show more of their returns beyond its walls on
+        average than `beyond_limit` allows. The gate bounds what one odometry step may need
+        corrected; a place that followed the odometry over scans it was not fitted to
+        (`Hypothesis.spread`: a scan no place explained, or one too small to align) carries the
+        error of every step since, and where ICP from it fails it is searched for within that spread
+        moved by `motion` (`_searched_within`), as a search's candidate is found again after updates
+        (on fhw with one scan in five a random cloud, the true place, followed over a cloud, came
+        out 14 degrees off; ICP from there explained 40 % of the next scan, the place was dropped,
+        and the recovery searched on for 20 more scans). The evidence of returns through walls is
+        pooled over the scans that are to confirm the place, as its inlier ratios are: in a SLAM map
+        beams pass sparse cells at the true place too, by an amount that varies from scan to scan
+        (on freiburg-campus one scan in a run of well explained ones put the true place over the
+        limit, and the recovery dropped it three times before it held)."""
         predicted = compose(hypothesis.pose, motion)
         fit = localize(scan, self.plan, predicted, self.icp)
         result: IcpResult | None = fit
