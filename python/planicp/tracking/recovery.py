@@ -112,15 +112,15 @@ class RecoveryConfig(Settings):
             trial (`verify`).
             None: no node limit; with `search_time` None as well, each search runs to its end
             within the update that starts it (seconds on a large plan).
-        search_time: seconds from the start of an update after which all its searches stop
-            where they are, at their first check (every 1024 nodes) past it, and go on in the
-            next update: the update's ceiling, whatever a node costs. A node's cost grows with
-            the plan and with the machine's load, from memory: on freiburg-campus's 280 x 270 m
-            plan, without the ceiling, the updates of a place's trial made a 99th percentile of
-            25-27 ms (18 ms with it; docs/benchmarks.md, "Other scan sets"). 15 ms leaves the
-            work after the searches (alignments, records: 3-5 ms there) within a 25 ms period.
-            On the real logs' building plans the nodes end first (20,000 take 2-5 ms): the
-            ceiling binds on a large plan or a slow or loaded machine, where a search then
+        search_time: seconds from the start of an update after which all its searches stop where
+            they are, at their first check (every 1024 nodes) past it, and go on in the next update:
+            the update's ceiling, whatever a node costs. A node's cost grows with the plan and with
+            the machine's load, from memory: on freiburg-campus's 280 x 270 m plan, with another
+            process streaming through memory, the updates of a place's trial made a 99th percentile
+            of 26 ms without the ceiling and 17 ms with it (docs/benchmarks.md, "Other scan sets").
+            15 ms leaves the work after the searches (alignments, records: 3-5 ms there) within a
+            25 ms period. On the real logs' building plans the nodes end first (20,000 take 2-5 ms):
+            the ceiling binds on a large plan or a slow or loaded machine, where a search then
             spreads over more updates. None: the nodes alone bound the searches, and a run with
             `search_spare_time` None as well is the same on any machine.
         search_spare_time: seconds from the start of an update within which the recovery's
