@@ -932,8 +932,8 @@ def beyond_study(harness: Any, logs: list[str], out: str) -> None:
 
 
 def _stream_memory() -> None:
-    """Copies 256 MiB back and forth until the process is ended: another job on the machine that
-    takes one core and the memory bandwidth and caches."""
+    """Copies between two arrays of 256 MiB each until the process is ended: another job on the
+    machine that takes one core and the memory bandwidth and caches."""
     a = np.ones(2**25)
     b = np.empty_like(a)
     while True:
@@ -1004,8 +1004,8 @@ def main() -> None:
     parser.add_argument(
         "--no-ceiling",
         action="store_true",
-        help="scan-sets, seeds, junk-draws and kidnap studies: RecoveryConfig(search_time=None), the searches "
-        "bounded by their nodes and the update's spare time only",
+        help="scan-sets, seeds, junk-draws, junk-repeats, faults and kidnap studies: RecoveryConfig(search_time=None), "
+        "the searches bounded by their nodes and the update's spare time only",
     )
     parser.add_argument(
         "--memory-load",
