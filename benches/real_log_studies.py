@@ -135,7 +135,9 @@ carried there without telling the localizer), for 25 updates, with the `Localize
 (with `--no-spare-time`, the searches' spare time off: the same on any machine), with the bars
 learned and as set (`AcceptanceGate(relaxes=False)`, `LostRule(relaxes=False)`). It gives the updates until the
 localizer said lost and until its estimate was back within 0.3 m of the reference and not lost
-("-": not within the 25; `--updates` feeds more).
+("-": not within the 25; `--updates` feeds more), and the updates after it said lost that it
+reported tracked (not lost) more than 0.3 m off, of them how many `provisional` (on trial: the
+whole plan searched beside the pose).
 
 `kidnap-trace` follows one kidnap of `kidnap` (`--kidnap`: which of the six K, from 0; `--updates`
 fed after it) update by update: how far the estimate is from the reference, whether the localizer
@@ -557,7 +559,10 @@ def bars_study(
 def kidnap_study(
     harness: Any, logs: list[str], out: str, min_hits: int, recovery: RecoveryConfig | None = None, updates: int = 25
 ) -> None:
-    print("| log | K | J | learned: lost after, back after | as set: lost after, back after |")
+    print(
+        "| log | K | J | learned: lost after, back after, tracked off (provisional) "
+        "| as set: lost after, back after, tracked off (provisional) |"
+    )
     print("|---|---|---|---|---|")
     for name in logs:
         plan, scans, ref, odom = load(harness, name, out, min_hits=min_hits)
@@ -566,13 +571,18 @@ def kidnap_study(
             for relaxes in (True, False):
                 loc = localizer(plan, ref[0], relaxes, recovery)
                 lost_at = back_at = None
+                off = provisional = 0  # after the loss: reported tracked (not lost) more than 0.3 m off
                 for i, moved in enumerate(kidnapped(loc, scans, odom, k, j, updates)):
                     e = loc.update(np.ascontiguousarray(scans[j + i]), moved)
+                    far = math.dist(e.pose[:2], ref[j + i][:2]) >= 0.3
                     if lost_at is None and e.lost:
                         lost_at = i + 1
-                    if back_at is None and not e.lost and math.dist(e.pose[:2], ref[j + i][:2]) < 0.3:
+                    if back_at is None and not e.lost and not far:
                         back_at = i + 1
-                cells.append(f"{'-' if lost_at is None else lost_at}, {'-' if back_at is None else back_at}")
+                    if lost_at is not None and not e.lost and far:
+                        off, provisional = off + 1, provisional + e.provisional
+                noticed, back = ("-" if at is None else str(at) for at in (lost_at, back_at))
+                cells.append(f"{noticed}, {back}, {off} ({provisional})")
             print(f"| {name} | {k} | {j} | " + " | ".join(cells) + " |", flush=True)
 
 

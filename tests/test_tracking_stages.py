@@ -296,6 +296,75 @@ def test_the_lost_stage_turns_lost_after_max_rejections_rejections(
     assert held.held and held.lost and held.rejections == 3 and len(detector.scores) == 3
 
 
+def test_a_lost_track_is_regained_by_a_fit_that_explains_as_much_as_the_recovery_asks_of_a_place(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # While lost, an accepted fit from the prediction ends the lost state only when it explains
+    # as much of its scan as the recovery asks of a place (60 %): then the track is regained.
+    the_rules = rules(plan)
+    assert the_rules.recovery.min_inlier_ratio == 0.6
+    detector = LostDetector(the_rules.lost)
+    detector.declare_lost()
+    search = SearchDecision(None, None, None, "", False)
+    sound = Correction(path[0], SMALL, True, None, "fused")
+    rejected = Correction(path[0], SMALL, False, None, "prediction")
+    good, poor = ScoreDecision(0.8, False, None, ""), ScoreDecision(0.5, False, None, "")
+    verdicts = [
+        stages.judge_lost(detector, score, correction, search, True, the_rules)
+        for score, correction in ((poor, sound), (good, rejected), (poor, sound))
+    ]
+    assert all(v.lost and not v.regained and not v.counted_accepted for v in verdicts)
+    assert [v.rejections for v in verdicts] == [4, 5, 6]
+    regained = stages.judge_lost(detector, good, sound, search, True, the_rules)
+    assert not regained.lost and regained.regained and regained.counted_accepted and regained.rejections == 0
+    assert "regained" in regained.why
+    # Tracking, a scan counts as accepted as its fit was, and nothing is regained.
+    verdict = stages.judge_lost(detector, poor, sound, search, False, the_rules)
+    assert not verdict.lost and verdict.counted_accepted and not verdict.regained
+
+
+def test_a_regained_track_is_on_trial_while_the_search_of_the_whole_plan_goes_on(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    # Lost at a place 5 m and 115 degrees off: the recovery's searches begin. The track's own
+    # fits then regain it there (a wrong place that explains the scans as well as the right one
+    # cannot be told from it on its fits): it is on trial, the search of the whole plan goes on
+    # beside it, and the place the scans fit replaces it.
+    config = RecoveryConfig(confirmations=2, search_nodes=40_000, search_time=None, search_spare_time=None)
+    icp = IcpConfig.for_tracking().replace(correspondence_search="kd_tree")
+    recovery = Recovery(plan, config, icp, AcceptanceGate(), OcclusionFilter(plan, OcclusionRule()), MotionNoise())
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    wrong = (path[0][0] + 4.0, path[0][1] - 3.0, path[0][2] + 2.0)
+    lost = LostDecision(True, False, False, 0.2, 3)
+    regained = LostDecision(False, False, True, 0.8, 0, regained=True)
+    tracking = LostDecision(False, False, True, 0.8, 0)
+    recovery.new_update()
+    first = stages.recover(
+        recovery, LostDetector(), scans[0], prediction_at(wrong), fit, idle_pose(prediction_at(wrong)), lost
+    )
+    assert first.action == "step" and recovery.searching
+    decisions = []
+    for i in range(1, 12):
+        wrong = se2.compose(wrong, se2.between(path[i - 1], path[i]))
+        tracked = prediction_at(wrong)
+        correction = Correction(wrong, SMALL, True, None, "fused")
+        recovery.new_update()
+        verdict = regained if i == 1 else tracking
+        decisions.append(stages.recover(recovery, LostDetector(), scans[i], tracked, fit, correction, verdict))
+        if decisions[-1].adopted is not None:
+            break
+    assert all(d.action == "verify" for d in decisions) and decisions[0].on_trial
+    adopted = decisions[-1].adopted
+    assert adopted is not None, [d.why for d in decisions]
+    assert error(path[len(decisions)], adopted.pose)[0] < 0.05
+    # Regained when the whole plan's search has ended: nothing is left to weigh the track against.
+    recovery.clear()
+    sound = Correction(path[0], SMALL, True, None, "fused")
+    ended = stages.recover(recovery, LostDetector(), scans[0], prediction_at(path[0]), fit, sound, regained)
+    assert ended.action == "clear"
+    assert not recovery.on_trial
+
+
 def idle_pose(prediction: Prediction) -> Correction:
     """The correction of an update without an accepted fit: the prediction's pose."""
     return Correction(prediction.pose, prediction.covariance, False, None, "prediction")

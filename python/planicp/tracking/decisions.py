@@ -431,6 +431,9 @@ class LostDecision:
             the plan (`LostRule.relaxed_to`): the rule as set would say lost. The recovery then
             searches the whole plan beside the track, and a place that explains the scans better
             replaces it (`Recovery.doubt`).
+        regained: the lost state ended with this scan, on the fit from the prediction: the track
+            is a place near where it was lost, judged as one the recovery finds there
+            (`Recovery.regain`): on trial while the search of the whole plan goes on.
     """
 
     lost: bool
@@ -439,6 +442,7 @@ class LostDecision:
     window_score: float
     rejections: int
     doubted: bool = False
+    regained: bool = False
 
     @property
     def why(self) -> str:
@@ -447,6 +451,8 @@ class LostDecision:
         if self.held:
             return f"{state}: the scan is not counted (clutter)"
         doubt = "; lost by the bar as set: the whole plan is searched beside the track" if self.doubted else ""
+        if self.regained:
+            doubt = "; regained on the fit from the prediction" + doubt
         return f"{state}: mean score {self.window_score:.2f}, {self.rejections} rejection(s) in a row{doubt}"
 
 

@@ -83,10 +83,11 @@ class Estimate:
             is `provisional`, the places that rival it.
         provisional: `pose` follows a place the recovery adopted before its search of the whole
             plan had ended (a place near where the localizer lost track that explains the scans
-            as well as sound tracking did), or a track kept only because the lost rule's bar is
-            relaxed to what the track has learned of the plan (`LostDecision.doubted`); a search
-            of the whole plan goes on, and a place it finds that explains the next scans better
-            replaces it (see `Recovery.verify`).
+            as well as sound tracking did), the lost track regained by a fit from its prediction
+            while that search went on (`LostDecision.regained`), or a track kept only because the
+            lost rule's bar is relaxed to what the track has learned of the plan
+            (`LostDecision.doubted`); a search of the whole plan goes on, and a place it finds
+            that explains the next scans better replaces it (see `Recovery.verify`).
         decisions: why the pose is what it is: the typed decision of each stage of this update, in
             the order `update` runs them (`planicp.tracking.decisions`): `Prediction`,
             `FitDecision`, `PendingDecision`, `SearchDecision`, `ScoreDecision`, `Correction`,

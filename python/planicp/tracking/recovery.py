@@ -39,7 +39,9 @@ While the `Localizer` is lost, every scan goes to a `Recovery`:
    that (adopted for good, 5 of 10 kidnapped robots were kept at such a place), so the place is on
    trial: the search of the whole plan goes on (`verify`), its places are followed beside the
    tracked one, and one that explains the next `confirmations` scans better by `margin` replaces
-   it. A place on trial that the localizer loses again is given up with its search.
+   it. A place on trial that the localizer loses again is given up with its search. The lost
+   track, regained by a fit from the localizer's prediction (`regain`), is judged alike: on trial
+   while the search of the whole plan goes on.
 
 Poses are T_map_base; scans are base-frame points (metres).
 """
@@ -419,6 +421,20 @@ class Recovery:
         `verify` is given next (`begin=True`)."""
         self.clear()
         self._trial = True
+        self._incumbent.clear()
+
+    def regain(self) -> None:
+        """The lost state ended on the fit from the localizer's prediction
+        (`LostDecision.regained`): the tracked pose is a place near where track was lost, judged
+        as one the recovery finds there (`_sure_nearby`). While the search of the whole plan goes
+        on, it is on trial (`verify`): a fit that explains 60 % of one scan is one scan's word, and
+        a kidnapped robot's track, coasting on the odometry, finds such fits at look-alike places
+        (docs/design.md). When that search has ended (or none ran), nothing is left to weigh it
+        against, and the recovery forgets its places."""
+        if self._whole is None:
+            self.clear()
+            return
+        self.hypotheses, self._trial, self._near = [], True, None
         self._incumbent.clear()
 
     @property

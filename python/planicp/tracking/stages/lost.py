@@ -18,7 +18,9 @@ def judge_lost(
 ) -> LostDecision:
     """The lost rule's verdict, with this scan counted in `detector` unless it is clutter
     (`ScoreDecision.continues`); a scan that takes back the place left behind (`left`, stage 7)
-    counts as accepted, with the share of it ICP from there explains."""
+    counts as accepted, with the share of it ICP from there explains. A fit that ends the lost
+    state regains the track (`LostDecision.regained`): a place near where it was lost, which
+    `recover` judges as one the recovery finds there (`Recovery.regain`)."""
     if score.continues:
         lost = detector.hold()
         return LostDecision(lost, True, False, detector.score, detector.rejections)
@@ -32,7 +34,8 @@ def judge_lost(
     clears = not was_lost or search.searched or score.score >= rules.recovery.min_inlier_ratio
     counted = correction.accepted and clears
     lost = detector.update(score.score, counted, rules.lost)
-    return LostDecision(lost, False, counted, detector.score, detector.rejections, _doubted(detector, lost, rules))
+    doubted = _doubted(detector, lost, rules)
+    return LostDecision(lost, False, counted, detector.score, detector.rejections, doubted, was_lost and not lost)
 
 
 def _doubted(detector: LostDetector, lost: bool, rules: Rules) -> bool:

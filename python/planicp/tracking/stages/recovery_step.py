@@ -27,8 +27,10 @@ def recover(
     (`detector` is reset). While a place adopted before the whole plan was searched is on trial,
     that search goes on beside the tracked pose (`Recovery.verify`, from the `correction`), and a
     better place it finds is adopted; so it does, begun with this scan, while the track is kept
-    only because the lost rule's bar is relaxed (`LostDecision.doubted`, `Recovery.doubt`).
-    Otherwise the recovery forgets its places.
+    only because the lost rule's bar is relaxed (`LostDecision.doubted`, `Recovery.doubt`). A
+    track its own fit regained (`LostDecision.regained`) is a place near where it was lost, and
+    is judged as one the recovery finds there (`Recovery.regain`): on trial while the search of
+    the whole plan goes on. Otherwise the recovery forgets its places.
 
     `lost_at`: where the localizer lost track when that is not the prediction (the place an
     adopted jump left behind, which the scans preferred to the track: `RecoveryDecision.lost_at`);
@@ -42,15 +44,18 @@ def recover(
     elif lost.lost:
         found = recovery.step(points, prediction.motion, prediction.pose, likelier=lost_at)
         action = "step"
-    elif recovery.on_trial or lost.doubted:
-        begin = not recovery.on_trial
-        if begin:
-            recovery.doubt()
-        found = recovery.verify(points, prediction.motion, correction.pose, begin=begin)
-        action = "verify"
     else:
-        recovery.clear()
-        action = "clear"
+        if lost.regained:
+            recovery.regain()
+        if recovery.on_trial or lost.doubted:
+            begin = not recovery.on_trial
+            if begin:
+                recovery.doubt()
+            found = recovery.verify(points, prediction.motion, correction.pose, begin=begin)
+            action = "verify"
+        else:
+            recovery.clear()
+            action = "clear"
     covariance = None
     if found is not None:
         covariance = finite_or(found.result.covariance, prediction.covariance)
