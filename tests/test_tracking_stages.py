@@ -343,16 +343,8 @@ def test_a_regained_track_is_on_trial_while_the_search_of_the_whole_plan_goes_on
         recovery, LostDetector(), scans[0], prediction_at(wrong), fit, idle_pose(prediction_at(wrong)), lost
     )
     assert first.action == "step" and recovery.searching
-    decisions = []
-    for i in range(1, 12):
-        wrong = se2.compose(wrong, se2.between(path[i - 1], path[i]))
-        tracked = prediction_at(wrong)
-        correction = Correction(wrong, SMALL, True, None, "fused")
-        recovery.new_update()
-        verdict = regained if i == 1 else tracking
-        decisions.append(stages.recover(recovery, LostDetector(), scans[i], tracked, fit, correction, verdict))
-        if decisions[-1].adopted is not None:
-            break
+    wrong = se2.compose(wrong, se2.between(path[0], path[1]))
+    decisions = tracked_at(recovery, path, scans, wrong, 1, [regained] + [tracking] * 10)
     assert all(d.action == "verify" for d in decisions) and decisions[0].on_trial
     adopted = decisions[-1].adopted
     assert adopted is not None, [d.why for d in decisions]
@@ -363,6 +355,33 @@ def test_a_regained_track_is_on_trial_while_the_search_of_the_whole_plan_goes_on
     ended = stages.recover(recovery, LostDetector(), scans[0], prediction_at(path[0]), fit, sound, regained)
     assert ended.action == "clear"
     assert not recovery.on_trial
+
+
+def tracked_at(
+    recovery: Recovery,
+    path: list[Pose],
+    scans: list[np.ndarray],
+    wrong: Pose,
+    first: int,
+    verdicts: list[LostDecision],
+) -> list[RecoveryDecision]:
+    """The recovery stage's decisions while the localizer tracks `wrong` (T_map_base at scan
+    `first`, moved by the path's steps after it) with the lost stage's verdict `verdicts[k]` at
+    its k-th update, until the recovery adopts a place."""
+    fit = FitDecision(None, None, None, False, "", usable=True)
+    decisions: list[RecoveryDecision] = []
+    for k, verdict in enumerate(verdicts):
+        i = first + k
+        if k > 0:
+            wrong = se2.compose(wrong, se2.between(path[i - 1], path[i]))
+        correction = Correction(wrong, SMALL, True, None, "fused")
+        recovery.new_update()
+        decisions.append(
+            stages.recover(recovery, LostDetector(), scans[i], prediction_at(wrong), fit, correction, verdict)
+        )
+        if decisions[-1].adopted is not None:
+            break
+    return decisions
 
 
 def idle_pose(prediction: Prediction) -> Correction:
@@ -630,15 +649,7 @@ def test_a_track_kept_only_by_the_relaxed_lost_bar_is_doubted_and_a_better_place
     doubted = LostDecision(False, False, True, 0.2, 0, doubted=True)
     fit = FitDecision(None, None, None, False, "", usable=True)
     wrong = (path[0][0] + 4.0, path[0][1] - 3.0, path[0][2] + 2.0)
-    decisions = []
-    for i in range(4):
-        motion = (0.0, 0.0, 0.0) if i == 0 else se2.between(path[i - 1], path[i])
-        wrong = se2.compose(wrong, motion)
-        tracked = prediction_at(wrong)
-        correction = Correction(wrong, SMALL, True, None, "fused")
-        decisions.append(stages.recover(recovery, LostDetector(), scans[i], tracked, fit, correction, doubted))
-        if decisions[-1].adopted is not None:
-            break
+    decisions = tracked_at(recovery, path, scans, wrong, 0, [doubted] * 4)
     assert all(d.action == "verify" for d in decisions) and decisions[0].on_trial
     adopted = decisions[-1].adopted
     assert adopted is not None, [d.why for d in decisions]
