@@ -50,6 +50,8 @@ from numpy.typing import NDArray
 from .._validation import Pose
 from ..plans.plan_map import PlanMap
 from ..se2 import between, compose, inverse, wrap_angle
+from .acceptance_gate import AcceptanceGate
+from .icp_result import IcpResult
 from .posterior_refinement import NO_PRIOR_VARIANCE, PosteriorRefinement, Refinement, refine_pose
 
 FAULT_HEADING_STEP = math.radians(6.0)
@@ -307,6 +309,17 @@ def with_held_mode(
     mode is climbed only when the faulted one is worth weighing."""
     held = refine_pose(points, predicted, plan, ("prediction", predicted, predicted_covariance), rule)
     return MixtureModes(faulted, held, fault_cost(rule.fault_probability))
+
+
+def holds_as_fault(
+    fit: IcpResult, predicted: Pose, motion: Pose, rule: PosteriorRefinement, gate: AcceptanceGate
+) -> bool:
+    """Whether ICP's `fit` from a place the sweep found (`fault_place`) is the fault's place of the
+    update whose odometry `motion` moved the last pose to `predicted` (T_map_base): it passes
+    `gate`'s bars on the fit (not its bar on the correction, which a fault exceeds) and stays
+    within the fault model to the gate's correction limit (`within_fault`)."""
+    tolerance = gate.max_translation_jump
+    return gate.fit_rejection(fit) == "" and within_fault(fit.pose, predicted, motion, rule, tolerance)
 
 
 def within_fault(pose: Pose, predicted: Pose, motion: Pose, rule: PosteriorRefinement, tolerance: float) -> bool:

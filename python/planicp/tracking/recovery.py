@@ -72,7 +72,7 @@ from .icp_result import IcpResult
 from .localize import localize
 from .motion_noise import MotionNoise, largest_position_std
 from .occlusion_rule import OcclusionFilter
-from .odometry_fault import fault_cost, fault_place, scan_cost, within_fault
+from .odometry_fault import fault_cost, fault_place, holds_as_fault, scan_cost
 from .posterior_refinement import PosteriorRefinement
 from .relocalize import Relocalization, RelocalizationConfig, SearchInSteps, SearchRegion
 from .student_t import student_t_quantile
@@ -330,9 +330,7 @@ class Recovery:
                 self.clear()
                 return found
             if self._sure_nearby(found):
-                # Adopted on trial: the search of the whole plan goes on (`verify`).
-                self.hypotheses, self._trial, self._near = [], True, None
-                self._incumbent.clear()
+                self._begin_trial()
                 return found
         return None
 
@@ -433,7 +431,13 @@ class Recovery:
         against, and the recovery forgets its places."""
         if self._whole is None:
             self.clear()
-            return
+        else:
+            self._begin_trial()
+
+    def _begin_trial(self) -> None:
+        """A place adopted while the search of the whole plan goes on: on trial (`verify`), that
+        search's places to be weighed against it from the next scan, the places followed so far and
+        the search near the last pose given up."""
         self.hypotheses, self._trial, self._near = [], True, None
         self._incumbent.clear()
 
@@ -804,10 +808,8 @@ class Recovery:
         if found[1] + fault_cost(rule.fault_probability) >= scan_cost(scan, held.pose, self.plan, rule):
             return None  # the scan does not pay for the fault
         fit = localize(scan, self.plan, found[0], self.icp)
-        if (
-            fit.inlier_ratio < self.config.min_inlier_ratio
-            or self.gate.fit_rejection(fit) != ""
-            or not within_fault(fit.pose, predicted, motion, rule, tolerance)
+        if fit.inlier_ratio < self.config.min_inlier_ratio or not holds_as_fault(
+            fit, predicted, motion, rule, self.gate
         ):
             return None
         return fit

@@ -14,7 +14,7 @@ from ..decisions import FitDecision, PendingDecision, PendingPlace, Prediction, 
 from ..fusion_rule import CHI2_3_999
 from ..icp_result import IcpResult
 from ..motion_noise import largest_position_std
-from ..odometry_fault import CostHistory, fault_cost, sweep_for_fault, with_held_mode, within_fault
+from ..odometry_fault import CostHistory, fault_cost, holds_as_fault, sweep_for_fault, with_held_mode, within_fault
 from ..posterior_refinement import refine_pose
 from ..recovery import SearchBudget
 from ..relocalize import SearchRegion
@@ -171,9 +171,7 @@ def _fault_search(
     if not sweep.more_probable:
         return replace(decision, fault=sweep)
     place = aligned_from(points, sweep.pose, rules)
-    if rules.gate.fit_rejection(place) != "" or not within_fault(
-        place.pose, prediction.pose, motion, rules.refinement, tolerance
-    ):
+    if not holds_as_fault(place, prediction.pose, motion, rules.refinement, rules.gate):
         return replace(decision, fault=sweep)
     # The scan prefers a place within the fault model to the fit by the fault cost: the posterior's
     # mode, with the odometry's fault component as its prior. A corrupted scan (turned within the
