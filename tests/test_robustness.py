@@ -152,9 +152,16 @@ def _kidnap(
     return lost_at, back_at
 
 
+# The recovery's searches held to their nodes (no ceiling in time, no spare time): a run is then
+# the same on any machine and under any load. With the defaults' spare time the searches end
+# sooner on an idle machine, later on a loaded one (seed 1 came back after 21 scans while a study
+# ran beside the tests).
+SAME_ON_ANY_MACHINE = RecoveryConfig(search_time=None, search_spare_time=None)
+
+
 def test_kidnapped_robot_is_found_again() -> None:
     """The issue's bar: `lost` within 5 scans and back under 10 cm within 20, in 9 of 10 runs."""
-    outcomes = [_kidnap(seed) for seed in range(10)]
+    outcomes = [_kidnap(seed, recovery=SAME_ON_ANY_MACHINE) for seed in range(10)]
     good = [lost is not None and lost < 5 and back is not None and back < 20 for lost, back in outcomes]
     assert sum(good) >= 9, outcomes
 
@@ -238,7 +245,7 @@ def test_a_kidnap_is_noticed_when_tracking_with_the_wall_index() -> None:
     """Tracking through the nearest-wall index: its visibility masks see occluders within 0.6 m
     only, so from the wrong room it pairs returns that came through walls. The lost rule counts
     those as unexplained; without that, this run (seed 1) was never found again."""
-    lost, back = _kidnap(1, IcpConfig.for_tracking(correspondence_search="wall_index"))
+    lost, back = _kidnap(1, IcpConfig.for_tracking(correspondence_search="wall_index"), SAME_ON_ANY_MACHINE)
     assert lost is not None and lost < 5 and back is not None and back < 20, (lost, back)
 
 
