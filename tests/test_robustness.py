@@ -316,6 +316,26 @@ def test_lost_detector_rules() -> None:
     assert detector.lost
     detector.reset()
     assert not detector.lost
+
+
+def test_the_lost_rule_scores_recent_scans_only() -> None:
+    """A crowd's first scans, poorly explained before any scan was explained well enough for
+    later ones to continue, are not still counted after many scans held as clutter (the crowd
+    bench's second drive at 40 people was declared lost at update 20 by two scores from updates
+    0 and 1); five poorly explained scans in a row still say lost."""
+    detector = LostDetector(LostRule(window=5, min_score=0.35, max_rejections=3))
+    assert not detector.update(0.14, False) and not detector.update(0.15, False)
+    assert not detector.update(0.26, True)
+    for _ in range(14):
+        assert not detector.hold()
+    verdicts = [detector.update(0.37, True), detector.hold(), detector.hold(), detector.update(0.38, True)]
+    assert verdicts == [False] * 4 and detector.scores == [0.37, 0.38]
+    assert not any([detector.update(0.14, True), detector.update(0.15, True), detector.update(0.26, True)])
+    assert detector.update(0.30, True)  # the last 5 all scored: mean 0.25
+    assert detector.score == pytest.approx((0.38 + 0.14 + 0.15 + 0.26 + 0.30) / 5)
+    detector.reset()
+    assert not detector.update(0.9, False) and not detector.hold() and not detector.update(0.9, False)
+    assert detector.update(0.9, False) and detector.rejections == 3  # in a row across a held scan
     for cfg, message in (
         ({"min_inlier_ratio": 0.0}, "min_inlier_ratio must be in"),
         ({"confirmations": 0}, "confirmations must be at least 1"),

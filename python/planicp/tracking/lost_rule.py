@@ -23,7 +23,11 @@ class LostRule(Settings):
     cells, `PlanMap.cells_mark_returns`), returns beyond the walls seen from the prediction count
     as unexplained. The localizer is
     lost when the mean score over the last `window` scans falls below `min_score`, or when
-    `max_rejections` scans in a row were rejected by the acceptance gate.
+    `max_rejections` scans in a row were rejected by the acceptance gate. A scan held as
+    clutter (see `min_score`) is not scored, but it is one of the last `window`: the score is
+    over recent scans only, so a window with a scan held in it says nothing (a crowd's first
+    scans, rejected before any scan was explained well enough to continue, are not still
+    counted twenty scans on).
 
     Attributes:
         window: scans the score is averaged over (>= 1).
@@ -57,18 +61,21 @@ class LostRule(Settings):
 
 @dataclass
 class LostDetector:
-    """The running state `LostRule` is applied to: the last `window` scores, the rejections in
-    a row, and the rule the last update judged them by (`judged_by`: `rule` relaxed to what the
-    track has learned of the plan; None before the first update)."""
+    """The running state `LostRule` is applied to: the last `window` scans (`recent`: each one's
+    score, None for one held as clutter), the rejections in a row, and the rule the last update
+    judged them by (`judged_by`: `rule` relaxed to what the track has learned of the plan; None
+    before the first update)."""
 
     rule: LostRule = field(default_factory=LostRule)
-    scores: deque[float] = field(default_factory=deque)
+    recent: deque[float | None] = field(default_factory=deque)
     rejections: int = 0
     judged_by: LostRule | None = None
 
     def hold(self) -> bool:
         """A scan that tells nothing about being lost (rejected in clutter, but continuing the
-        previous scan): the state is kept. Returns whether lost."""
+        last scan the plan explained well): not scored, but one of the last `window`, and the
+        rejections in a row are kept. Returns whether lost."""
+        self._push(None)
         return self.lost
 
     def update(self, score: float, accepted: bool, rule: LostRule | None = None) -> bool:
@@ -76,16 +83,25 @@ class LostDetector:
         (the bars this update applies, `LostRule.relaxed_to`; default `self.rule`), which the
         `lost` verdict keeps until the next update."""
         self.judged_by = self.rule if rule is None else rule
-        self.scores.append(0.0 if math.isnan(score) else score)
-        while len(self.scores) > self.rule.window:
-            self.scores.popleft()
+        self._push(0.0 if math.isnan(score) else score)
         self.rejections = 0 if accepted else self.rejections + 1
         return self.lost
 
+    def _push(self, score: float | None) -> None:
+        self.recent.append(score)
+        while len(self.recent) > self.rule.window:
+            self.recent.popleft()
+
+    @property
+    def scores(self) -> list[float]:
+        """The scores of the last `window` scans, oldest first (those held as clutter left out)."""
+        return [s for s in self.recent if s is not None]
+
     @property
     def score(self) -> float:
-        """Mean score over the window so far (NaN before the first scan)."""
-        return sum(self.scores) / len(self.scores) if self.scores else math.nan
+        """Mean score of the last `window` scans that were scored (NaN if none was)."""
+        scores = self.scores
+        return sum(scores) / len(scores) if scores else math.nan
 
     @property
     def lost(self) -> bool:
@@ -93,7 +109,8 @@ class LostDetector:
         return self.lost_by(self.rule if self.judged_by is None else self.judged_by)
 
     def lost_by(self, rule: LostRule) -> bool:
-        """Whether `rule` says lost over the scores and rejections so far."""
+        """Whether `rule` says lost over the scores and rejections so far: by the score only when
+        each of the last `rule.window` scans was scored."""
         full = len(self.scores) >= rule.window
         return (full and self.score < rule.min_score) or self.rejections >= rule.max_rejections
 
@@ -103,6 +120,6 @@ class LostDetector:
 
     def reset(self) -> None:
         """Forgets the history (after a relocalization or a pose given by the user)."""
-        self.scores.clear()
+        self.recent.clear()
         self.rejections = 0
         self.judged_by = None
