@@ -111,6 +111,41 @@ def test_the_fit_stage_gives_the_gates_reason_for_a_prediction_beyond_the_jump_l
     assert tiny.result is None and not tiny.usable and tiny.reason == "scan has 2 usable points (need 3)"
 
 
+def test_the_occlusion_rule_is_tried_from_an_uncertain_prediction_when_the_fit_of_every_return_is_rejected(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """A crowd round the robot from its first scan (the `Localizer`'s first prediction is 10 cm
+    uncertain, too much for the rule at once): four in five beams blocked at 30-60 % of their
+    range. The fit of every return is rejected; the rule, tried with its margin widened to 3 sigma,
+    keeps the rest and the fit of those passes. After an odometry fault nothing is kept."""
+    truth = path[1]
+    scan = scans[1]
+    rng = np.random.default_rng(5)
+    blocked = rng.random(len(scan)) < 0.8
+    crowded = scan.copy()
+    crowded[blocked] *= rng.uniform(0.3, 0.6, size=(int(blocked.sum()), 1))
+    uncertain = np.diag([0.1**2, 0.1**2, (5 * DEG) ** 2])
+    the_rules = rules(plan)
+    plain = stages.fit_from_prediction(crowded, prediction_at(truth, uncertain), rules(plan, occlusion=False), False)
+    assert plain.result is not None and not plain.passed and "inlier ratio" in plain.reason
+    fit = stages.fit_from_prediction(crowded, prediction_at(truth, uncertain), the_rules, False)
+    assert fit.passed and fit.kept is not None and fit.result is not None
+    assert np.count_nonzero(fit.kept & blocked) < 0.05 * blocked.sum()  # the crowd is left out...
+    certain = stages.fit_from_prediction(crowded, prediction_at(truth), the_rules, False)
+    assert certain.kept is not None  # ...the walls kept, as from a certain prediction (not the furniture)
+    assert np.count_nonzero(fit.kept & ~blocked) >= np.count_nonzero(certain.kept & ~blocked) > 100
+    assert error(truth, fit.result.pose)[0] < 0.02
+    # Not while lost, and not where the fit of every return passes: one alignment.
+    assert stages.fit_from_prediction(crowded, prediction_at(truth, uncertain), the_rules, True).kept is None
+    clean = stages.fit_from_prediction(scan, prediction_at(truth, uncertain), the_rules, False)
+    assert clean.passed and clean.kept is None
+    # The odometry turned 30 degrees more than the robot: the returns on the walls look short of
+    # them from the prediction, and the rest do not fit it soundly.
+    turned = se2.compose(truth, (0.0, 0.0, 30 * DEG))
+    faulted = stages.fit_from_prediction(scan, prediction_at(turned, uncertain), the_rules, False)
+    assert not faulted.passed and faulted.kept is None
+
+
 def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
 ) -> None:

@@ -9,8 +9,12 @@ this when the obstacle stands near a wall, or when obstacles are most of the sca
 the returns on a crowd, trimming alone lost track (4.6 m RMS over five drives) while the
 `Localizer`'s defaults, this rule among them, kept 0.32 cm (`benches/crowd.py`, session 5).
 
-It needs a trustworthy prediction: it is only applied when the predicted position's 3-sigma
-uncertainty is below `margin`, and when enough returns remain.
+It needs a trustworthy prediction: it is applied when the predicted position's 3-sigma
+uncertainty is below `margin`, and when enough returns remain. From a less certain prediction the
+returns are all aligned first; only where the gate rejects that fit is the rule tried with the
+margin widened to the uncertainty (`margin_for`: a return on a wall the robot may be that much
+nearer looks that much short of it), and its fit kept only where the plan explains the returns
+it kept as soundly as a crowd's (`planicp.tracking.stages.fit`).
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ class OcclusionRule(Settings):
 
     Attributes:
         margin: metres a return must fall short of the expected wall range to be left out (> 0);
-            also the largest 3-sigma position uncertainty of the prediction for the rule to apply.
+            also the largest 3-sigma position uncertainty of the prediction for the rule to apply
+            at once (beyond it, the rule's margin when it is tried, `margin_for`).
         beams: directions the expected ranges are cast in, over the full circle (>= 8).
         min_points: fewest returns that must remain; otherwise the whole scan is used (>= 3).
     """
@@ -43,6 +48,11 @@ class OcclusionRule(Settings):
     margin: Annotated[float, Real(gt=0.0, unit="metres")] = 0.2
     beams: Annotated[int, Whole(ge=8, le=1 << 20)] = 1440
     min_points: Annotated[int, Whole(ge=3)] = 50
+
+    def margin_for(self, position_std: float) -> float:
+        """The margin from a prediction whose widest position standard deviation is
+        `position_std` metres: `margin`, or 3 `position_std` where that is more."""
+        return max(self.margin, 3.0 * position_std)
 
 
 class OcclusionFilter:
@@ -89,13 +99,17 @@ class OcclusionFilter:
         matter."""
         return self.classify(points, pose)[0]
 
-    def classify(self, points: NDArray[np.float64], pose: Pose) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """(in front, beyond): which base-frame `points` lie more than `margin` short of the plan's
-        wall in their direction from `pose` (see `in_front`), and which lie more than `margin`
-        beyond it: returns a beam could not give from `pose`, since the wall would have stopped it.
+    def classify(
+        self, points: NDArray[np.float64], pose: Pose, margin: float | None = None
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """(in front, beyond): which base-frame `points` lie more than `margin` (metres; default
+        the rule's) short of the plan's wall in their direction from `pose` (see `in_front`), and
+        which lie more than `margin` beyond it: returns a beam could not give from `pose`, since
+        the wall would have stopped it.
         At a wall's edge a return may belong to either neighbouring direction: it is in front of
         the farthest of the three nearest directions' walls, beyond the nearest. One native call
         casts the arc the returns span (and one direction either side) and classifies them."""
         if len(points) == 0:
             return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
-        return self._grid.classify_returns((pose[0], pose[1], pose[2]), points, self.rule.margin, self.rule.beams)
+        margin = self.rule.margin if margin is None else margin
+        return self._grid.classify_returns((pose[0], pose[1], pose[2]), points, margin, self.rule.beams)

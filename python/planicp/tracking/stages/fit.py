@@ -89,7 +89,46 @@ def _aligned(
         if shift > rules.occlusion.rule.margin / 4.0:
             result = localize(points, rules.plan, predicted, rules.config, view=view)
             return result, None, beyond, False, True
+    if kept is None and beyond is None and not lost and rules.gate.rejection(result, predicted) != "":
+        widened = _widened(points, prediction, rules, view)
+        if widened is not None:
+            return widened[0], widened[1], widened[2], False, False
     return result, kept, beyond, occluded, False
+
+
+def _widened(
+    points: NDArray[np.float64], prediction: Prediction, rules: Rules, view: _core.WallView | None
+) -> tuple[IcpResult, NDArray[np.bool_], NDArray[np.bool_]] | None:
+    """(fit, kept, beyond) of the occlusion rule tried where the prediction was too uncertain for
+    it and the gate rejected the fit of every return: the returns more than the prediction's
+    3-sigma position uncertainty short of the plan's walls (`OcclusionRule.margin_for`) left out
+    and the rest aligned. Taken only where the gate passes that fit, the plan explains the
+    returns kept as soundly as the crowd rule asks of a crowded scan's (`ContinuityRule.min_overlap`),
+    and the fit lands within a quarter of that margin of the prediction (farther, the rule judged
+    the returns from the wrong place); None otherwise, or where the rule keeps too few returns
+    or all of them. So a crowd round the robot from its first scans (the `Localizer`'s first
+    prediction is 10 cm uncertain) is left out instead of being taken for a wrong pose, and after
+    an odometry fault, where the returns on the walls look short of them from the prediction and
+    the rest fit the wrong pose about half as well, nothing changes."""
+    occlusion = rules.occlusion
+    if occlusion is None:
+        return None
+    spread = largest_position_std(prediction.covariance)
+    margin = occlusion.rule.margin_for(spread)
+    if margin <= occlusion.rule.margin:
+        return None
+    predicted = prediction.pose
+    in_front, beyond = occlusion.classify(points, predicted, margin)
+    kept: NDArray[np.bool_] = ~in_front
+    remaining = int(np.count_nonzero(kept))
+    if remaining < occlusion.rule.min_points or remaining == len(points):
+        return None
+    result = localize(points[kept], rules.plan, predicted, rules.config, view=view)
+    shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
+    sound = result.inlier_ratio >= rules.continuity.min_overlap and shift <= margin / 4.0
+    if not sound or rules.gate.rejection(result, predicted) != "":
+        return None
+    return result, kept, beyond
 
 
 def _unoccluded(
