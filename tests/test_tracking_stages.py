@@ -37,6 +37,7 @@ from planicp.tracking.decisions import (
     ScoreDecision,
     SearchDecision,
 )
+from planicp.tracking.fusion_rule import CHI2_3_999
 from planicp.tracking.lost_rule import LostDetector
 from planicp.tracking.occlusion_rule import OcclusionFilter, OcclusionRule
 from planicp.tracking.odometry_fault import CostHistory, FaultSweep, fault_cost, scan_cost
@@ -1094,6 +1095,21 @@ def test_a_correction_beyond_the_gate_that_an_uncertain_prediction_allows_is_no_
     narrow = Prediction((0.0, 0.0, 0.0), (2.0, 0.0, 0.0), predicted, along, False)
     beyond = search_stage(scans[20], narrow, stages.fit_from_prediction(scans[20], narrow, the_rules, False), the_rules)
     assert beyond.cause == "jump" and beyond.pending is not None
+    # A fit that slid to a place beyond the uncertain prediction's bound (1.1 m away; on seattle,
+    # every third scan tracked, after a 5.2 m step, ICP from a heading 9 degrees off went to a
+    # place that explained 47 % of the scan): the bound is searched first, and the truth, 0.3 m
+    # and 6 degrees from the prediction, is found there and taken at once.
+    near = se2.compose(truth, (0.3, 0.0, 6 * DEG))
+    wider = Prediction((0.0, 0.0, 0.0), (5.0, 0.0, 50 * DEG), near, wide, False)
+    sound = stages.fit_from_prediction(scans[20], wider, the_rules, False)
+    assert sound.result is not None and error(truth, sound.result.pose)[0] < 0.02
+    slid = replace(sound.result, pose=se2.compose(near, (1.1, 0.0, 0.0)))
+    reason = the_rules.gate.rejection(slid, near)
+    assert reason.startswith("correction of 1.1") and the_rules.gate.fit_rejection(slid) == ""
+    assert the_rules.fusion.innovation(slid, near, wide) > CHI2_3_999
+    bounded = search_stage(scans[20], wider, replace(sound, result=slid, reason=reason), the_rules)
+    assert bounded.cause == "uncertain" and bounded.searched and bounded.pending is None
+    assert bounded.result is not None and error(truth, bounded.result.pose)[0] < 0.02
     # A fit refused for what it explains, not for its jump, is no jump either way: nothing waits.
     few = scans[20][::8][:25]
     poor = stages.fit_from_prediction(few, uncertain, the_rules, False)

@@ -37,7 +37,7 @@ def search_near_prediction(
     update goes on with).
 
     A place found for an uncertain prediction agrees with it and is taken at once (so is one
-    found for a fit rejected for a jump that prediction allows, `search_cause`). After a fit
+    found within its bound for a fit rejected for a jump, `search_cause`). After a fit
     rejected for its jump, odometry may have faulted and the prediction says nothing; but a
     corrupted scan (turned, shifted) fits some place beyond the gate too. So the place (the
     search's, or the sound fit's where the search finds none) is taken at once only where the
@@ -70,9 +70,9 @@ def search_near_prediction(
         if found is not None:
             return SearchDecision(cause, found, found, "", True)
         if _only_jump(result, reason, rules):
-            # A jump the prediction allows that no place within its bound confirms: searched as
-            # any jump is (after fhw's 24-degree heading fault, the fit 0.58 m off explained 48 %
-            # of the scan, the place the fault put the robot lay beyond the bound).
+            # A jump that no place within the prediction's bound confirms: searched as any jump is
+            # (after fhw's 24-degree heading fault, the fit 0.58 m off explained 48 % of the scan,
+            # the place the fault put the robot lay beyond the bound).
             found = _search_near(points, predicted, None, None, rules, budget)
             return _jump(points, prediction, result, reason, found, rules, history, "jump")
         return _fault_search(
@@ -187,11 +187,13 @@ def search_cause(result: IcpResult, reason: str, prediction: Prediction, rules: 
     accepts, and ICP from a heading that far off can settle in a wrong basin: on freiburg-101,
     after a 34-degree turn of the odometry, a fit 0.3 m off explained 79 % of the scan against
     95 % at the truth and held for 8 scans); "jump", a good fit rejected only for its jump,
-    unless the prediction is uncertain and the fit lies within the chi-square bound of the
-    fusion with it (`CHI2_3_999`): a correction the odometry's own uncertainty allows is no
-    jump (on seattle with every third scan tracked, a 5.1 m step turning 50 degrees, 7.6 degrees
-    uncertain, was corrected by 10.3 degrees). None: no search (or the recovery searches no
-    neighbourhood)."""
+    unless the prediction is uncertain: the places within its chi-square bound (`CHI2_3_999`)
+    are searched first, wherever the fit lies. A correction the odometry's own uncertainty allows
+    is no jump (on seattle with every third scan tracked, a 5.1 m step turning 50 degrees, 7.6
+    degrees uncertain, was corrected by 10.3 degrees), and a fit that slid beyond the bound says
+    nothing of the places inside it (seattle, a 5.2 m step: ICP from a heading 9 degrees off went
+    to a place 1.1 m away; the robot lay 0.33 m from the prediction). None: no search (or the
+    recovery searches no neighbourhood)."""
     if rules.recovery.local_radius <= 0.0:
         return None
     covariance = prediction.covariance
@@ -199,8 +201,7 @@ def search_cause(result: IcpResult, reason: str, prediction: Prediction, rules: 
         3.0 * math.sqrt(max(float(covariance[2, 2]), 0.0)) > rules.gate.max_rotation_jump
     )
     if _only_jump(result, reason, rules):
-        allowed = uncertain and rules.fusion.innovation(result, prediction.pose, covariance) <= CHI2_3_999
-        return "uncertain" if allowed else "jump"
+        return "uncertain" if uncertain else "jump"
     return "uncertain" if uncertain else None
 
 
