@@ -168,6 +168,32 @@ def test_the_score_counts_the_returns_the_occlusion_rule_left_out_as_unexplained
     assert not score.poor and score.continues is None and score.reason == ""
 
 
+def test_a_crowd_scan_between_the_learned_and_the_set_bar_is_held_not_counted(
+    plan: PlanMap, path: list[Pose], scans: list[np.ndarray]
+) -> None:
+    """Seven in ten beams blocked by people: the plan explains under the lost rule's 0.35 as set
+    but above the bar learned on a patchy plan, so the scan is not poor; the plan explains the
+    returns the occlusion rule kept, and the scan is held as a crowd rather than counted with its
+    score (which would put the track in doubt, the whole plan searched beside it)."""
+    truth = path[1]
+    rng = np.random.default_rng(3)
+    blocked = rng.random(len(scans[1])) < 0.7
+    crowded = scans[1].copy()
+    crowded[blocked] *= rng.uniform(0.3, 0.6, size=(int(blocked.sum()), 1))
+    relaxed = on_a_patchy_map(plan, path[0])._rules()
+    fit = stages.fit_from_prediction(crowded, prediction_at(truth), relaxed, False)
+    assert fit.passed and fit.kept is not None and fit.result is not None and fit.result.inlier_ratio > 0.9
+    search = SearchDecision(None, None, fit.result, "", False)
+    score = stages.judge_score(crowded, prediction_at(truth), fit, search, relaxed, False, None)
+    assert relaxed.lost.min_score < score.score < relaxed.lost_as_set.min_score
+    assert not score.poor and score.continues is True and score.reason == ""
+    assert stages.judge_score(crowded, prediction_at(truth), fit, search, relaxed, True, None).continues is None
+    clean = stages.fit_from_prediction(scans[1], prediction_at(truth), relaxed, False)
+    clean_search = SearchDecision(None, None, clean.result, "", False)
+    clean_score = stages.judge_score(scans[1], prediction_at(truth), clean, clean_search, relaxed, False, None)
+    assert clean_score.score > relaxed.lost_as_set.min_score and clean_score.continues is None
+
+
 def test_on_a_slam_map_the_score_does_not_count_returns_beyond_a_cell_the_beams_passed(
     plan: PlanMap, path: list[Pose], scans: list[np.ndarray], tmp_path: Any
 ) -> None:

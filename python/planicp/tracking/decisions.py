@@ -289,7 +289,8 @@ class ScoreDecision:
         continues: for a poor fit while not lost, whether the scan is clutter or a crowd
             (continues the last well explained scan, or the plan explains the kept returns well):
             True, it does not count towards being lost; False, the fit is not trusted. None: not
-            checked.
+            checked. A fit not poor by the learned bars but below the lost rule's as set is
+            checked for a crowd only (True, or None).
         reason: why the fit is not accepted ("" when it is): the search stage's, or, for an
             accepted poor fit that does not continue the last well explained scan, that.
     """

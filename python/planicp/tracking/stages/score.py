@@ -45,7 +45,26 @@ def judge_score(
     continues: bool | None = None
     if poor and not lost:
         continues, reason = _continuity(points, prediction.odom, fit, result, reason, searched, score, rules, anchor)
+    elif (
+        not lost and score < rules.lost_as_set.min_score and _sound_where_it_sees(fit, result, reason, searched, rules)
+    ):
+        # Below the lost rule's bar as set, above the bar learned from the track: a crowd's scan
+        # is not poor by the learned bar, but counted with its score it would put the track in
+        # doubt (`LostDecision.doubted`) and the whole plan would be searched beside it, where a
+        # place whose walls the crowd's returns fall on explains more of its scans (the crowd
+        # bench's second drive at 40 people: a place 3.8 m away adopted). It is held as a crowd.
+        continues = True
     return ScoreDecision(score, poor, continues, reason)
+
+
+def _sound_where_it_sees(fit: FitDecision, result: IcpResult, reason: str, searched: bool, rules: Rules) -> bool:
+    """Whether the scan is sound where it sees the plan: the occlusion rule kept too few returns
+    to align (the scan says nothing either way), or the fit from the prediction of those it kept
+    passed and explains at least as many of them as a continuation must overlap."""
+    kept = fit.kept
+    return fit.occluded or (
+        kept is not None and not searched and reason == "" and result.inlier_ratio >= rules.continuity.min_overlap
+    )
 
 
 def scan_score(
@@ -91,9 +110,7 @@ def _continuity(
     nothing either way. Otherwise only the kept returns need to continue the last scan: a
     return short of the plan's walls says nothing about where the robot is."""
     kept = fit.kept
-    continues = fit.occluded or (
-        kept is not None and not searched and reason == "" and result.inlier_ratio >= rules.continuity.min_overlap
-    )
+    continues = _sound_where_it_sees(fit, result, reason, searched, rules)
     if not continues and anchor is not None:
         continues = rules.continuity.continues(
             points if kept is None else points[kept], anchor[0], between(anchor[1], odom)
