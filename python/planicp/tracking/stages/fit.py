@@ -80,7 +80,9 @@ def _aligned(
     `tests/test_localizer.py::test_gate_rejects_a_correction_beyond_max_translation_jump`, a
     prediction 25 cm off left 400 of 1080 returns out and the fit of the rest stopped 15 cm
     from the truth; judging the returns again from that fit and aligning from there stayed
-    there too, while all returns from the prediction reach the truth.)"""
+    there too, while all returns from the prediction reach the truth.) Where the prediction was
+    too uncertain for the rule and the gate rejects the fit of every return, the rule is tried
+    with its margin widened (`_widened`)."""
     predicted = prediction.pose
     kept, beyond, occluded, view = _unoccluded(points, prediction, rules, lost)
     result = localize(points if kept is None else points[kept], rules.plan, predicted, rules.config, view=view)
