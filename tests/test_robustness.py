@@ -336,6 +336,10 @@ def test_the_lost_rule_scores_recent_scans_only() -> None:
     detector.reset()
     assert not detector.update(0.9, False) and not detector.hold() and not detector.update(0.9, False)
     assert detector.update(0.9, False) and detector.rejections == 3  # in a row across a held scan
+    detector.reset()
+    assert not detector.update(0.9, False) and not detector.update(0.9, False)
+    assert not detector.hold(accepted=True) and detector.rejections == 0  # a held scan's accepted fit ends the row
+    assert not detector.update(0.9, False) and not detector.update(0.9, False)
     for cfg, message in (
         ({"min_inlier_ratio": 0.0}, "min_inlier_ratio must be in"),
         ({"confirmations": 0}, "confirmations must be at least 1"),

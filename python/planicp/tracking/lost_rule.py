@@ -71,11 +71,14 @@ class LostDetector:
     rejections: int = 0
     judged_by: LostRule | None = None
 
-    def hold(self) -> bool:
-        """A scan that tells nothing about being lost (rejected in clutter, but continuing the
-        last scan the plan explained well): not scored, but one of the last `window`, and the
-        rejections in a row are kept. Returns whether lost."""
+    def hold(self, accepted: bool = False) -> bool:
+        """A scan that tells nothing about being lost (clutter, continuing the last scan the plan
+        explained well, or a crowd): not scored, but one of the last `window`; its fit, if the
+        gate `accepted` it, ends a row of rejections, which a rejected one neither ends nor
+        lengthens. Returns whether lost."""
         self._push(None)
+        if accepted:
+            self.rejections = 0
         return self.lost
 
     def update(self, score: float, accepted: bool, rule: LostRule | None = None) -> bool:

@@ -76,7 +76,9 @@ def _aligned(
     returns from the prediction. When the fit lands more than a quarter of the rule's margin
     away, the prediction was off by a good part of the margin, which makes returns on the plan's
     walls look short of them: every return is aligned again from the prediction, and none counts
-    as left out. (In
+    as left out. (Where the rule kept too few returns to align, every return was aligned already:
+    a fit that slides then is pulled by what stands in front of the walls, and the scan stays
+    `occluded`.) (In
     `tests/test_localizer.py::test_gate_rejects_a_correction_beyond_max_translation_jump`, a
     prediction 25 cm off left 400 of 1080 returns out and the fit of the rest stopped 15 cm
     from the truth; judging the returns again from that fit and aligning from there stayed
@@ -86,7 +88,7 @@ def _aligned(
     predicted = prediction.pose
     kept, beyond, occluded, view = _unoccluded(points, prediction, rules, lost)
     result = localize(points if kept is None else points[kept], rules.plan, predicted, rules.config, view=view)
-    if beyond is not None and rules.occlusion is not None:
+    if kept is not None and rules.occlusion is not None:
         shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
         if shift > rules.occlusion.rule.margin / 4.0:
             result = localize(points, rules.plan, predicted, rules.config, view=view)

@@ -22,7 +22,7 @@ def judge_lost(
     state regains the track (`LostDecision.regained`): a place near where it was lost, which
     `recover` judges as one the recovery finds there (`Recovery.regain`)."""
     if score.continues:
-        lost = detector.hold()
+        lost = detector.hold(correction.accepted)
         return LostDecision(lost, True, False, detector.score, detector.rejections)
     # While lost, a fit from the prediction (the place the localizer lost track at) ends the lost
     # state only when it explains as much of the scan as the recovery asks of a place it adopts:
