@@ -15,6 +15,7 @@ from ..icp_config import IcpConfig
 from ..icp_result import IcpResult
 from ..localize import localize
 from ..motion_noise import largest_position_std
+from ..occlusion_rule import OcclusionFilter
 from .rules import Rules
 
 
@@ -89,8 +90,7 @@ def _aligned(
     kept, beyond, occluded, view = _unoccluded(points, prediction, rules, lost)
     result = localize(points if kept is None else points[kept], rules.plan, predicted, rules.config, view=view)
     if kept is not None and rules.occlusion is not None:
-        shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
-        if shift > rules.occlusion.rule.margin / 4.0:
+        if _misjudged(result, predicted, rules.occlusion.rule.margin):
             result = localize(points, rules.plan, predicted, rules.config, view=view)
             return result, None, beyond, False, True
     if kept is None and beyond is None and not lost and rules.gate.rejection(result, predicted) != "":
@@ -117,22 +117,41 @@ def _widened(
     occlusion = rules.occlusion
     if occlusion is None:
         return None
-    spread = largest_position_std(prediction.covariance)
-    margin = occlusion.rule.margin_for(spread)
+    margin = occlusion.rule.margin_for(largest_position_std(prediction.covariance))
     if margin <= occlusion.rule.margin:
         return None
     predicted = prediction.pose
-    in_front, beyond = occlusion.classify(points, predicted, margin)
-    kept: NDArray[np.bool_] = ~in_front
-    remaining = int(np.count_nonzero(kept))
-    if remaining < occlusion.rule.min_points or remaining == len(points):
+    kept, beyond, _ = _classified(points, predicted, occlusion, margin)
+    if kept is None:
         return None
     result = localize(points[kept], rules.plan, predicted, rules.config, view=view)
-    shift = math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1])
-    sound = result.inlier_ratio >= rules.continuity.min_overlap and shift <= margin / 4.0
+    sound = result.inlier_ratio >= rules.continuity.min_overlap and not _misjudged(result, predicted, margin)
     if not sound or rules.gate.rejection(result, predicted) != "":
         return None
     return result, kept, beyond
+
+
+def _misjudged(result: IcpResult, predicted: Pose, margin: float) -> bool:
+    """Whether the fit landed more than a quarter of the occlusion rule's `margin` (metres) from
+    the prediction it judged the returns from: the prediction was off by a good part of the
+    margin, and returns on the walls looked short of them."""
+    return math.hypot(result.pose[0] - predicted[0], result.pose[1] - predicted[1]) > margin / 4.0
+
+
+def _classified(
+    points: NDArray[np.float64], pose: Pose, occlusion: OcclusionFilter, margin: float | None = None
+) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_], bool]:
+    """(kept, beyond, occluded): the occlusion rule's classes of `points` from `pose` with
+    `margin` (default the rule's): the points not in front of the plan's walls (None when fewer
+    than the rule's `min_points` remain, `occluded`, or all do), those beyond the walls."""
+    in_front, beyond = occlusion.classify(points, pose, margin)
+    kept: NDArray[np.bool_] = ~in_front
+    remaining = int(np.count_nonzero(kept))
+    if remaining < occlusion.rule.min_points:
+        return None, beyond, True
+    if remaining == len(points):
+        return None, beyond, False
+    return kept, beyond, False
 
 
 def _unoccluded(
@@ -154,14 +173,8 @@ def _unoccluded(
         return None, None, False, view
     if 3.0 * largest_position_std(prediction.covariance) >= occlusion.rule.margin:
         return None, None, False, view
-    in_front, beyond = occlusion.classify(points, prediction.pose)
-    kept: NDArray[np.bool_] = ~in_front
-    remaining = int(np.count_nonzero(kept))
-    if remaining < occlusion.rule.min_points:
-        return None, beyond, True, view
-    if remaining == len(points):
-        return None, beyond, False, view
-    return kept, beyond, False, view
+    kept, beyond, occluded = _classified(points, prediction.pose, occlusion)
+    return kept, beyond, occluded, view
 
 
 def aligned_from(points: NDArray[np.float64], pose: Pose, rules: Rules, config: IcpConfig | None = None) -> IcpResult:
