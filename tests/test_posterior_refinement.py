@@ -1,4 +1,4 @@
-"""The corrected pose refined to the scan's most likely pose in the plan's likelihood field
+"""The corrected pose refined to the posterior's mode, or two modes' mean, in the plan's likelihood field
 (`planicp.tracking.posterior_refinement`, `planicp._core.LikelihoodGrid`)."""
 
 from __future__ import annotations
@@ -11,7 +11,9 @@ import pytest
 
 from planicp import Localizer, PlanMap, PosteriorRefinement, _core
 from planicp.plans.ros_map import write_ros_map
+from planicp.tracking.decisions import Correction
 from planicp.tracking.posterior_refinement import refine_pose
+from planicp.tracking.stages.correction import _refined
 
 
 def room() -> PlanMap:
@@ -127,16 +129,18 @@ def test_along_a_corridor_the_prior_decides_and_across_it_the_scan() -> None:
     assert refined.prior == "prediction"
     assert refined.pose[0] == pytest.approx(prior_pose[0], abs=0.01)  # along: the prior's
     assert refined.pose[1] == pytest.approx(truth[1], abs=0.005)  # across: the walls'
+    # Both climbs end in the one basin: one mode, nothing spread.
+    assert refined.other is None and refined.other_share == 0.0 and not refined.spread.any()
 
 
-def test_of_two_basins_the_one_of_higher_posterior_is_taken_wherever_the_fit_ended() -> None:
+def test_of_two_basins_the_one_of_higher_posterior_carries_the_pose_wherever_the_fit_ended() -> None:
     plan = comb()
     truth = (10.0, 1.0, 0.0)
     scan = scan_at(plan, truth, max_range=3.0)
     covariance = np.diag([0.2**2, 0.2**2, math.radians(2.0) ** 2])
     # ICP slid one stub along (0.5 m): from there alone the climb stays in that basin, whose scan
     # likelihood is the true one's; the prediction, 3 cm off, makes the true basin's posterior the
-    # higher, and its climb is taken.
+    # higher, and its climb carries the pose.
     slid = (10.5, 1.0, 0.0)
     prediction = (10.03, 1.0, 0.0)
     field = plan.likelihood_field()
@@ -144,15 +148,53 @@ def test_of_two_basins_the_one_of_higher_posterior_is_taken_wherever_the_fit_end
     assert math.dist(stayed[0][:2], slid[:2]) < 0.02  # the one climb from the fit
     refined = refine_pose(scan, slid, plan, ("prediction", prediction, covariance), PosteriorRefinement())
     assert refined.from_prior
-    assert math.dist(refined.pose[:2], truth[:2]) < 0.015, refined  # the prior pulls it 1 cm its way
     assert refined.cost < stayed[1] - 4.0  # (0.47 / 0.2)^2 = 5.5 of prior between them
+    # The slid basin keeps a share of the mass, e^(-5.5/2) of the true one's, and the mean moves
+    # that share of the 0.5 m towards it.
+    assert refined.other is not None and math.dist(refined.other[:2], slid[:2]) < 0.02
+    assert 0.03 < refined.other_share < 0.1, refined.other_share
+    assert math.dist(refined.pose[:2], truth[:2]) < 0.05, refined
     # The prediction where the scan fits nothing (1 m above the wall, turned, a wide covariance): its
     # climb gains nothing, and the fit's basin, of far higher posterior, is kept.
     wide = np.diag([1.0, 1.0, math.radians(10.0) ** 2])
     astray = (10.0, 2.0, 0.3)
     kept = refine_pose(scan, (10.01, 1.0, 0.0), plan, ("prediction", astray, wide), PosteriorRefinement())
     assert not kept.from_prior
+    assert kept.other_share < 1e-6
     assert math.dist(kept.pose[:2], truth[:2]) < 0.01, kept
+
+
+def test_two_modes_of_like_posterior_give_their_mean_and_a_covariance_that_covers_both() -> None:
+    # The comb fits every 0.5 m. A prediction 5 cm from the true stub with 0.2 m along the wall:
+    # ICP slid to the next stub, and the posterior has a mode at each; the pose is their mean, each
+    # weighed by its mass exp(-cost/2) / sqrt(det(information)), and their spread is reported.
+    plan = comb()
+    truth = (10.0, 1.0, 0.0)
+    scan = scan_at(plan, truth, max_range=3.0)
+    covariance = np.diag([0.2**2, 0.1**2, math.radians(2.0) ** 2])
+    slid, prediction = (10.5, 1.0, 0.0), (10.05, 1.0, 0.0)
+    field = plan.likelihood_field()
+    ends = [field.refine(scan, start, prediction, covariance.tolist(), 0.3) for start in (prediction, slid)]
+    (true_end, true_cost, _, true_info, _), (slid_end, slid_cost, _, slid_info, _) = ends
+    assert abs(true_end[0] - 10.0) < 0.02 and abs(slid_end[0] - 10.49) < 0.02
+    mass = [math.exp(-c / 2) / math.sqrt(np.linalg.det(i)) for c, i in ((true_cost, true_info), (slid_cost, slid_info))]
+    share = mass[1] / sum(mass)
+    assert 0.1 < share < 0.4, share  # like posteriors: neither mode's mass is negligible
+    refined = refine_pose(scan, slid, plan, ("prediction", prediction, covariance), PosteriorRefinement())
+    assert refined.from_prior and refined.other is not None
+    assert refined.other_share == pytest.approx(share, rel=1e-6)
+    d = slid_end[0] - true_end[0]
+    assert refined.pose[0] == pytest.approx(true_end[0] + share * d, abs=1e-6)
+    assert refined.spread[0, 0] == pytest.approx(share * (1 - share) * d**2, rel=1e-6)
+    # The correction stage reports the pose with the spread added to the fusion's covariance, and
+    # says so.
+    fused = Correction(slid, np.diag([0.02**2, 0.02**2, math.radians(0.5) ** 2]), True, None, "fused")
+    the_rules = Localizer(plan, prediction, refinement=PosteriorRefinement())._rules()
+    corrected = _refined(scan, fused, ("prediction", prediction, covariance), the_rules)
+    assert corrected.pose == refined.pose
+    assert np.allclose(corrected.covariance, fused.covariance + refined.spread)
+    assert math.sqrt(corrected.covariance[0, 0]) > 0.15  # half the 0.49 m between the modes, nearly
+    assert "mean over two modes" in corrected.why
 
 
 def test_the_localizer_reports_the_refinement_and_can_be_told_not_to_refine() -> None:

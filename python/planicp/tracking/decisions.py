@@ -356,8 +356,14 @@ class Correction:
         }[self.kind]
         if self.refused:
             text += f" ({self.refused})"
-        if self.refinement is not None and self.refinement.moved >= 0.005:
-            text += f", moved {100 * self.refinement.moved:.1f} cm to the scan's most likely pose"
+        refinement = self.refinement
+        if refinement is not None and refinement.other is not None:
+            text += (
+                f", moved {100 * refinement.moved:.1f} cm to the posterior's mean over two modes "
+                f"(the less likely one weighed {100 * min(refinement.other_share, 1 - refinement.other_share):.0f} %)"
+            )
+        elif refinement is not None and refinement.moved >= 0.005:
+            text += f", moved {100 * refinement.moved:.1f} cm to the scan's most likely pose"
         return text
 
 

@@ -1,4 +1,5 @@
-"""The corrected pose refined to the pose of highest posterior in the plan's likelihood field.
+"""The corrected pose refined to the posterior's mode (or the mean of its two modes) in the plan's
+likelihood field.
 
 ICP pairs each return with its nearest plan point and keeps the pairs within a shrinking distance.
 On a map whose walls are bands of noisy cells (a SLAM map), the pairs it keeps decide where it
@@ -15,21 +16,32 @@ the motion model.
 
 `g` the plan's likelihood field (`PlanMap.likelihood_field`), `w` the weight of one return
 (`PosteriorRefinement.return_weight`), `(x_p, P)` the prior, from two places: the corrected pose and
-the prior's pose. The cost has a mode in each basin the scan fits, and one climb finds only the
-mode of the basin it starts in: ICP, having slid to a wrong basin, would leave the climb from its
-pose there, however much less probable that basin is than the one the prediction lies in. Of the
-two climbs' ends the one of lower cost, the higher posterior, is taken (both when they end in the
-same basin: the same pose). Where the fit was fused with the
+the prior's pose. `cost` is twice the negative log posterior. It has a mode in each basin the scan
+fits, and one climb finds only the mode of the basin it starts in: ICP, having slid to a wrong
+basin, would leave the climb from its pose there, however much less probable that basin is than
+the one the prediction lies in. So both are climbed, and each end is read in the Laplace
+approximation: a Gaussian of covariance `(w J^T J + P^-1)^-1` and of mass
+`exp(-cost/2) / sqrt(det(w J^T J + P^-1))`. Where the two Gaussians lie within two standard
+deviations of each other (the Mahalanobis distance under their mean covariance), their mixture has
+one mode: the climbs found one, and the end of lower cost is the pose. Farther apart, the posterior
+has two modes, and the pose is its mean, each mode weighed by its share of the mass; their spread
+about the mean is added to the pose's covariance (`Refinement.spread`). The mean is the estimate
+of least expected squared error; the mode of lower cost alone would throw the other mode's mass
+away. On freiburg-campus a scan whose walls the map drew twice, 0.3 m apart, has a mode at each
+drawing (costs 60.1 and 62.3); the lower, 0.33 m from the reference pose, was taken with a 6 cm
+deviation, where the mean lies 0.25 m from it with deviations (11.7, 8.9 cm) that cover both. A
+mode that costs 10 units more than the other weighs about e^-5 of it, and the mean is the other
+mode. Where the fit was fused with the
 odometry prediction, and where the fit is degenerate (the field says nothing along a corridor),
 the prediction is the prior; where the fusion judged the odometry to have faulted and the scan
 constrains every direction, the prediction is no evidence and the scan's likelihood alone
-decides. A search's place is not refined (its own alignment decided it).
+decides (one climb). A search's place is not refined (its own alignment decided it).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Annotated
 
 import numpy as np
@@ -93,8 +105,12 @@ class Refinement:
             odometry faulted and the scan constrains every direction).
         cost, start_cost: the cost (see the module) at `pose` and at `start`.
         iterations: accepted Levenberg-Marquardt steps of the climb that ended at `pose`.
-        from_prior: whether `pose` is the end of the climb from the prior's pose (True) or of
-            the climb from `start` (False).
+        from_prior: whether the more probable mode is the end of the climb from the prior's
+            pose (True) or of the climb from `start` (False).
+        other: the other mode, T_map_base, where the two climbs ended in two; else None.
+        other_share: the other mode's share of the posterior mass (0 when there is none).
+        spread: 3x3 covariance of the two modes about `pose` (zeros when there is one mode),
+            m^2 and rad^2: what the correction adds to its covariance.
     """
 
     start: Pose
@@ -104,6 +120,9 @@ class Refinement:
     start_cost: float
     iterations: int
     from_prior: bool = False
+    other: Pose | None = None
+    other_share: float = 0.0
+    spread: NDArray[np.float64] = field(default_factory=lambda: np.zeros((3, 3)))
 
     @property
     def moved(self) -> float:
@@ -118,7 +137,8 @@ def refine_pose(
     prior: tuple[str, Pose, NDArray[np.float64]] | None,
     rule: PosteriorRefinement,
 ) -> Refinement:
-    """The pose of lowest cost of two climbs, from `start` and from the prior's pose (see the module).
+    """The posterior's mode, or mean of its two modes, from two climbs: from `start` and from the
+    prior's pose (see the module).
 
     Args:
         points: (N, 2) scan points in the robot frame, metres.
@@ -127,24 +147,75 @@ def refine_pose(
         prior: (name, pose, 3x3 covariance) of the prior; None: no prior.
         rule: the refinement's settings.
     """
-    field = plan.likelihood_field()
+    grid = plan.likelihood_field()
     if prior is None:
         name, prior_pose, prior_covariance = "none", start, np.eye(3) * NO_PRIOR_VARIANCE
     else:
         name, prior_pose, prior_covariance = prior
     covariance = np.asarray(prior_covariance, dtype=np.float64).tolist()
-    pose, cost, start_cost, _, iterations = field.refine(
+    pose, cost, start_cost, information, iterations = grid.refine(
         points, start, prior_pose, covariance, rule.return_weight, rule.max_iterations
     )
-    from_prior = False
-    if prior is not None and _apart(prior_pose, start):
-        other, other_cost, _, _, other_iterations = field.refine(
-            points, prior_pose, prior_pose, covariance, rule.return_weight, rule.max_iterations
-        )
-        if other_cost < cost:
-            pose, cost, iterations, from_prior = other, other_cost, other_iterations, True
-    refined: Pose = (float(pose[0]), float(pose[1]), wrap_angle(float(pose[2])))
-    return Refinement(start, refined, name, float(cost), float(start_cost), int(iterations), from_prior)
+    mode = _Mode(_pose(*pose), float(cost), np.asarray(information, dtype=np.float64), int(iterations))
+    if prior is None or not _apart(prior_pose, start):
+        return Refinement(start, mode.pose, name, mode.cost, float(start_cost), mode.iterations)
+    other_pose, other_cost, _, other_information, other_iterations = grid.refine(
+        points, prior_pose, prior_pose, covariance, rule.return_weight, rule.max_iterations
+    )
+    other = _Mode(
+        _pose(*other_pose), float(other_cost), np.asarray(other_information, dtype=np.float64), int(other_iterations)
+    )
+    from_prior = other.cost < mode.cost
+    best, second = (other, mode) if from_prior else (mode, other)
+    d = np.array(
+        [second.pose[0] - best.pose[0], second.pose[1] - best.pose[1], wrap_angle(second.pose[2] - best.pose[2])]
+    )
+    if not _bimodal(d, best, second):
+        return Refinement(start, best.pose, name, best.cost, float(start_cost), best.iterations, from_prior)
+    share = _share(second, best)
+    mean = _pose(best.pose[0] + share * d[0], best.pose[1] + share * d[1], best.pose[2] + share * d[2])
+    spread = share * (1.0 - share) * np.outer(d, d)
+    return Refinement(
+        start, mean, name, best.cost, float(start_cost), best.iterations, from_prior, second.pose, share, spread
+    )
+
+
+@dataclass(frozen=True)
+class _Mode:
+    """The end of one climb: its pose (T_map_base), cost, information matrix and steps."""
+
+    pose: Pose
+    cost: float
+    information: NDArray[np.float64]
+    iterations: int
+
+
+def _bimodal(d: NDArray[np.float64], a: _Mode, b: _Mode) -> bool:
+    """Whether the Laplace approximations at two climbs' ends, `d` apart, make two modes: their
+    Mahalanobis distance under the mean of their covariances exceeds 2 (a mixture of two like
+    Gaussians has two modes only when they lie more than two standard deviations apart). False
+    where an information matrix cannot be inverted."""
+    try:
+        mean_covariance = 0.5 * (np.linalg.inv(a.information) + np.linalg.inv(b.information))
+        return float(d @ np.linalg.solve(mean_covariance, d)) > 4.0
+    except np.linalg.LinAlgError:
+        return False
+
+
+def _share(second: _Mode, best: _Mode) -> float:
+    """`second`'s share of the two modes' posterior mass in the Laplace approximation: each mode's
+    mass is `exp(-cost/2) / sqrt(det(information))`. 0 where an information matrix is not
+    positive definite (a climb that stopped on a ridge is no mode to weigh)."""
+    signs, logdets = zip(*(np.linalg.slogdet(m.information) for m in (second, best)), strict=True)
+    if min(signs) <= 0 or not all(math.isfinite(v) for v in logdets):
+        return 0.0
+    log_ratio = -0.5 * (second.cost - best.cost) - 0.5 * (logdets[0] - logdets[1])
+    return 1.0 / (1.0 + math.exp(-log_ratio)) if log_ratio > -700.0 else 0.0
+
+
+def _pose(x: float, y: float, yaw: float) -> Pose:
+    """A pose of floats with its heading wrapped."""
+    return (float(x), float(y), wrap_angle(float(yaw)))
 
 
 def _apart(a: Pose, b: Pose) -> bool:

@@ -29,7 +29,8 @@ def correct(
     posterior in the plan's likelihood field (`posterior_refinement`): with the prediction as
     the prior where the two were fused or the fit is degenerate, none where the odometry faulted
     and the scan constrains every direction; a search's place is kept as its alignment left it.
-    The covariance is the fusion's."""
+    The covariance is the fusion's, widened by the spread of the posterior's two modes where the
+    refinement found two."""
     result = search.result
     if result is None or score.reason != "":
         return Correction(prediction.pose, prediction.covariance, False, None, "prediction")
@@ -125,11 +126,13 @@ def _refined(
     rules: Rules,
 ) -> Correction:
     """`correction` with its pose refined (`refine_pose`; `prior`: its name, pose and covariance,
-    or None) when the rule is on."""
+    or None) when the rule is on, and the spread of the posterior's two modes, where it has two,
+    added to its covariance."""
     if not rules.refinement.enabled:
         return correction
     refinement = refine_pose(points, correction.pose, rules.plan, prior, rules.refinement)
-    return replace(correction, pose=refinement.pose, refinement=refinement)
+    covariance = correction.covariance + refinement.spread
+    return replace(correction, pose=refinement.pose, covariance=covariance, refinement=refinement)
 
 
 def finite_or(covariance: NDArray[np.float64], fallback: NDArray[np.float64]) -> NDArray[np.float64]:
