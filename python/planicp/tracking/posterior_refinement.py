@@ -100,13 +100,14 @@ class Refinement:
 
     Attributes:
         start: the corrected pose it started from, T_map_base.
-        pose: the refined pose, T_map_base.
+        pose: the refined pose, T_map_base: the posterior's mode, or the mean of its two modes.
         prior: "prediction" (the fit was fused with it, or is degenerate) or "none" (the
             odometry faulted and the scan constrains every direction).
-        cost, start_cost: the cost (see the module) at `pose` and at `start`.
-        iterations: accepted Levenberg-Marquardt steps of the climb that ended at `pose`.
-        from_prior: whether the more probable mode is the end of the climb from the prior's
-            pose (True) or of the climb from `start` (False).
+        cost, start_cost: the cost (see the module) at the mode of lower cost (`pose` where there
+            is one mode) and at `start`.
+        iterations: accepted Levenberg-Marquardt steps of the climb that ended at that mode.
+        from_prior: whether the mode of lower cost is the end of the climb from the prior's pose
+            (True) or of the climb from `start` (False).
         other: the other mode, T_map_base, where the two climbs ended in two; else None.
         other_share: the other mode's share of the posterior mass (0 when there is none).
         spread: 3x3 covariance of the two modes about `pose` (zeros when there is one mode),
