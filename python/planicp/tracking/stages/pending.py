@@ -31,7 +31,7 @@ def confirm_pending(
     scan's likelihood prefers to the prediction's fit by the fault cost (`_fault_confirmed`), or
     that explains the scan better than the prediction's fit by the recovery's `margin` (or the
     prediction's was rejected) where the place also explains the scan as the track's scans are
-    (`_explains_as_usual`). Of several confirmed, the one whose fit explains the most of the
+    (`_usual_cost`). Of several confirmed, the one whose fit explains the most of the
     scan.
 
     A scan that says nothing either way keeps a place pending for the next scan
@@ -52,6 +52,7 @@ def confirm_pending(
     if not pending:
         return PendingDecision(None, None)
     cost = _field_costs(points, rules)
+    usual = _usual_cost(rules, history)
     best: tuple[float, PendingDecision] | None = None
     kept: list[PendingPlace] = []
     first = None
@@ -63,7 +64,7 @@ def confirm_pending(
             kept.append(later)
             continue
         follow = aligned_from(points, there, rules)
-        verdict = _verdict(follow, there, fit, rules, history, cost)
+        verdict = _verdict(follow, there, fit, rules, usual, cost)
         if verdict == "confirmed" and (best is None or follow.inlier_ratio > best[0]):
             best = (follow.inlier_ratio, PendingDecision(there, follow, (), len(pending)))
         elif verdict == "silent":
@@ -92,58 +93,54 @@ def _verdict(
     there: Pose,
     fit: FitDecision,
     rules: Rules,
-    history: CostHistory | None,
+    usual: float | None,
     cost: Callable[[Pose], float],
 ) -> str:
     """What this scan says of the pending place `there`, whose fit is `follow`, against the fit
     from the prediction (`fit`, aligned), `cost` the scan's cost in the likelihood field at a
-    pose: "confirmed", "refuted" or "silent"."""
+    pose, `usual` the most it costs where a place explains it as the track's scans are
+    (`_usual_cost`): "confirmed", "refuted" or "silent"."""
     assert fit.result is not None
     place, other = follow.pose, fit.result.pose
     if rules.gate.rejection(follow, there):
-        neither = fit.reason != "" or _explains_neither(place, other, rules, history, cost)
+        neither = fit.reason != "" or _explains_neither(place, other, usual, cost)
         return "silent" if neither else "refuted"
     if _fault_confirmed_by(place, other, rules, cost):
         return "confirmed"
     preferred = fit.reason != "" or follow.inlier_ratio > fit.result.inlier_ratio + rules.recovery.margin
-    if preferred and _explains_as_usual(place, rules, history, cost):
+    if preferred and (usual is None or cost(place) <= usual):
         return "confirmed"
-    return "silent" if _explains_neither(place, other, rules, history, cost) else "refuted"
+    return "silent" if _explains_neither(place, other, usual, cost) else "refuted"
 
 
-def _explains_as_usual(place: Pose, rules: Rules, history: CostHistory | None, cost: Callable[[Pose], float]) -> bool:
-    """Whether the scan's cost in the plan's likelihood field at `place` is within the fault cost
-    of the track's typical cost (`history`): the place explains the scan as the track's scans are,
-    as the fault sweep asks of a place it finds (`FaultSweep.more_probable`). A place merely less
-    bad than the fit from the prediction is no evidence of where the robot is: on
+def _usual_cost(rules: Rules, history: CostHistory | None) -> float | None:
+    """The most the scan may cost in the plan's likelihood field at a place that explains it as
+    the track's scans are: the track's typical cost (`history`) plus the fault cost, what the fault
+    sweep asks of a place it finds (`FaultSweep.more_probable`). None without the refinement's
+    field, its fault component, or a typical cost yet.
+
+    A place the share test or a rejected fit from the prediction would confirm must explain the
+    scan so: a place merely less bad than that fit is no evidence of where the robot is. On
     freiburg-campus (every third scan, odometry seed 8) a search's place 2.6 m off, left pending
     after a rejected jump, was confirmed by the next scan because that scan's fit from the
     prediction was rejected too, though the scan cost 49.3 there against a typical 23.7 (the
-    fault cost 13.8), and the track stayed 2.8-3.0 m off for six updates. (A place the scan's
+    fault cost 13.8), and the track stayed 2.8-3.0 m off for six updates. A place the scan's
     likelihood prefers to the prediction's fit by the fault cost needs no more: where the map drew
     walls twice every place costs far above the typical, and on freiburg-campus with tripled
     odometry noise the true place, at 39.5 against a rejected fit's 69.6, was kept waiting until
-    it was lost.) True without the refinement's field, its fault component, or a typical cost
-    yet."""
+    it was lost."""
     refinement = rules.refinement
     typical = None if history is None else history.typical()
     if typical is None or not refinement.weighs_faults:
-        return True
-    return cost(place) <= typical + fault_cost(refinement.fault_probability)
+        return None
+    return typical + fault_cost(refinement.fault_probability)
 
 
-def _explains_neither(
-    place: Pose, fit: Pose, rules: Rules, history: CostHistory | None, cost: Callable[[Pose], float]
-) -> bool:
-    """Whether the scan's cost in the plan's likelihood field (`cost`) exceeds the track's typical
-    cost (`history`) by the fault cost both at `place` and at `fit` (the prediction's fit):
-    neither explains it as the track's scans are explained. False without the refinement's
-    field, its fault component, or a typical cost yet."""
-    refinement = rules.refinement
-    typical = None if history is None else history.typical()
-    if typical is None or not refinement.weighs_faults:
-        return False
-    return min(cost(place), cost(fit)) > typical + fault_cost(refinement.fault_probability)
+def _explains_neither(place: Pose, fit: Pose, usual: float | None, cost: Callable[[Pose], float]) -> bool:
+    """Whether the scan's cost in the plan's likelihood field (`cost`) exceeds `usual`
+    (`_usual_cost`) both at `place` and at `fit` (the prediction's fit): neither explains it as
+    the track's scans are explained. False where `usual` is None."""
+    return usual is not None and min(cost(place), cost(fit)) > usual
 
 
 def _fault_confirmed(points: NDArray[np.float64], place: Pose, fit: Pose, rules: Rules) -> bool:
